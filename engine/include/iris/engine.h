@@ -1,0 +1,114 @@
+// Iris View engine — the public entry point.
+//
+// An Engine owns a Vulkan device, a render thread, a buffer thread and a loader
+// pool. Every member function is thread-safe and may be called in any order from
+// any thread. None of them waits on an engine thread, with three documented
+// exceptions: open() reads the file's header synchronously so that it can return
+// a clear error, unbindSurface() waits until the render thread has released the
+// swapchain (the surface must outlive it), and waitForFrame() waits by design.
+#pragma once
+
+#include <chrono>
+#include <memory>
+
+#include <vulkan/vulkan_core.h>
+
+#include "iris/types.h"
+
+namespace iris {
+
+struct EngineConfig {
+    uint64_t ramBudgetBytes = 1ull << 30;   // decoded tiles kept in RAM
+    uint64_t vramBudgetBytes = 512ull << 20; // tile atlas size (slots of 256×256 RGBA8 with mips)
+    uint32_t loaderThreads = 0;              // 0: one per hardware thread
+    uint32_t perimeterTiles = 1;             // tiles buffered beyond the visible field on each side
+    bool validation = false;                 // enable VK_LAYER_KHRONOS_validation when installed
+    std::array<float, 3> background{0.96f, 0.96f, 0.96f}; // colour outside the slide (linear RGB 0..1)
+    // Optional: a VkInstance created by the host (for example QVulkanInstance::vkInstance()).
+    // The engine then creates its device on it, so that a VkSurfaceKHR of that instance
+    // can be bound later. The host keeps it alive until the Engine is destroyed.
+    VkInstance instance = VK_NULL_HANDLE;
+    // Receives log lines from any engine thread; must be thread-safe and quick.
+    LogCallback log;
+};
+
+class Engine {
+public:
+    // Creates the Vulkan device and the engine threads. Fails with a clear message when no
+    // Vulkan 1.3 device with the needed features exists.
+    static Expected<std::unique_ptr<Engine>> create(const EngineConfig& config);
+    ~Engine();
+    Engine(const Engine&) = delete;
+    Engine& operator=(const Engine&) = delete;
+
+    // --- render target -------------------------------------------------------------
+    // Render into an offscreen RGBA8 image that readFrame() returns.
+    Result bindOffscreen(uint32_t width, uint32_t height);
+    // Present into a surface (the engine makes the swapchain and presents from its render
+    // thread). `instance` must be the one given in EngineConfig::instance, since the device
+    // was created on it. width/height are in device pixels.
+    Result bindSurface(VkInstance instance, VkSurfaceKHR surface, uint32_t width, uint32_t height);
+    // Releases the swapchain (waits for the render thread to do so); the surface may be
+    // destroyed once this returns.
+    void unbindSurface();
+    // New target size in (device) pixels; the view's centre and downsample are kept.
+    void resize(uint32_t width, uint32_t height);
+    // A hidden target renders nothing (a window that is not exposed).
+    void setVisible(bool visible);
+
+    // --- slide ---------------------------------------------------------------------
+    // Opens a slide (replacing the current one) and fits it into the target. Returns a
+    // clear error for missing, unreadable, corrupt or unsupported files; on error the
+    // previous slide is closed and the engine stays usable.
+    Result open(const std::string& path);
+    void close();
+    std::optional<SlideInfo> slideInfo() const;
+    Expected<Image> readAssociatedImage(const std::string& name) const;
+
+    // --- view ----------------------------------------------------------------------
+    // Moves the view by (dx, dy) target pixels: the image moves with the pointer, so a
+    // positive dx shows what lies further left.
+    void translate(double dx, double dy);
+    // Multiplies the magnification by factor (>1 zooms in), keeping the level-0 point
+    // under the target pixel (anchorX, anchorY) where it is.
+    void zoom(double factor, double anchorX, double anchorY);
+    void setView(const View& view);
+    View view() const;
+    // The view that shows the whole slide in the current target.
+    View fitView() const;
+    // Target size in pixels as last bound or resized.
+    std::pair<uint32_t, uint32_t> targetSize() const;
+
+    // --- output --------------------------------------------------------------------
+    // The last frame rendered into the offscreen target (RGBA8).
+    Expected<Frame> readFrame() const;
+    // Waits until a frame of the current view with every visible tile resident has been
+    // rendered (or until timeout). Returns Timeout, NoSlide, NotBound or the engine error.
+    Result waitForFrame(std::chrono::milliseconds timeout);
+    // Called on the render thread after each frame is submitted (presented); keep it
+    // quick and thread-safe (a Qt host posts a queued signal).
+    void setFrameCallback(std::function<void(const FrameStats&)> callback);
+
+    // --- settings ------------------------------------------------------------------
+    void setBackground(float r, float g, float b);
+    // Reduction-enhancement of mip levels (sharpening). Stored now; the mip pipeline is
+    // a plain box filter until the enhancement pipeline lands, see docs/ARCHITECTURE.md.
+    void setEnhance(bool on);
+    bool enhance() const;
+
+    // --- state ---------------------------------------------------------------------
+    // First error wins and sticks until clearError() or a successful open().
+    Result error() const;
+    void clearError();
+    DeviceInfo device() const;
+    // Messages the Vulkan validation layers reported (tests require zero).
+    uint64_t validationMessageCount() const;
+
+    struct Impl;
+
+private:
+    explicit Engine(std::unique_ptr<Impl> impl);
+    std::unique_ptr<Impl> impl_;
+};
+
+} // namespace iris

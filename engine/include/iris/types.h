@@ -1,0 +1,146 @@
+// Iris View engine — public value types.
+//
+// Everything in engine/include/iris/ is public API: Qt-free, exception-free,
+// and safe to use from any thread. Coordinates follow OpenSlide's convention:
+// "level-0 pixels" are pixels of the slide's full-resolution level, and a
+// downsample is level-0 pixels per screen (or level) pixel.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+namespace iris {
+
+// What went wrong, as a category a host can branch on. The message says it in words.
+enum class Status : int {
+    Ok = 0,
+    InvalidArgument,    // a call's arguments make no sense (zero size, NaN, …)
+    NotFound,           // the path does not exist
+    NotAFile,           // the path is a directory or a device
+    UnsupportedFormat,  // the file exists but no reader recognises it
+    CorruptData,        // the file is recognised but broken (truncated, bad tiles, …)
+    IoError,            // the operating system refused a read
+    OutOfMemory,
+    Vulkan,             // a Vulkan call failed (VkResult in the message)
+    DeviceLost,         // the GPU went away; the engine must be recreated
+    NoSlide,            // the call needs an open slide
+    NotBound,           // the call needs a render target (offscreen or surface)
+    Timeout,
+};
+
+const char* statusName(Status s) noexcept;
+
+// The result of a call that can fail: a status and a human-readable message.
+class Result {
+public:
+    Result() = default;
+    Result(Status status, std::string message) : status_(status), message_(std::move(message)) {}
+    static Result success() { return {}; }
+
+    bool ok() const noexcept { return status_ == Status::Ok; }
+    explicit operator bool() const noexcept { return ok(); }
+    Status status() const noexcept { return status_; }
+    const std::string& message() const noexcept { return message_; }
+
+private:
+    Status status_ = Status::Ok;
+    std::string message_;
+};
+
+// A value or the Result that explains why there is none (std::expected is C++23).
+template <class T>
+class Expected {
+public:
+    Expected(T value) : value_(std::move(value)) {}
+    Expected(Result error) : error_(std::move(error)) {
+        if (error_.ok()) error_ = Result(Status::InvalidArgument, "Expected constructed from a success Result without a value");
+    }
+    bool ok() const noexcept { return value_.has_value(); }
+    explicit operator bool() const noexcept { return ok(); }
+    T& value() & { return *value_; }
+    const T& value() const& { return *value_; }
+    T&& value() && { return std::move(*value_); }
+    T* operator->() { return &*value_; }
+    const T* operator->() const { return &*value_; }
+    T& operator*() { return *value_; }
+    const T& operator*() const { return *value_; }
+    const Result& error() const noexcept { return error_; }
+
+private:
+    std::optional<T> value_;
+    Result error_;
+};
+
+struct LevelInfo {
+    int64_t width = 0;     // pixels of this level
+    int64_t height = 0;
+    double downsample = 1; // level-0 pixels per pixel of this level
+    int64_t tilesX = 0;    // the engine's own 256×256 grid over this level
+    int64_t tilesY = 0;
+};
+
+struct SlideInfo {
+    std::string path;
+    std::string vendor;                // "aperio", "generic-tiff", "iris", …
+    int64_t width = 0;                 // level-0 dimensions
+    int64_t height = 0;
+    std::vector<LevelInfo> levels;     // finest first
+    double mppX = 0;                   // microns per level-0 pixel; 0 when the slide does not say
+    double mppY = 0;
+    double objectivePower = 0;         // scanning objective (for example 20 or 40); 0 when unknown
+    std::vector<std::pair<std::string, std::string>> properties; // every property, sorted by name
+    std::vector<std::string> associatedImages;                     // "label", "macro", "thumbnail", …
+};
+
+// The view: which level-0 point is at the centre of the target, and how many
+// level-0 pixels one target pixel covers. The target's size comes from bind/resize.
+struct View {
+    double centerX = 0;
+    double centerY = 0;
+    double downsample = 1;
+};
+
+// An RGBA8 image, rows top to bottom, 4 bytes a pixel, no padding, straight (not premultiplied) alpha.
+struct Image {
+    uint32_t width = 0;
+    uint32_t height = 0;
+    std::vector<uint8_t> rgba;
+};
+
+// A rendered frame read back from the offscreen target.
+struct Frame {
+    Image image;
+    View view;              // the view this frame shows
+    uint64_t serial = 0;    // increases with every frame rendered
+    bool complete = false;  // every visible tile of the finest needed level was resident
+};
+
+// Per-frame figures, delivered to the frame callback.
+struct FrameStats {
+    uint64_t serial = 0;
+    double intervalMs = 0;  // since the previous frame
+    double cpuMs = 0;       // render thread's time recording and submitting this frame
+    uint32_t tilesDrawn = 0;
+    bool complete = false;
+    View view;
+};
+
+struct DeviceInfo {
+    std::string name;            // VkPhysicalDeviceProperties::deviceName
+    std::string driver;          // driver name and version
+    uint32_t graphicsFamily = 0; // queue family indices the engine chose
+    uint32_t computeFamily = 0;
+    uint32_t transferFamily = 0;
+    uint32_t atlasSlots = 0;     // tile slots the VRAM budget bought
+};
+
+enum class LogLevel { Debug, Info, Warning, Error };
+using LogCallback = std::function<void(LogLevel, std::string_view)>;
+
+} // namespace iris

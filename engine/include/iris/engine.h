@@ -32,7 +32,7 @@ struct EngineConfig {
     LogCallback log;
 };
 
-class Engine {
+class IRIS_API Engine {
 public:
     // Creates the Vulkan device and the engine threads. Fails with a clear message when no
     // Vulkan 1.3 device with the needed features exists.

@@ -15,6 +15,8 @@
 #include <utility>
 #include <vector>
 
+#include "iris/export.h"
+
 namespace iris {
 
 // What went wrong, as a category a host can branch on. The message says it in words.
@@ -34,7 +36,7 @@ enum class Status : int {
     Timeout,
 };
 
-const char* statusName(Status s) noexcept;
+IRIS_API const char* statusName(Status s) noexcept;
 
 // The result of a call that can fail: a status and a human-readable message.
 class Result {

@@ -1,0 +1,62 @@
+#include "cache/loader_pool.h"
+
+namespace iris {
+
+void fillFailedTilePlaceholder(uint8_t* rgba) {
+    for (int y = 0; y < kTileSize; ++y) {
+        for (int x = 0; x < kTileSize; ++x) {
+            uint8_t* p = rgba + (size_t(y) * kTileSize + size_t(x)) * 4;
+            const bool stripe = ((x + y) / 8) % 4 == 0;
+            p[0] = stripe ? 200 : 128;
+            p[1] = stripe ? 40 : 128;
+            p[2] = stripe ? 40 : 128;
+            p[3] = 255;
+        }
+    }
+}
+
+LoaderPool::LoaderPool(SharedState& shared, TileCache& cache, const Log& log, unsigned threads, int perimeter)
+    : shared_(shared), cache_(cache), log_(log), perimeter_(perimeter) {
+    if (threads == 0) threads = std::max(1u, std::thread::hardware_concurrency());
+    for (unsigned i = 0; i < threads; ++i) threads_.emplace_back([this] { run(); });
+}
+
+LoaderPool::~LoaderPool() { stop(); }
+
+void LoaderPool::stop() {
+    if (threads_.empty()) return;
+    shared_.stopping.store(true, std::memory_order_release);
+    shared_.bump();
+    for (auto& t : threads_) t.join();
+    threads_.clear();
+}
+
+void LoaderPool::run() {
+    while (!shared_.stopping.load(std::memory_order_acquire)) {
+        const uint64_t seen = shared_.wakeValue();
+        if (!loadOne()) shared_.waitChange(seen);
+    }
+}
+
+bool LoaderPool::loadOne() {
+    const Snapshot snap = shared_.snapshot();
+    if (!snap.slide) return false;
+    const std::vector<TileRef> region = bufferRegion(snap.slide->info, snap.slide->generation, snap.viewport, perimeter_);
+    for (const TileRef& t : region) {
+        if (!cache_.tryClaim(t.key)) continue;
+        std::unique_ptr<uint8_t[]> buf = cache_.acquireBuffer();
+        const Result r = snap.slide->source->readTile(t.level, t.tx, t.ty, buf.get());
+        const bool failed = !r.ok();
+        if (failed) {
+            shared_.setError(r);
+            log_.error(r.message());
+            fillFailedTilePlaceholder(buf.get());
+        }
+        cache_.publish(t.key, std::move(buf), failed);
+        shared_.bump(); // the buffer thread may now upload it
+        return true;
+    }
+    return false;
+}
+
+} // namespace iris

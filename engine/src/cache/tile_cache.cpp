@@ -1,0 +1,106 @@
+#include "cache/tile_cache.h"
+
+#include <cstring>
+
+#include "slide/slide_source.h"
+#include "view/view_model.h"
+
+namespace iris {
+
+TileCache::TileCache(uint64_t budgetBytes) : budget_(budgetBytes < uint64_t(kTileBytes) * 16 ? uint64_t(kTileBytes) * 16 : budgetBytes) {}
+
+bool TileCache::tryClaim(uint64_t key) {
+    std::lock_guard lock(mutex_);
+    auto [it, inserted] = entries_.try_emplace(key);
+    if (inserted) it->second.lru = lru_.end();
+    return inserted;
+}
+
+std::unique_ptr<uint8_t[]> TileCache::acquireBuffer() {
+    {
+        std::lock_guard lock(mutex_);
+        if (!freeBuffers_.empty()) {
+            auto b = std::move(freeBuffers_.back());
+            freeBuffers_.pop_back();
+            return b;
+        }
+    }
+    return std::make_unique<uint8_t[]>(kTileBytes);
+}
+
+void TileCache::recycleLocked(std::unique_ptr<uint8_t[]> buf) {
+    if (buf && freeBuffers_.size() < 64) freeBuffers_.push_back(std::move(buf));
+}
+
+void TileCache::publish(uint64_t key, std::unique_ptr<uint8_t[]> pixels, bool failed) {
+    std::lock_guard lock(mutex_);
+    auto it = entries_.find(key);
+    if (it == entries_.end()) { // dropped meanwhile (slide closed)
+        recycleLocked(std::move(pixels));
+        return;
+    }
+    it->second.pixels = std::move(pixels);
+    it->second.failed = failed;
+    lru_.push_front(key);
+    it->second.lru = lru_.begin();
+    ++readyCount_;
+    evictOverBudgetLocked();
+}
+
+void TileCache::abandon(uint64_t key, std::unique_ptr<uint8_t[]> buffer) {
+    std::lock_guard lock(mutex_);
+    auto it = entries_.find(key);
+    if (it != entries_.end() && !it->second.pixels) entries_.erase(it);
+    recycleLocked(std::move(buffer));
+}
+
+bool TileCache::copyOut(uint64_t key, uint8_t* dst, bool* failed) {
+    std::lock_guard lock(mutex_);
+    auto it = entries_.find(key);
+    if (it == entries_.end() || !it->second.pixels) return false;
+    std::memcpy(dst, it->second.pixels.get(), kTileBytes);
+    if (failed) *failed = it->second.failed;
+    lru_.splice(lru_.begin(), lru_, it->second.lru);
+    return true;
+}
+
+bool TileCache::isReady(uint64_t key) const {
+    std::lock_guard lock(mutex_);
+    auto it = entries_.find(key);
+    return it != entries_.end() && it->second.pixels;
+}
+
+void TileCache::evictOverBudgetLocked() {
+    const uint64_t maxReady = budget_ / kTileBytes;
+    while (readyCount_ > maxReady && !lru_.empty()) {
+        const uint64_t victim = lru_.back();
+        lru_.pop_back();
+        auto it = entries_.find(victim);
+        recycleLocked(std::move(it->second.pixels));
+        entries_.erase(it);
+        --readyCount_;
+    }
+}
+
+void TileCache::dropOtherGenerations(uint32_t generation) {
+    std::lock_guard lock(mutex_);
+    for (auto it = entries_.begin(); it != entries_.end();) {
+        if (TileKey::generation(it->first) != (generation & 0xFFFF)) {
+            if (it->second.pixels) {
+                lru_.erase(it->second.lru);
+                recycleLocked(std::move(it->second.pixels));
+                --readyCount_;
+            }
+            it = entries_.erase(it);
+        } else {
+            ++it;
+        }
+    }
+}
+
+uint64_t TileCache::bytesUsed() const {
+    std::lock_guard lock(mutex_);
+    return (readyCount_ + freeBuffers_.size()) * uint64_t(kTileBytes);
+}
+
+} // namespace iris

@@ -1,0 +1,52 @@
+// RAM cache of decoded tiles, bounded by a byte budget, in recycled buffers.
+// Issue-2 slice: one mutex; the lock-free directory comes with the engine core issue.
+#pragma once
+
+#include <cstdint>
+#include <list>
+#include <memory>
+#include <mutex>
+#include <unordered_map>
+#include <vector>
+
+namespace iris {
+
+class TileCache {
+public:
+    explicit TileCache(uint64_t budgetBytes);
+
+    // Claims `key` for decoding: true when it was neither cached nor being decoded.
+    bool tryClaim(uint64_t key);
+    // Returns a buffer (kTileBytes) to decode into; recycled, allocated only while the pool grows.
+    std::unique_ptr<uint8_t[]> acquireBuffer();
+    // Publishes a decoded (or failed, with placeholder pixels) tile and drops the claim.
+    void publish(uint64_t key, std::unique_ptr<uint8_t[]> pixels, bool failed);
+    // Drops a claim without a result (the tile left the buffer region before it was decoded).
+    void abandon(uint64_t key, std::unique_ptr<uint8_t[]> buffer);
+    // Copies a ready tile into dst; false when not ready. `failed` tells a placeholder.
+    bool copyOut(uint64_t key, uint8_t* dst, bool* failed);
+    bool isReady(uint64_t key) const;
+    // Forgets every tile whose generation differs from `generation`.
+    void dropOtherGenerations(uint32_t generation);
+
+    uint64_t bytesUsed() const;
+    uint64_t budgetBytes() const { return budget_; }
+
+private:
+    struct Entry {
+        std::unique_ptr<uint8_t[]> pixels; // null while loading
+        bool failed = false;
+        std::list<uint64_t>::iterator lru;
+    };
+    void evictOverBudgetLocked();
+    void recycleLocked(std::unique_ptr<uint8_t[]> buf);
+
+    const uint64_t budget_;
+    mutable std::mutex mutex_;
+    std::unordered_map<uint64_t, Entry> entries_;
+    std::list<uint64_t> lru_; // ready entries, most recent at the front
+    std::vector<std::unique_ptr<uint8_t[]>> freeBuffers_;
+    uint64_t readyCount_ = 0;
+};
+
+} // namespace iris

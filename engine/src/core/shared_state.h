@@ -1,0 +1,84 @@
+// State shared by the API and the engine threads (issue-2 slice: a small mutex guards the
+// published slide and view; engine threads copy a snapshot and work on that).
+//
+// Wake-ups: every change that another thread may care about (new view, new slide, tile
+// decoded, upload completed, target changed) bumps `wake` and notifies. Engine threads read
+// `wake` before taking a snapshot and sleep with wake.wait(seen) when they found nothing to
+// do, so a change published between snapshot and sleep is never missed.
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <memory>
+#include <mutex>
+
+#include "iris/types.h"
+#include "slide/slide_source.h"
+#include "view/view_model.h"
+
+namespace iris {
+
+struct OpenSlide {
+    std::shared_ptr<SlideSource> source;
+    SlideInfo info;
+    uint32_t generation = 0; // packed into every TileKey of this slide
+};
+
+struct Snapshot {
+    std::shared_ptr<const OpenSlide> slide;
+    Viewport viewport;
+    uint64_t viewSerial = 0; // bumped by every view, slide or target change
+    bool visible = true;
+    std::array<float, 3> background{0.96f, 0.96f, 0.96f};
+    bool enhance = true;
+};
+
+class SharedState {
+public:
+    Snapshot snapshot() const {
+        std::lock_guard lock(mutex_);
+        return current_;
+    }
+    template <class F>
+    void update(F&& f) {
+        {
+            std::lock_guard lock(mutex_);
+            f(current_);
+            ++current_.viewSerial;
+        }
+        bump();
+    }
+    // release: pairs with the acquire load in waitSeen()/load() of the engine threads, so
+    // that whatever was published before the bump is visible to a thread that sees it.
+    void bump() {
+        wake_.fetch_add(1, std::memory_order_release);
+        wake_.notify_all();
+    }
+    uint64_t wakeValue() const { return wake_.load(std::memory_order_acquire); }
+    void waitChange(uint64_t seen) const { wake_.wait(seen, std::memory_order_acquire); }
+
+    std::atomic<bool> stopping{false};
+
+    // First error wins and sticks (until cleared).
+    void setError(const Result& r) {
+        std::lock_guard lock(errorMutex_);
+        if (error_.ok() && !r.ok()) error_ = r;
+    }
+    Result error() const {
+        std::lock_guard lock(errorMutex_);
+        return error_;
+    }
+    void clearError() {
+        std::lock_guard lock(errorMutex_);
+        error_ = {};
+    }
+
+private:
+    mutable std::mutex mutex_;
+    Snapshot current_;
+    std::atomic<uint64_t> wake_{0};
+    mutable std::mutex errorMutex_;
+    Result error_;
+};
+
+} // namespace iris

@@ -1,0 +1,298 @@
+// Engine: the public facade. It owns the device, the atlas, the caches and the three kinds of
+// engine thread, and turns API calls into published state (SharedState::update) that the
+// threads pull. See docs/ARCHITECTURE.md.
+#include "iris/engine.h"
+
+#include <cmath>
+
+#include "buffer/buffer_thread.h"
+#include "cache/loader_pool.h"
+#include "cache/tile_cache.h"
+#include "core/log.h"
+#include "core/shared_state.h"
+#include "gpu/device.h"
+#include "gpu/tile_atlas.h"
+#include "gpu/tile_pipeline.h"
+#include "render/render_thread.h"
+#include "view/view_model.h"
+
+namespace iris {
+
+struct Engine::Impl {
+    explicit Impl(const EngineConfig& c)
+        : config(c), log(c.log), device(log), atlas(device), pipeline(device, atlas), cache(c.ramBudgetBytes) {}
+
+    ~Impl() {
+        shared.stopping.store(true, std::memory_order_release);
+        shared.bump();
+        loaders.reset();
+        if (render) render->stop();
+        if (buffer) buffer->stop();
+        render.reset();
+        buffer.reset();
+    }
+
+    Result init() {
+        if (Result r = device.init(config); !r.ok()) return r;
+        if (Result r = atlas.init(config.vramBudgetBytes); !r.ok()) return r;
+        if (Result r = pipeline.init(); !r.ok()) return r;
+        render = std::make_unique<RenderThread>(shared, device, atlas, pipeline, log);
+        if (Result r = render->init(); !r.ok()) return r;
+        buffer = std::make_unique<BufferThread>(shared, cache, device, atlas, log, int(config.perimeterTiles),
+                                                render->completedFrame());
+        if (Result r = buffer->init(); !r.ok()) return r;
+        shared.update([&](Snapshot& s) { s.background = config.background; });
+        render->start();
+        buffer->start();
+        loaders = std::make_unique<LoaderPool>(shared, cache, log, config.loaderThreads, int(config.perimeterTiles));
+        log.info("engine ready: " + std::to_string(atlas.slotCount()) + " atlas slots, RAM budget " +
+                 std::to_string(cache.budgetBytes() >> 20) + " MiB");
+        return {};
+    }
+
+    // Applies a view change with the downsample clamped and the numbers sanitised.
+    void setViewLocked(Snapshot& s, View v) {
+        if (!std::isfinite(v.centerX) || !std::isfinite(v.centerY)) return;
+        if (s.slide) {
+            v.downsample = clampDownsample(s.slide->info, s.viewport.width, s.viewport.height, v.downsample);
+            // Keep some of the slide in view: the centre stays within the slide's bounds.
+            v.centerX = std::clamp(v.centerX, 0.0, double(s.slide->info.width));
+            v.centerY = std::clamp(v.centerY, 0.0, double(s.slide->info.height));
+        } else if (!(v.downsample > 0) || !std::isfinite(v.downsample)) {
+            return;
+        }
+        s.viewport.view = v;
+    }
+
+    EngineConfig config;
+    Log log;
+    SharedState shared;
+    gpu::Device device;
+    gpu::TileAtlas atlas;
+    gpu::TilePipeline pipeline;
+    TileCache cache;
+    std::unique_ptr<RenderThread> render;
+    std::unique_ptr<BufferThread> buffer;
+    std::unique_ptr<LoaderPool> loaders;
+    std::mutex openMutex; // serialises open/close (the disk work of open happens outside it)
+    uint32_t generation = 0;
+    bool surfaceBound = false;
+    bool offscreenBound = false;
+};
+
+Expected<std::unique_ptr<Engine>> Engine::create(const EngineConfig& config) {
+    auto impl = std::make_unique<Impl>(config);
+    if (Result r = impl->init(); !r.ok()) return r;
+    return std::unique_ptr<Engine>(new Engine(std::move(impl)));
+}
+
+Engine::Engine(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+Engine::~Engine() = default;
+
+namespace {
+Result checkSize(uint32_t w, uint32_t h, uint32_t maxDim) {
+    if (w == 0 || h == 0) return Result(Status::InvalidArgument, "The target size must not be zero");
+    if (w > maxDim || h > maxDim) {
+        return Result(Status::InvalidArgument, "Target " + std::to_string(w) + "x" + std::to_string(h) +
+                                                   " exceeds the device's limit of " + std::to_string(maxDim));
+    }
+    return {};
+}
+} // namespace
+
+Result Engine::bindOffscreen(uint32_t width, uint32_t height) {
+    if (Result r = checkSize(width, height, impl_->device.properties().limits.maxImageDimension2D); !r.ok()) return r;
+    {
+        std::lock_guard lock(impl_->openMutex);
+        if (impl_->surfaceBound) impl_->render->unbindSurface();
+        impl_->surfaceBound = false;
+        impl_->offscreenBound = true;
+    }
+    impl_->shared.update([&](Snapshot& s) {
+        s.viewport.width = width;
+        s.viewport.height = height;
+    });
+    impl_->render->requestOffscreen(width, height);
+    return {};
+}
+
+Result Engine::bindSurface(VkInstance instance, VkSurfaceKHR surface, uint32_t width, uint32_t height) {
+    if (!surface) return Result(Status::InvalidArgument, "bindSurface: no surface given");
+    if (instance != impl_->device.instance()) {
+        return Result(Status::InvalidArgument,
+                      "bindSurface: the surface's VkInstance is not the engine's (pass it as EngineConfig::instance)");
+    }
+    if (!impl_->device.hasSwapchain()) return Result(Status::Vulkan, "The Vulkan device has no VK_KHR_swapchain");
+    if (width == 0 || height == 0) width = height = 1;
+    {
+        std::lock_guard lock(impl_->openMutex);
+        impl_->surfaceBound = true;
+        impl_->offscreenBound = false;
+    }
+    impl_->shared.update([&](Snapshot& s) {
+        s.viewport.width = width;
+        s.viewport.height = height;
+    });
+    impl_->render->requestSurface(surface, width, height);
+    return {};
+}
+
+void Engine::unbindSurface() {
+    {
+        std::lock_guard lock(impl_->openMutex);
+        if (!impl_->surfaceBound) return;
+        impl_->surfaceBound = false;
+    }
+    impl_->render->unbindSurface();
+}
+
+void Engine::resize(uint32_t width, uint32_t height) {
+    if (width == 0 || height == 0) return; // minimised: keep the last size
+    if (!checkSize(width, height, impl_->device.properties().limits.maxImageDimension2D).ok()) return;
+    impl_->shared.update([&](Snapshot& s) {
+        s.viewport.width = width;
+        s.viewport.height = height;
+    });
+    impl_->render->requestResize(width, height);
+}
+
+void Engine::setVisible(bool visible) {
+    impl_->shared.update([&](Snapshot& s) { s.visible = visible; });
+}
+
+Result Engine::open(const std::string& path) {
+    // The disk work (header parse) runs without holding any engine lock.
+    Expected<std::unique_ptr<SlideSource>> src = openSlideSource(path);
+    std::lock_guard lock(impl_->openMutex);
+    if (!src) {
+        close();
+        impl_->shared.setError(src.error());
+        impl_->log.warn(src.error().message());
+        return src.error();
+    }
+    auto slide = std::make_shared<OpenSlide>();
+    slide->source = std::shared_ptr<SlideSource>(std::move(src.value()));
+    slide->info = slide->source->info();
+    impl_->generation = (impl_->generation + 1) & 0xFFFF;
+    if (impl_->generation == 0) impl_->generation = 1;
+    slide->generation = impl_->generation;
+    impl_->cache.dropOtherGenerations(slide->generation);
+    impl_->shared.clearError();
+    impl_->shared.update([&](Snapshot& s) {
+        s.slide = slide;
+        s.viewport.view = iris::fitView(slide->info, s.viewport.width, s.viewport.height);
+    });
+    impl_->log.info("opened " + path + " (" + slide->info.vendor + ", " + std::to_string(slide->info.width) + "x" +
+                    std::to_string(slide->info.height) + ", " + std::to_string(slide->info.levels.size()) + " levels)");
+    return {};
+}
+
+void Engine::close() {
+    impl_->shared.update([&](Snapshot& s) { s.slide.reset(); });
+}
+
+std::optional<SlideInfo> Engine::slideInfo() const {
+    const Snapshot s = impl_->shared.snapshot();
+    if (!s.slide) return std::nullopt;
+    return s.slide->info;
+}
+
+Expected<Image> Engine::readAssociatedImage(const std::string& name) const {
+    const Snapshot s = impl_->shared.snapshot();
+    if (!s.slide) return Result(Status::NoSlide, "No slide is open");
+    return s.slide->source->readAssociatedImage(name);
+}
+
+void Engine::translate(double dx, double dy) {
+    if (!std::isfinite(dx) || !std::isfinite(dy)) return;
+    impl_->shared.update([&](Snapshot& s) {
+        View v = s.viewport.view;
+        v.centerX -= dx * v.downsample;
+        v.centerY -= dy * v.downsample;
+        impl_->setViewLocked(s, v);
+    });
+}
+
+void Engine::zoom(double factor, double anchorX, double anchorY) {
+    if (!std::isfinite(factor) || factor <= 0 || !std::isfinite(anchorX) || !std::isfinite(anchorY)) return;
+    impl_->shared.update([&](Snapshot& s) {
+        View v = s.viewport.view;
+        // The level-0 point under the anchor before and after must coincide.
+        const double ax = anchorX - s.viewport.width * 0.5, ay = anchorY - s.viewport.height * 0.5;
+        const double px = v.centerX + ax * v.downsample, py = v.centerY + ay * v.downsample;
+        double ds = v.downsample / factor;
+        if (s.slide) ds = clampDownsample(s.slide->info, s.viewport.width, s.viewport.height, ds);
+        v.downsample = ds;
+        v.centerX = px - ax * ds;
+        v.centerY = py - ay * ds;
+        impl_->setViewLocked(s, v);
+    });
+}
+
+void Engine::setView(const View& view) {
+    impl_->shared.update([&](Snapshot& s) { impl_->setViewLocked(s, view); });
+}
+
+View Engine::view() const { return impl_->shared.snapshot().viewport.view; }
+
+View Engine::fitView() const {
+    const Snapshot s = impl_->shared.snapshot();
+    if (!s.slide) return s.viewport.view;
+    return iris::fitView(s.slide->info, s.viewport.width, s.viewport.height);
+}
+
+std::pair<uint32_t, uint32_t> Engine::targetSize() const {
+    const Snapshot s = impl_->shared.snapshot();
+    return {s.viewport.width, s.viewport.height};
+}
+
+Expected<Frame> Engine::readFrame() const {
+    {
+        std::lock_guard lock(impl_->openMutex);
+        if (!impl_->offscreenBound) return Result(Status::NotBound, "readFrame needs an offscreen target (bindOffscreen)");
+    }
+    return impl_->render->lastFrame();
+}
+
+Result Engine::waitForFrame(std::chrono::milliseconds timeout) {
+    const Snapshot s = impl_->shared.snapshot();
+    if (!s.slide) return Result(Status::NoSlide, "No slide is open");
+    {
+        std::lock_guard lock(impl_->openMutex);
+        if (!impl_->offscreenBound && !impl_->surfaceBound) return Result(Status::NotBound, "No render target is bound");
+    }
+    return impl_->render->waitForFrame(s.viewSerial, timeout);
+}
+
+void Engine::setFrameCallback(std::function<void(const FrameStats&)> callback) {
+    impl_->render->setFrameCallback(std::move(callback));
+}
+
+void Engine::setBackground(float r, float g, float b) {
+    auto c = [](float v) { return std::isfinite(v) ? std::clamp(v, 0.0f, 1.0f) : 0.0f; };
+    impl_->shared.update([&](Snapshot& s) { s.background = {c(r), c(g), c(b)}; });
+}
+
+void Engine::setEnhance(bool on) {
+    impl_->shared.update([&](Snapshot& s) { s.enhance = on; });
+}
+
+bool Engine::enhance() const { return impl_->shared.snapshot().enhance; }
+
+Result Engine::error() const { return impl_->shared.error(); }
+void Engine::clearError() { impl_->shared.clearError(); }
+
+DeviceInfo Engine::device() const {
+    DeviceInfo d;
+    d.name = impl_->device.properties().deviceName;
+    d.driver = impl_->device.driverName();
+    d.graphicsFamily = impl_->device.families().graphics;
+    d.computeFamily = impl_->device.families().compute;
+    d.transferFamily = impl_->device.families().transfer;
+    d.atlasSlots = impl_->atlas.slotCount();
+    return d;
+}
+
+uint64_t Engine::validationMessageCount() const { return impl_->device.validationMessages(); }
+
+} // namespace iris

@@ -1,0 +1,162 @@
+#include "gpu/render_target.h"
+
+#include <algorithm>
+
+namespace iris::gpu {
+
+namespace {
+Result makeView(VkDevice dev, VkImage image, VkFormat format, VkImageView& out) {
+    const VkImageViewCreateInfo vci{
+        .sType = VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO,
+        .pNext = nullptr,
+        .flags = 0,
+        .image = image,
+        .viewType = VK_IMAGE_VIEW_TYPE_2D,
+        .format = format,
+        .components = {},
+        .subresourceRange = vk::colorRange(0, 1, 0, 1),
+    };
+    IRIS_VK_TRY(vkCreateImageView(dev, &vci, nullptr, &out));
+    return {};
+}
+} // namespace
+
+OffscreenTarget::~OffscreenTarget() {
+    VkDevice dev = device_.device();
+    if (view_) vkDestroyImageView(dev, view_, nullptr);
+    if (image_) vkDestroyImage(dev, image_, nullptr);
+    if (memory_) vkFreeMemory(dev, memory_, nullptr);
+    vk::destroyMappedBuffer(dev, readback_);
+}
+
+Result OffscreenTarget::init(uint32_t width, uint32_t height) {
+    VkDevice dev = device_.device();
+    width_ = width;
+    height_ = height;
+    const VkImageCreateInfo ici{
+        .sType = VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO,
+        .pNext = nullptr,
+        .flags = 0,
+        .imageType = VK_IMAGE_TYPE_2D,
+        .format = kFormat,
+        .extent = {width, height, 1},
+        .mipLevels = 1,
+        .arrayLayers = 1,
+        .samples = VK_SAMPLE_COUNT_1_BIT,
+        .tiling = VK_IMAGE_TILING_OPTIMAL,
+        .usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
+        .sharingMode = VK_SHARING_MODE_EXCLUSIVE,
+        .queueFamilyIndexCount = 0,
+        .pQueueFamilyIndices = nullptr,
+        .initialLayout = VK_IMAGE_LAYOUT_UNDEFINED,
+    };
+    IRIS_VK_TRY(vkCreateImage(dev, &ici, nullptr, &image_));
+    VkMemoryRequirements req;
+    vkGetImageMemoryRequirements(dev, image_, &req);
+    const uint32_t type = vk::findMemoryType(device_.physical(), req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
+    if (type == UINT32_MAX) return Result(Status::Vulkan, "no device-local memory for the offscreen target");
+    const VkMemoryAllocateInfo mai{
+        .sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO, .pNext = nullptr, .allocationSize = req.size, .memoryTypeIndex = type};
+    IRIS_VK_TRY(vkAllocateMemory(dev, &mai, nullptr, &memory_));
+    IRIS_VK_TRY(vkBindImageMemory(dev, image_, memory_, 0));
+    if (Result r = makeView(dev, image_, kFormat, view_); !r.ok()) return r;
+    return vk::createMappedBuffer(device_.physical(), dev, VkDeviceSize(width) * height * 4,
+                                  VK_BUFFER_USAGE_TRANSFER_DST_BIT, /*preferCached=*/true, readback_);
+}
+
+Swapchain::~Swapchain() {
+    destroyResources();
+    if (swapchain_) vkDestroySwapchainKHR(device_.device(), swapchain_, nullptr);
+}
+
+void Swapchain::destroyResources() {
+    VkDevice dev = device_.device();
+    for (VkImageView v : views_) vkDestroyImageView(dev, v, nullptr);
+    for (VkSemaphore s : renderDone_) vkDestroySemaphore(dev, s, nullptr);
+    views_.clear();
+    renderDone_.clear();
+    images_.clear();
+}
+
+Result Swapchain::recreate(uint32_t width, uint32_t height) {
+    VkDevice dev = device_.device();
+    VkPhysicalDevice pd = device_.physical();
+    VkBool32 supported = VK_FALSE;
+    IRIS_VK_TRY(vkGetPhysicalDeviceSurfaceSupportKHR(pd, device_.queueFamily(), surface_, &supported));
+    if (!supported) return Result(Status::Vulkan, "The engine's graphics queue cannot present to this surface");
+    VkSurfaceCapabilitiesKHR caps;
+    IRIS_VK_TRY(vkGetPhysicalDeviceSurfaceCapabilitiesKHR(pd, surface_, &caps));
+    VkExtent2D extent = caps.currentExtent;
+    if (extent.width == UINT32_MAX) {
+        extent.width = std::clamp(width, caps.minImageExtent.width, caps.maxImageExtent.width);
+        extent.height = std::clamp(height, caps.minImageExtent.height, caps.maxImageExtent.height);
+    }
+    // The old swapchain's images may still be in use by the presentation engine: wait.
+    device_.waitIdle();
+    destroyResources();
+    VkSwapchainKHR old = swapchain_;
+    swapchain_ = VK_NULL_HANDLE;
+    if (extent.width == 0 || extent.height == 0) {
+        if (old) vkDestroySwapchainKHR(dev, old, nullptr);
+        return {};
+    }
+    uint32_t n = 0;
+    vkGetPhysicalDeviceSurfaceFormatsKHR(pd, surface_, &n, nullptr);
+    std::vector<VkSurfaceFormatKHR> formats(n);
+    vkGetPhysicalDeviceSurfaceFormatsKHR(pd, surface_, &n, formats.data());
+    // UNORM formats: slide bytes go to the screen unchanged (no sRGB encode on write).
+    VkSurfaceFormatKHR chosen{VK_FORMAT_UNDEFINED, VK_COLOR_SPACE_SRGB_NONLINEAR_KHR};
+    for (VkFormat want : {VK_FORMAT_B8G8R8A8_UNORM, VK_FORMAT_R8G8B8A8_UNORM}) {
+        for (const auto& f : formats) {
+            if (f.format == want && f.colorSpace == VK_COLOR_SPACE_SRGB_NONLINEAR_KHR && chosen.format == VK_FORMAT_UNDEFINED)
+                chosen = f;
+        }
+    }
+    if (chosen.format == VK_FORMAT_UNDEFINED) {
+        if (formats.empty()) return Result(Status::Vulkan, "The surface offers no formats");
+        chosen = formats[0];
+    }
+    format_ = chosen.format;
+    uint32_t count = std::max(caps.minImageCount + 1, 3u);
+    if (caps.maxImageCount) count = std::min(count, caps.maxImageCount);
+    const VkSwapchainCreateInfoKHR sci{
+        .sType = VK_STRUCTURE_TYPE_SWAPCHAIN_CREATE_INFO_KHR,
+        .pNext = nullptr,
+        .flags = 0,
+        .surface = surface_,
+        .minImageCount = count,
+        .imageFormat = chosen.format,
+        .imageColorSpace = chosen.colorSpace,
+        .imageExtent = extent,
+        .imageArrayLayers = 1,
+        .imageUsage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
+        .imageSharingMode = VK_SHARING_MODE_EXCLUSIVE,
+        .queueFamilyIndexCount = 0,
+        .pQueueFamilyIndices = nullptr,
+        .preTransform = (caps.supportedTransforms & VK_SURFACE_TRANSFORM_IDENTITY_BIT_KHR) ? VK_SURFACE_TRANSFORM_IDENTITY_BIT_KHR
+                                                                                            : caps.currentTransform,
+        .compositeAlpha = (caps.supportedCompositeAlpha & VK_COMPOSITE_ALPHA_OPAQUE_BIT_KHR)
+                              ? VK_COMPOSITE_ALPHA_OPAQUE_BIT_KHR
+                              : VkCompositeAlphaFlagBitsKHR(caps.supportedCompositeAlpha & -caps.supportedCompositeAlpha),
+        .presentMode = VK_PRESENT_MODE_FIFO_KHR, // vsync: the monitor's rate, no tearing, always supported
+        .clipped = VK_TRUE,
+        .oldSwapchain = old,
+    };
+    const VkResult vr = vkCreateSwapchainKHR(dev, &sci, nullptr, &swapchain_);
+    if (old) vkDestroySwapchainKHR(dev, old, nullptr);
+    IRIS_VK_TRY(vr);
+    extent_ = extent;
+    IRIS_VK_TRY(vkGetSwapchainImagesKHR(dev, swapchain_, &n, nullptr));
+    images_.resize(n);
+    IRIS_VK_TRY(vkGetSwapchainImagesKHR(dev, swapchain_, &n, images_.data()));
+    views_.resize(n);
+    renderDone_.resize(n);
+    const VkSemaphoreCreateInfo semci{.sType = VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO, .pNext = nullptr, .flags = 0};
+    for (uint32_t i = 0; i < n; ++i) {
+        if (Result r = makeView(dev, images_[i], format_, views_[i]); !r.ok()) return r;
+        IRIS_VK_TRY(vkCreateSemaphore(dev, &semci, nullptr, &renderDone_[i]));
+    }
+    return {};
+}
+
+} // namespace iris::gpu

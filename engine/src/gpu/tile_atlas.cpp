@@ -1,0 +1,218 @@
+#include "gpu/tile_atlas.h"
+
+#include <algorithm>
+
+#include "gpu/vk_util.h"
+#include "slide/slide_source.h"
+
+namespace iris::gpu {
+
+uint64_t TileAtlas::bytesPerSlot() {
+    uint64_t bytes = 0;
+    for (uint32_t m = 0; m < kTileMipLevels; ++m) {
+        const uint64_t s = uint64_t(kTileSize) >> m;
+        bytes += s * s * 4;
+    }
+    return bytes;
+}
+
+TileAtlas::~TileAtlas() {
+    VkDevice dev = device_.device();
+    if (!dev) return;
+    if (sampler_) vkDestroySampler(dev, sampler_, nullptr);
+    if (view_) vkDestroyImageView(dev, view_, nullptr);
+    if (image_) vkDestroyImage(dev, image_, nullptr);
+    if (memory_) vkFreeMemory(dev, memory_, nullptr);
+}
+
+Result TileAtlas::init(uint64_t vramBudgetBytes) {
+    VkDevice dev = device_.device();
+    const auto& limits = device_.properties().limits;
+    uint64_t n = vramBudgetBytes / bytesPerSlot();
+    n = std::clamp<uint64_t>(n, 64, limits.maxImageArrayLayers);
+
+    constexpr VkFormat kFormat = VK_FORMAT_R8G8B8A8_UNORM; // UNORM: bytes in, bytes out, no sRGB conversion
+    VkFormatProperties fp;
+    vkGetPhysicalDeviceFormatProperties(device_.physical(), kFormat, &fp);
+    const VkFormatFeatureFlags need = VK_FORMAT_FEATURE_SAMPLED_IMAGE_BIT | VK_FORMAT_FEATURE_SAMPLED_IMAGE_FILTER_LINEAR_BIT |
+                                      VK_FORMAT_FEATURE_BLIT_SRC_BIT | VK_FORMAT_FEATURE_BLIT_DST_BIT;
+    if ((fp.optimalTilingFeatures & need) != need) {
+        return Result(Status::Vulkan, "The device cannot sample and blit RGBA8 images with linear filtering");
+    }
+
+    VkResult vr = VK_ERROR_OUT_OF_DEVICE_MEMORY;
+    // Halve the slot count until the allocation succeeds (a budget larger than the device).
+    for (; n >= 64; n /= 2) {
+        const VkImageCreateInfo ici{
+            .sType = VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO,
+            .pNext = nullptr,
+            .flags = 0,
+            .imageType = VK_IMAGE_TYPE_2D,
+            .format = kFormat,
+            .extent = {uint32_t(kTileSize), uint32_t(kTileSize), 1},
+            .mipLevels = kTileMipLevels,
+            .arrayLayers = uint32_t(n),
+            .samples = VK_SAMPLE_COUNT_1_BIT,
+            .tiling = VK_IMAGE_TILING_OPTIMAL,
+            .usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
+            .sharingMode = VK_SHARING_MODE_EXCLUSIVE,
+            .queueFamilyIndexCount = 0,
+            .pQueueFamilyIndices = nullptr,
+            .initialLayout = VK_IMAGE_LAYOUT_UNDEFINED,
+        };
+        IRIS_VK_TRY(vkCreateImage(dev, &ici, nullptr, &image_));
+        VkMemoryRequirements req;
+        vkGetImageMemoryRequirements(dev, image_, &req);
+        const uint32_t type = vk::findMemoryType(device_.physical(), req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
+        const VkMemoryAllocateInfo mai{
+            .sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO, .pNext = nullptr, .allocationSize = req.size, .memoryTypeIndex = type};
+        vr = type == UINT32_MAX ? VK_ERROR_OUT_OF_DEVICE_MEMORY : vkAllocateMemory(dev, &mai, nullptr, &memory_);
+        if (vr == VK_SUCCESS) break;
+        vkDestroyImage(dev, image_, nullptr);
+        image_ = VK_NULL_HANDLE;
+    }
+    IRIS_VK_TRY(vr);
+    IRIS_VK_TRY(vkBindImageMemory(dev, image_, memory_, 0));
+
+    const VkImageViewCreateInfo vci{
+        .sType = VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO,
+        .pNext = nullptr,
+        .flags = 0,
+        .image = image_,
+        .viewType = VK_IMAGE_VIEW_TYPE_2D_ARRAY,
+        .format = kFormat,
+        .components = {},
+        .subresourceRange = vk::colorRange(),
+    };
+    IRIS_VK_TRY(vkCreateImageView(dev, &vci, nullptr, &view_));
+
+    const VkSamplerCreateInfo sci{
+        .sType = VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO,
+        .pNext = nullptr,
+        .flags = 0,
+        .magFilter = VK_FILTER_LINEAR,
+        .minFilter = VK_FILTER_LINEAR,
+        .mipmapMode = VK_SAMPLER_MIPMAP_MODE_LINEAR,
+        .addressModeU = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
+        .addressModeV = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
+        .addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
+        .mipLodBias = 0,
+        .anisotropyEnable = VK_FALSE,
+        .maxAnisotropy = 1,
+        .compareEnable = VK_FALSE,
+        .compareOp = VK_COMPARE_OP_ALWAYS,
+        .minLod = 0,
+        .maxLod = float(kTileMipLevels - 1),
+        .borderColor = VK_BORDER_COLOR_FLOAT_TRANSPARENT_BLACK,
+        .unnormalizedCoordinates = VK_FALSE,
+    };
+    IRIS_VK_TRY(vkCreateSampler(dev, &sci, nullptr, &sampler_));
+
+    // One-time transition of every layer to GENERAL, where the image stays.
+    VkCommandPool pool;
+    const VkCommandPoolCreateInfo pci{.sType = VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO,
+                                      .pNext = nullptr,
+                                      .flags = VK_COMMAND_POOL_CREATE_TRANSIENT_BIT,
+                                      .queueFamilyIndex = device_.queueFamily()};
+    IRIS_VK_TRY(vkCreateCommandPool(dev, &pci, nullptr, &pool));
+    VkCommandBuffer cmd;
+    const VkCommandBufferAllocateInfo cai{.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO,
+                                          .pNext = nullptr,
+                                          .commandPool = pool,
+                                          .level = VK_COMMAND_BUFFER_LEVEL_PRIMARY,
+                                          .commandBufferCount = 1};
+    vkAllocateCommandBuffers(dev, &cai, &cmd);
+    const VkCommandBufferBeginInfo bi{.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO,
+                                      .pNext = nullptr,
+                                      .flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT,
+                                      .pInheritanceInfo = nullptr};
+    vkBeginCommandBuffer(cmd, &bi);
+    const VkImageMemoryBarrier2 b = vk::imageBarrier(image_, VK_PIPELINE_STAGE_2_NONE, VK_ACCESS_2_NONE,
+                                                 VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT,
+                                                 VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL, vk::colorRange());
+    vk::pipelineBarrier(cmd, &b, 1);
+    vkEndCommandBuffer(cmd);
+    VkFence fence;
+    const VkFenceCreateInfo fci{.sType = VK_STRUCTURE_TYPE_FENCE_CREATE_INFO, .pNext = nullptr, .flags = 0};
+    vkCreateFence(dev, &fci, nullptr, &fence);
+    const VkCommandBufferSubmitInfo cbi{.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_SUBMIT_INFO, .pNext = nullptr, .commandBuffer = cmd, .deviceMask = 0};
+    const VkSubmitInfo2 si{.sType = VK_STRUCTURE_TYPE_SUBMIT_INFO_2,
+                           .pNext = nullptr,
+                           .flags = 0,
+                           .waitSemaphoreInfoCount = 0,
+                           .pWaitSemaphoreInfos = nullptr,
+                           .commandBufferInfoCount = 1,
+                           .pCommandBufferInfos = &cbi,
+                           .signalSemaphoreInfoCount = 0,
+                           .pSignalSemaphoreInfos = nullptr};
+    VkResult sr = device_.submit(si, fence);
+    if (sr == VK_SUCCESS) sr = vkWaitForFences(dev, 1, &fence, VK_TRUE, UINT64_MAX);
+    vkDestroyFence(dev, fence, nullptr);
+    vkDestroyCommandPool(dev, pool, nullptr);
+    IRIS_VK_TRY(sr);
+
+    slots_.assign(size_t(n), Slot{});
+    index_.reserve(size_t(n) * 2);
+    return {};
+}
+
+int TileAtlas::acquireForFrame(uint64_t key, uint64_t frame) {
+    std::lock_guard lock(mutex_);
+    auto it = index_.find(key);
+    if (it == index_.end()) return -1;
+    Slot& s = slots_[size_t(it->second)];
+    if (s.state != State::Active) return -1;
+    s.lastUsedFrame = frame;
+    return it->second;
+}
+
+bool TileAtlas::present(uint64_t key) const {
+    std::lock_guard lock(mutex_);
+    return index_.count(key) != 0;
+}
+
+int TileAtlas::allocate(uint64_t key, const std::unordered_set<uint64_t>& keep, uint64_t completedFrame) {
+    std::lock_guard lock(mutex_);
+    int victim = -1;
+    uint64_t oldest = UINT64_MAX;
+    for (size_t i = 0; i < slots_.size(); ++i) {
+        const Slot& s = slots_[i];
+        if (s.state == State::Free) {
+            victim = int(i);
+            break;
+        }
+        if (s.state == State::Active && s.lastUsedFrame <= completedFrame && !keep.count(s.key) &&
+            s.lastUsedFrame < oldest) {
+            oldest = s.lastUsedFrame;
+            victim = int(i);
+        }
+    }
+    if (victim < 0) return -1;
+    Slot& s = slots_[size_t(victim)];
+    if (s.state != State::Free) index_.erase(s.key);
+    s.key = key;
+    s.state = State::Filling;
+    index_[key] = victim;
+    return victim;
+}
+
+void TileAtlas::activate(int slot) {
+    std::lock_guard lock(mutex_);
+    slots_[size_t(slot)].state = State::Active;
+}
+
+void TileAtlas::release(int slot) {
+    std::lock_guard lock(mutex_);
+    Slot& s = slots_[size_t(slot)];
+    index_.erase(s.key);
+    s = Slot{};
+}
+
+uint32_t TileAtlas::activeCount() const {
+    std::lock_guard lock(mutex_);
+    uint32_t n = 0;
+    for (const Slot& s : slots_) n += s.state == State::Active;
+    return n;
+}
+
+} // namespace iris::gpu

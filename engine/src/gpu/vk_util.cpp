@@ -1,0 +1,88 @@
+#include "gpu/vk_util.h"
+
+namespace iris::vk {
+
+const char* resultName(VkResult r) {
+    switch (r) {
+#define X(n) case n: return #n;
+        X(VK_SUCCESS) X(VK_NOT_READY) X(VK_TIMEOUT) X(VK_EVENT_SET) X(VK_EVENT_RESET) X(VK_INCOMPLETE)
+        X(VK_ERROR_OUT_OF_HOST_MEMORY) X(VK_ERROR_OUT_OF_DEVICE_MEMORY) X(VK_ERROR_INITIALIZATION_FAILED)
+        X(VK_ERROR_DEVICE_LOST) X(VK_ERROR_MEMORY_MAP_FAILED) X(VK_ERROR_LAYER_NOT_PRESENT)
+        X(VK_ERROR_EXTENSION_NOT_PRESENT) X(VK_ERROR_FEATURE_NOT_PRESENT) X(VK_ERROR_INCOMPATIBLE_DRIVER)
+        X(VK_ERROR_TOO_MANY_OBJECTS) X(VK_ERROR_FORMAT_NOT_SUPPORTED) X(VK_ERROR_FRAGMENTED_POOL)
+        X(VK_ERROR_UNKNOWN) X(VK_ERROR_OUT_OF_POOL_MEMORY) X(VK_ERROR_SURFACE_LOST_KHR)
+        X(VK_ERROR_NATIVE_WINDOW_IN_USE_KHR) X(VK_SUBOPTIMAL_KHR) X(VK_ERROR_OUT_OF_DATE_KHR)
+#undef X
+    default: return "VkResult(other)";
+    }
+}
+
+Result check(VkResult r, const char* what) {
+    if (r >= 0) return {};
+    const Status s = r == VK_ERROR_DEVICE_LOST ? Status::DeviceLost
+                     : (r == VK_ERROR_OUT_OF_HOST_MEMORY || r == VK_ERROR_OUT_OF_DEVICE_MEMORY) ? Status::OutOfMemory
+                                                                                                 : Status::Vulkan;
+    return Result(s, std::string(what) + " failed: " + resultName(r));
+}
+
+uint32_t findMemoryType(VkPhysicalDevice pd, uint32_t typeBits, VkMemoryPropertyFlags required,
+                        VkMemoryPropertyFlags preferred) {
+    VkPhysicalDeviceMemoryProperties props;
+    vkGetPhysicalDeviceMemoryProperties(pd, &props);
+    uint32_t fallback = UINT32_MAX;
+    for (uint32_t i = 0; i < props.memoryTypeCount; ++i) {
+        if (!(typeBits & (1u << i))) continue;
+        const VkMemoryPropertyFlags f = props.memoryTypes[i].propertyFlags;
+        if ((f & required) != required) continue;
+        if ((f & (required | preferred)) == (required | preferred)) return i;
+        if (fallback == UINT32_MAX) fallback = i;
+    }
+    return fallback;
+}
+
+Result createMappedBuffer(VkPhysicalDevice pd, VkDevice dev, VkDeviceSize size, VkBufferUsageFlags usage,
+                          bool preferCached, MappedBuffer& out) {
+    const VkBufferCreateInfo bci{
+        .sType = VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO,
+        .pNext = nullptr,
+        .flags = 0,
+        .size = size,
+        .usage = usage,
+        .sharingMode = VK_SHARING_MODE_EXCLUSIVE,
+        .queueFamilyIndexCount = 0,
+        .pQueueFamilyIndices = nullptr,
+    };
+    IRIS_VK_TRY(vkCreateBuffer(dev, &bci, nullptr, &out.buffer));
+    VkMemoryRequirements req;
+    vkGetBufferMemoryRequirements(dev, out.buffer, &req);
+    const uint32_t type = findMemoryType(pd, req.memoryTypeBits, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT,
+                                         preferCached ? VK_MEMORY_PROPERTY_HOST_CACHED_BIT
+                                                      : VK_MEMORY_PROPERTY_HOST_COHERENT_BIT);
+    if (type == UINT32_MAX) return Result(Status::Vulkan, "no host-visible memory type for a staging buffer");
+    VkPhysicalDeviceMemoryProperties props;
+    vkGetPhysicalDeviceMemoryProperties(pd, &props);
+    out.coherent = props.memoryTypes[type].propertyFlags & VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+    const VkMemoryAllocateInfo mai{
+        .sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO, .pNext = nullptr, .allocationSize = req.size, .memoryTypeIndex = type};
+    IRIS_VK_TRY(vkAllocateMemory(dev, &mai, nullptr, &out.memory));
+    IRIS_VK_TRY(vkBindBufferMemory(dev, out.buffer, out.memory, 0));
+    IRIS_VK_TRY(vkMapMemory(dev, out.memory, 0, VK_WHOLE_SIZE, 0, &out.mapped));
+    out.size = size;
+    return {};
+}
+
+void destroyMappedBuffer(VkDevice dev, MappedBuffer& b) {
+    if (b.memory) vkFreeMemory(dev, b.memory, nullptr); // unmaps implicitly
+    if (b.buffer) vkDestroyBuffer(dev, b.buffer, nullptr);
+    b = MappedBuffer{};
+}
+
+void invalidate(VkDevice dev, const MappedBuffer& b) {
+    if (b.coherent) return;
+    const VkMappedMemoryRange range{
+        .sType = VK_STRUCTURE_TYPE_MAPPED_MEMORY_RANGE, .pNext = nullptr, .memory = b.memory, .offset = 0, .size = VK_WHOLE_SIZE};
+    vkInvalidateMappedMemoryRanges(dev, 1, &range);
+}
+
+} // namespace iris::vk
+

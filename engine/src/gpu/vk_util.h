@@ -1,0 +1,81 @@
+// Small Vulkan helpers: VkResult → Result, synchronization2 barrier builders, memory types.
+#pragma once
+
+#include <string>
+
+#include <vulkan/vulkan.h>
+
+#include "iris/types.h"
+
+namespace iris::vk {
+
+const char* resultName(VkResult r);
+
+// VkResult < 0 is an error (DeviceLost gets its own status); ≥ 0 is success, including
+// VK_SUBOPTIMAL_KHR, which the swapchain code handles itself.
+Result check(VkResult r, const char* what);
+
+#define IRIS_VK_TRY(expr)                                                   \
+    do {                                                                    \
+        if (::iris::Result iris_r_ = ::iris::vk::check((expr), #expr); !iris_r_.ok()) \
+            return iris_r_;                                                 \
+    } while (0)
+
+uint32_t findMemoryType(VkPhysicalDevice pd, uint32_t typeBits, VkMemoryPropertyFlags required,
+                        VkMemoryPropertyFlags preferred = 0);
+
+inline VkImageSubresourceRange colorRange(uint32_t baseMip = 0, uint32_t mipCount = VK_REMAINING_MIP_LEVELS,
+                                          uint32_t baseLayer = 0, uint32_t layerCount = VK_REMAINING_ARRAY_LAYERS) {
+    return {VK_IMAGE_ASPECT_COLOR_BIT, baseMip, mipCount, baseLayer, layerCount};
+}
+
+inline VkImageMemoryBarrier2 imageBarrier(VkImage image, VkPipelineStageFlags2 srcStage, VkAccessFlags2 srcAccess,
+                                          VkPipelineStageFlags2 dstStage, VkAccessFlags2 dstAccess,
+                                          VkImageLayout oldLayout, VkImageLayout newLayout,
+                                          VkImageSubresourceRange range) {
+    return VkImageMemoryBarrier2{
+        .sType = VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER_2,
+        .pNext = nullptr,
+        .srcStageMask = srcStage,
+        .srcAccessMask = srcAccess,
+        .dstStageMask = dstStage,
+        .dstAccessMask = dstAccess,
+        .oldLayout = oldLayout,
+        .newLayout = newLayout,
+        .srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED,
+        .dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED,
+        .image = image,
+        .subresourceRange = range,
+    };
+}
+
+inline void pipelineBarrier(VkCommandBuffer cmd, const VkImageMemoryBarrier2* barriers, uint32_t count) {
+    const VkDependencyInfo dep{
+        .sType = VK_STRUCTURE_TYPE_DEPENDENCY_INFO,
+        .pNext = nullptr,
+        .dependencyFlags = 0,
+        .memoryBarrierCount = 0,
+        .pMemoryBarriers = nullptr,
+        .bufferMemoryBarrierCount = 0,
+        .pBufferMemoryBarriers = nullptr,
+        .imageMemoryBarrierCount = count,
+        .pImageMemoryBarriers = barriers,
+    };
+    vkCmdPipelineBarrier2(cmd, &dep);
+}
+
+// A host-visible buffer, persistently mapped.
+struct MappedBuffer {
+    VkBuffer buffer = VK_NULL_HANDLE;
+    VkDeviceMemory memory = VK_NULL_HANDLE;
+    void* mapped = nullptr;
+    VkDeviceSize size = 0;
+    bool coherent = true;
+};
+Result createMappedBuffer(VkPhysicalDevice pd, VkDevice dev, VkDeviceSize size, VkBufferUsageFlags usage,
+                          bool preferCached, MappedBuffer& out);
+void destroyMappedBuffer(VkDevice dev, MappedBuffer& b);
+// Makes device writes visible to the host for non-coherent memory.
+void invalidate(VkDevice dev, const MappedBuffer& b);
+
+} // namespace iris::vk

@@ -1,0 +1,496 @@
+#include "render/render_thread.h"
+
+#include <cmath>
+#include <cstring>
+#include <vector>
+
+namespace iris {
+
+using Clock = std::chrono::steady_clock;
+
+RenderThread::RenderThread(SharedState& shared, gpu::Device& device, gpu::TileAtlas& atlas, gpu::TilePipeline& pipeline,
+                           const Log& log)
+    : shared_(shared), device_(device), atlas_(atlas), pipeline_(pipeline), log_(log) {}
+
+RenderThread::~RenderThread() {
+    stop();
+    VkDevice dev = device_.device();
+    if (!dev) return;
+    device_.waitIdle();
+    swapchain_.reset();
+    offscreen_.reset();
+    for (FrameSlot& f : frames_) {
+        if (f.fence) vkDestroyFence(dev, f.fence, nullptr);
+        if (f.acquired) vkDestroySemaphore(dev, f.acquired, nullptr);
+        if (f.pool) vkDestroyCommandPool(dev, f.pool, nullptr);
+        vk::destroyMappedBuffer(dev, f.instances);
+    }
+}
+
+Result RenderThread::init() {
+    VkDevice dev = device_.device();
+    for (FrameSlot& f : frames_) {
+        const VkCommandPoolCreateInfo pci{.sType = VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO,
+                                          .pNext = nullptr,
+                                          .flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT,
+                                          .queueFamilyIndex = device_.queueFamily()};
+        IRIS_VK_TRY(vkCreateCommandPool(dev, &pci, nullptr, &f.pool));
+        const VkCommandBufferAllocateInfo cai{.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO,
+                                              .pNext = nullptr,
+                                              .commandPool = f.pool,
+                                              .level = VK_COMMAND_BUFFER_LEVEL_PRIMARY,
+                                              .commandBufferCount = 1};
+        IRIS_VK_TRY(vkAllocateCommandBuffers(dev, &cai, &f.cmd));
+        const VkFenceCreateInfo fci{.sType = VK_STRUCTURE_TYPE_FENCE_CREATE_INFO, .pNext = nullptr, .flags = VK_FENCE_CREATE_SIGNALED_BIT};
+        IRIS_VK_TRY(vkCreateFence(dev, &fci, nullptr, &f.fence));
+        const VkSemaphoreCreateInfo sci{.sType = VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO, .pNext = nullptr, .flags = 0};
+        IRIS_VK_TRY(vkCreateSemaphore(dev, &sci, nullptr, &f.acquired));
+        if (Result r = vk::createMappedBuffer(device_.physical(), dev, sizeof(gpu::TileInstance) * kMaxInstances,
+                                              VK_BUFFER_USAGE_VERTEX_BUFFER_BIT, false, f.instances);
+            !r.ok())
+            return r;
+    }
+    return {};
+}
+
+void RenderThread::start() {
+    thread_ = std::thread([this] { run(); });
+}
+
+void RenderThread::stop() {
+    if (thread_.joinable()) thread_.join();
+    std::lock_guard lock(mutex_);
+    unbindDone_ = true;
+    cv_.notify_all();
+}
+
+void RenderThread::requestOffscreen(uint32_t width, uint32_t height) {
+    {
+        std::lock_guard lock(mutex_);
+        request_ = TargetRequest{true, TargetKind::Offscreen, VK_NULL_HANDLE, width, height, false};
+        haveFrame_ = false;
+    }
+    shared_.bump();
+}
+
+void RenderThread::requestSurface(VkSurfaceKHR surface, uint32_t width, uint32_t height) {
+    {
+        std::lock_guard lock(mutex_);
+        request_ = TargetRequest{true, TargetKind::Surface, surface, width, height, false};
+        haveFrame_ = false;
+    }
+    shared_.bump();
+}
+
+void RenderThread::requestResize(uint32_t width, uint32_t height) {
+    {
+        std::lock_guard lock(mutex_);
+        if (request_.pending && !request_.resizeOnly) {
+            request_.width = width; // a bind not yet applied takes the new size
+            request_.height = height;
+        } else {
+            request_ = TargetRequest{true, TargetKind::None, VK_NULL_HANDLE, width, height, true};
+        }
+    }
+    shared_.bump();
+}
+
+void RenderThread::unbindSurface() {
+    std::unique_lock lock(mutex_);
+    if (!thread_.joinable()) return;
+    request_ = TargetRequest{true, TargetKind::None, VK_NULL_HANDLE, 0, 0, false};
+    unbindDone_ = false;
+    lock.unlock();
+    shared_.bump();
+    lock.lock();
+    // Bounded: a render thread stuck in the driver must not hang the host's window teardown.
+    if (!cv_.wait_for(lock, std::chrono::seconds(10), [&] { return unbindDone_; })) {
+        log_.error("unbindSurface: the render thread did not release the swapchain within 10 s");
+    }
+}
+
+void RenderThread::setFrameCallback(std::function<void(const FrameStats&)> cb) {
+    std::lock_guard lock(mutex_);
+    callback_ = std::move(cb);
+}
+
+Expected<Frame> RenderThread::lastFrame() const {
+    std::lock_guard lock(mutex_);
+    if (!haveFrame_) return Result(Status::NotBound, "No frame has been rendered into an offscreen target yet");
+    return lastFrame_;
+}
+
+Result RenderThread::waitForFrame(uint64_t viewSerial, std::chrono::milliseconds timeout) {
+    std::unique_lock lock(mutex_);
+    const bool ok = cv_.wait_for(lock, timeout, [&] {
+        return completeViewSerial_ >= viewSerial || shared_.stopping.load(std::memory_order_acquire);
+    });
+    if (!ok) return Result(Status::Timeout, "No complete frame of the current view within " + std::to_string(timeout.count()) + " ms");
+    return {};
+}
+
+void RenderThread::applyTargetRequest() {
+    TargetRequest req;
+    {
+        std::lock_guard lock(mutex_);
+        if (!request_.pending) return;
+        req = request_;
+        request_.pending = false;
+    }
+    if (req.resizeOnly) {
+        reqWidth_ = req.width;
+        reqHeight_ = req.height;
+        if (kind_ == TargetKind::Offscreen) {
+            req.kind = TargetKind::Offscreen;
+        } else if (kind_ == TargetKind::Surface) {
+            swapchainDirty_ = true;
+            return;
+        } else {
+            return;
+        }
+    }
+    // Whatever the request, the old target goes first (after the GPU is done with it).
+    device_.waitIdle();
+    for (FrameSlot& f : frames_) {
+        vkWaitForFences(device_.device(), 1, &f.fence, VK_TRUE, UINT64_MAX);
+        if (f.serial) completedFrame_.store(std::max(completedFrame_.load(), f.serial), std::memory_order_release);
+    }
+    offscreen_.reset();
+    if (req.kind != TargetKind::Surface || req.surface != surface_) swapchain_.reset();
+    kind_ = req.kind;
+    reqWidth_ = req.width;
+    reqHeight_ = req.height;
+    if (kind_ == TargetKind::Offscreen) {
+        offscreen_ = std::make_unique<gpu::OffscreenTarget>(device_);
+        if (Result r = offscreen_->init(req.width, req.height); !r.ok()) {
+            shared_.setError(r);
+            log_.error("offscreen target: " + r.message());
+            offscreen_.reset();
+            kind_ = TargetKind::None;
+        }
+    } else if (kind_ == TargetKind::Surface) {
+        surface_ = req.surface;
+        if (!swapchain_) swapchain_ = std::make_unique<gpu::Swapchain>(device_, surface_);
+        swapchainDirty_ = true;
+    } else {
+        surface_ = VK_NULL_HANDLE;
+        std::lock_guard lock(mutex_);
+        unbindDone_ = true;
+        cv_.notify_all();
+    }
+}
+
+void RenderThread::run() {
+    uint64_t renderedWake = UINT64_MAX;
+    while (!shared_.stopping.load(std::memory_order_acquire)) {
+        const uint64_t seen = shared_.wakeValue();
+        applyTargetRequest();
+        if (kind_ == TargetKind::Surface && swapchainDirty_) {
+            swapchainDirty_ = false;
+            if (Result r = swapchain_->recreate(reqWidth_, reqHeight_); !r.ok()) {
+                shared_.setError(r);
+                log_.error("swapchain: " + r.message());
+            }
+            renderedWake = UINT64_MAX; // a new swapchain needs a frame
+        }
+        const Snapshot snap = shared_.snapshot();
+        const bool canRender = (kind_ == TargetKind::Offscreen && offscreen_) ||
+                               (kind_ == TargetKind::Surface && swapchain_ && swapchain_->valid());
+        if (!canRender || !snap.visible || seen == renderedWake) {
+            shared_.waitChange(seen);
+            continue;
+        }
+        if (Result r = renderFrame(snap); !r.ok()) {
+            shared_.setError(r);
+            log_.error("render: " + r.message());
+            if (r.status() == Status::DeviceLost) {
+                // Nothing more can be drawn; sleep until the host tears the engine down.
+                renderedWake = seen;
+                shared_.waitChange(seen);
+                continue;
+            }
+        }
+        renderedWake = seen;
+    }
+}
+
+Result RenderThread::waitSlot(FrameSlot& f) {
+    IRIS_VK_TRY(vkWaitForFences(device_.device(), 1, &f.fence, VK_TRUE, UINT64_MAX));
+    if (f.serial) {
+        // release: pairs with the buffer thread's acquire load before reclaiming slots
+        uint64_t prev = completedFrame_.load(std::memory_order_relaxed);
+        if (f.serial > prev) completedFrame_.store(f.serial, std::memory_order_release);
+    }
+    return {};
+}
+
+Result RenderThread::renderFrame(const Snapshot& snap) {
+    const auto t0 = Clock::now();
+    VkDevice dev = device_.device();
+    FrameSlot& f = frames_[serial_ % kFramesInFlight];
+    if (Result r = waitSlot(f); !r.ok()) return r;
+
+    // Target image for this frame.
+    VkImage image;
+    VkImageView view;
+    VkFormat format;
+    VkExtent2D extent;
+    uint32_t imageIndex = 0;
+    if (kind_ == TargetKind::Offscreen) {
+        image = offscreen_->image();
+        view = offscreen_->view();
+        format = gpu::OffscreenTarget::kFormat;
+        extent = offscreen_->extent();
+    } else {
+        const VkResult ar = vkAcquireNextImageKHR(dev, swapchain_->handle(), 100'000'000, f.acquired, VK_NULL_HANDLE, &imageIndex);
+        if (ar == VK_ERROR_OUT_OF_DATE_KHR) {
+            swapchainDirty_ = true;
+            shared_.bump();
+            return {};
+        }
+        if (ar == VK_TIMEOUT || ar == VK_NOT_READY) {
+            shared_.bump(); // try again on the next pass
+            return {};
+        }
+        if (ar == VK_SUBOPTIMAL_KHR) swapchainDirty_ = true; // draw this one, recreate after
+        else IRIS_VK_TRY(ar);
+        image = swapchain_->image(imageIndex);
+        view = swapchain_->view(imageIndex);
+        format = swapchain_->format();
+        extent = swapchain_->extent();
+    }
+    Expected<VkPipeline> pipe = pipeline_.pipelineFor(format);
+    if (!pipe) return pipe.error();
+
+    const uint64_t serial = ++serial_;
+    f.serial = serial;
+
+    // Draw list: base, LR, HR, each only where its tiles are ACTIVE.
+    Viewport vp = snap.viewport;
+    vp.width = extent.width;
+    vp.height = extent.height;
+    auto* inst = static_cast<gpu::TileInstance*>(f.instances.mapped);
+    uint32_t count = 0;
+    bool complete = false;
+    if (snap.slide) {
+        const SlideInfo& info = snap.slide->info;
+        const LevelChoice c = chooseLevels(info, vp.view.downsample);
+        int order[3] = {c.base, c.lr, c.hr};
+        if (order[1] == order[0]) order[1] = -1;
+        if (order[2] == order[0]) order[0] = -1;
+        complete = true;
+        for (int li : order) {
+            if (li < 0) continue;
+            const LevelInfo& level = info.levels[size_t(li)];
+            const TileRange range = visibleTiles(level, vp, 0);
+            const bool isHr = li == c.hr;
+            const double lod = std::max(0.0, std::log2(vp.view.downsample / level.downsample));
+            for (int64_t ty = range.y0; ty <= range.y1; ++ty) {
+                for (int64_t tx = range.x0; tx <= range.x1; ++tx) {
+                    const uint64_t key = TileKey::make(snap.slide->generation, li, tx, ty);
+                    const int layer = count < kMaxInstances ? atlas_.acquireForFrame(key, serial) : -1;
+                    if (layer < 0) {
+                        if (isHr) complete = false;
+                        continue;
+                    }
+                    const TilePlacement p = placeTile(level, vp, tx, ty);
+                    inst[count++] = gpu::TileInstance{
+                        .rect = {float(p.x0), float(p.y0), float(p.x1), float(p.y1)},
+                        .texel = {float(p.validW), float(p.validH), float(layer), float(lod)},
+                        .scale = float(p.texelsPerPixel),
+                    };
+                }
+            }
+        }
+    }
+
+    VkCommandBuffer cmd = f.cmd;
+    IRIS_VK_TRY(vkResetCommandBuffer(cmd, 0));
+    const VkCommandBufferBeginInfo bi{.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO,
+                                      .pNext = nullptr,
+                                      .flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT,
+                                      .pInheritanceInfo = nullptr};
+    IRIS_VK_TRY(vkBeginCommandBuffer(cmd, &bi));
+    // Previous contents are discarded (UNDEFINED); the wait on the previous frame's copy
+    // (offscreen) or on the acquire semaphore (swapchain) is covered by the source stages.
+    const VkImageMemoryBarrier2 toColor = vk::imageBarrier(
+        image, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT | VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_NONE,
+        VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
+        VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, vk::colorRange(0, 1, 0, 1));
+    vk::pipelineBarrier(cmd, &toColor, 1);
+    const VkRenderingAttachmentInfo color{
+        .sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO,
+        .pNext = nullptr,
+        .imageView = view,
+        .imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+        .resolveMode = VK_RESOLVE_MODE_NONE,
+        .resolveImageView = VK_NULL_HANDLE,
+        .resolveImageLayout = VK_IMAGE_LAYOUT_UNDEFINED,
+        .loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR,
+        .storeOp = VK_ATTACHMENT_STORE_OP_STORE,
+        .clearValue = {.color = {{snap.background[0], snap.background[1], snap.background[2], 1.0f}}},
+    };
+    const VkRenderingInfo ri{
+        .sType = VK_STRUCTURE_TYPE_RENDERING_INFO,
+        .pNext = nullptr,
+        .flags = 0,
+        .renderArea = {{0, 0}, extent},
+        .layerCount = 1,
+        .viewMask = 0,
+        .colorAttachmentCount = 1,
+        .pColorAttachments = &color,
+        .pDepthAttachment = nullptr,
+        .pStencilAttachment = nullptr,
+    };
+    vkCmdBeginRendering(cmd, &ri);
+    if (count > 0) {
+        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, *pipe);
+        const VkViewport viewport{0, 0, float(extent.width), float(extent.height), 0, 1};
+        const VkRect2D scissor{{0, 0}, extent};
+        vkCmdSetViewport(cmd, 0, 1, &viewport);
+        vkCmdSetScissor(cmd, 0, 1, &scissor);
+        VkDescriptorSet set = pipeline_.descriptorSet();
+        vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline_.layout(), 0, 1, &set, 0, nullptr);
+        const gpu::TilePush push{{float(extent.width), float(extent.height)}};
+        vkCmdPushConstants(cmd, pipeline_.layout(), VK_SHADER_STAGE_VERTEX_BIT, 0, sizeof(push), &push);
+        const VkDeviceSize offset = 0;
+        vkCmdBindVertexBuffers(cmd, 0, 1, &f.instances.buffer, &offset);
+        vkCmdDraw(cmd, 4, count, 0, 0);
+    }
+    vkCmdEndRendering(cmd);
+
+    if (kind_ == TargetKind::Offscreen) {
+        const VkImageMemoryBarrier2 toCopy = vk::imageBarrier(
+            image, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
+            VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_READ_BIT, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+            VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, vk::colorRange(0, 1, 0, 1));
+        vk::pipelineBarrier(cmd, &toCopy, 1);
+        const VkBufferImageCopy region{
+            .bufferOffset = 0,
+            .bufferRowLength = 0,
+            .bufferImageHeight = 0,
+            .imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1},
+            .imageOffset = {0, 0, 0},
+            .imageExtent = {extent.width, extent.height, 1},
+        };
+        vkCmdCopyImageToBuffer(cmd, image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, offscreen_->readback().buffer, 1, &region);
+        const VkBufferMemoryBarrier2 toHost{
+            .sType = VK_STRUCTURE_TYPE_BUFFER_MEMORY_BARRIER_2,
+            .pNext = nullptr,
+            .srcStageMask = VK_PIPELINE_STAGE_2_COPY_BIT,
+            .srcAccessMask = VK_ACCESS_2_TRANSFER_WRITE_BIT,
+            .dstStageMask = VK_PIPELINE_STAGE_2_HOST_BIT,
+            .dstAccessMask = VK_ACCESS_2_HOST_READ_BIT,
+            .srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED,
+            .dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED,
+            .buffer = offscreen_->readback().buffer,
+            .offset = 0,
+            .size = VK_WHOLE_SIZE,
+        };
+        const VkDependencyInfo dep{.sType = VK_STRUCTURE_TYPE_DEPENDENCY_INFO,
+                                   .pNext = nullptr,
+                                   .dependencyFlags = 0,
+                                   .memoryBarrierCount = 0,
+                                   .pMemoryBarriers = nullptr,
+                                   .bufferMemoryBarrierCount = 1,
+                                   .pBufferMemoryBarriers = &toHost,
+                                   .imageMemoryBarrierCount = 0,
+                                   .pImageMemoryBarriers = nullptr};
+        vkCmdPipelineBarrier2(cmd, &dep);
+    } else {
+        const VkImageMemoryBarrier2 toPresent = vk::imageBarrier(
+            image, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
+            VK_PIPELINE_STAGE_2_NONE, VK_ACCESS_2_NONE, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+            VK_IMAGE_LAYOUT_PRESENT_SRC_KHR, vk::colorRange(0, 1, 0, 1));
+        vk::pipelineBarrier(cmd, &toPresent, 1);
+    }
+    IRIS_VK_TRY(vkEndCommandBuffer(cmd));
+
+    IRIS_VK_TRY(vkResetFences(dev, 1, &f.fence));
+    const VkCommandBufferSubmitInfo cbi{
+        .sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_SUBMIT_INFO, .pNext = nullptr, .commandBuffer = cmd, .deviceMask = 0};
+    const bool surface = kind_ == TargetKind::Surface;
+    const VkSemaphoreSubmitInfo waitAcq{.sType = VK_STRUCTURE_TYPE_SEMAPHORE_SUBMIT_INFO,
+                                        .pNext = nullptr,
+                                        .semaphore = f.acquired,
+                                        .value = 0,
+                                        .stageMask = VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+                                        .deviceIndex = 0};
+    const VkSemaphoreSubmitInfo sigDone{.sType = VK_STRUCTURE_TYPE_SEMAPHORE_SUBMIT_INFO,
+                                        .pNext = nullptr,
+                                        .semaphore = surface ? swapchain_->renderDone(imageIndex) : VK_NULL_HANDLE,
+                                        .value = 0,
+                                        .stageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+                                        .deviceIndex = 0};
+    const VkSubmitInfo2 si{.sType = VK_STRUCTURE_TYPE_SUBMIT_INFO_2,
+                           .pNext = nullptr,
+                           .flags = 0,
+                           .waitSemaphoreInfoCount = surface ? 1u : 0u,
+                           .pWaitSemaphoreInfos = &waitAcq,
+                           .commandBufferInfoCount = 1,
+                           .pCommandBufferInfos = &cbi,
+                           .signalSemaphoreInfoCount = surface ? 1u : 0u,
+                           .pSignalSemaphoreInfos = &sigDone};
+    IRIS_VK_TRY(device_.submit(si, f.fence));
+
+    if (surface) {
+        VkSwapchainKHR sc = swapchain_->handle();
+        VkSemaphore done = swapchain_->renderDone(imageIndex);
+        const VkPresentInfoKHR pi{.sType = VK_STRUCTURE_TYPE_PRESENT_INFO_KHR,
+                                  .pNext = nullptr,
+                                  .waitSemaphoreCount = 1,
+                                  .pWaitSemaphores = &done,
+                                  .swapchainCount = 1,
+                                  .pSwapchains = &sc,
+                                  .pImageIndices = &imageIndex,
+                                  .pResults = nullptr};
+        const VkResult pr = device_.present(pi);
+        if (pr == VK_ERROR_OUT_OF_DATE_KHR || pr == VK_SUBOPTIMAL_KHR) {
+            swapchainDirty_ = true;
+            shared_.bump();
+        } else {
+            IRIS_VK_TRY(pr);
+        }
+        publishFrame(snap, complete, count, std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+        return {};
+    }
+
+    // Offscreen: the frame is read back right away (that is what an offscreen target is for).
+    if (Result r = waitSlot(f); !r.ok()) return r;
+    vk::invalidate(dev, offscreen_->readback());
+    {
+        std::lock_guard lock(mutex_);
+        lastFrame_.image.width = extent.width;
+        lastFrame_.image.height = extent.height;
+        lastFrame_.image.rgba.resize(size_t(extent.width) * extent.height * 4);
+        std::memcpy(lastFrame_.image.rgba.data(), offscreen_->readback().mapped, lastFrame_.image.rgba.size());
+        lastFrame_.view = vp.view;
+        lastFrame_.serial = serial;
+        lastFrame_.complete = complete;
+        haveFrame_ = true;
+    }
+    publishFrame(snap, complete, count, std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+    return {};
+}
+
+void RenderThread::publishFrame(const Snapshot& snap, bool complete, uint32_t tiles, double cpuMs) {
+    std::function<void(const FrameStats&)> cb;
+    FrameStats stats;
+    {
+        std::lock_guard lock(mutex_);
+        const auto now = Clock::now();
+        stats.serial = serial_;
+        stats.intervalMs = lastFrameTime_.time_since_epoch().count() ? std::chrono::duration<double, std::milli>(now - lastFrameTime_).count() : 0;
+        lastFrameTime_ = now;
+        stats.cpuMs = cpuMs;
+        stats.tilesDrawn = tiles;
+        stats.complete = complete;
+        stats.view = snap.viewport.view;
+        if (complete && snap.viewSerial > completeViewSerial_) completeViewSerial_ = snap.viewSerial;
+        cb = callback_;
+    }
+    cv_.notify_all();
+    if (cb) cb(stats);
+}
+
+} // namespace iris

@@ -1,0 +1,104 @@
+// The render thread: owns the render target (offscreen image or swapchain), the frame
+// command buffers and the instance buffers. Per frame it draws every ACTIVE tile of the
+// base level, then the LR level, then the HR level over them (tiles not yet buffered are
+// simply absent, so coarser ones show through). It renders while something changes and
+// sleeps on the shared wake counter otherwise.
+#pragma once
+
+#include <array>
+#include <chrono>
+#include <condition_variable>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <thread>
+
+#include "core/log.h"
+#include "core/shared_state.h"
+#include "gpu/render_target.h"
+#include "gpu/tile_atlas.h"
+#include "gpu/tile_pipeline.h"
+
+namespace iris {
+
+class RenderThread {
+public:
+    RenderThread(SharedState& shared, gpu::Device& device, gpu::TileAtlas& atlas, gpu::TilePipeline& pipeline, const Log& log);
+    ~RenderThread();
+    Result init();
+    void start();
+    void stop(); // shared.stopping must be set first
+
+    // Target requests from API threads; applied by the render thread on its next pass.
+    void requestOffscreen(uint32_t width, uint32_t height);
+    void requestSurface(VkSurfaceKHR surface, uint32_t width, uint32_t height);
+    void requestResize(uint32_t width, uint32_t height);
+    void unbindSurface(); // waits until the swapchain is gone
+
+    Expected<Frame> lastFrame() const;
+    Result waitForFrame(uint64_t viewSerial, std::chrono::milliseconds timeout);
+    void setFrameCallback(std::function<void(const FrameStats&)> cb);
+
+    // The newest frame whose GPU work has finished; the atlas may reuse slots it drew.
+    // release store after the fence wait; the buffer thread's acquire load pairs with it.
+    const std::atomic<uint64_t>& completedFrame() const { return completedFrame_; }
+
+private:
+    static constexpr uint32_t kFramesInFlight = 2;
+    static constexpr uint32_t kMaxInstances = 16384;
+    struct FrameSlot {
+        VkCommandPool pool = VK_NULL_HANDLE;
+        VkCommandBuffer cmd = VK_NULL_HANDLE;
+        VkFence fence = VK_NULL_HANDLE;
+        VkSemaphore acquired = VK_NULL_HANDLE;
+        vk::MappedBuffer instances;
+        uint64_t serial = 0;
+    };
+    enum class TargetKind { None, Offscreen, Surface };
+    struct TargetRequest {
+        bool pending = false;
+        TargetKind kind = TargetKind::None;
+        VkSurfaceKHR surface = VK_NULL_HANDLE;
+        uint32_t width = 0, height = 0;
+        bool resizeOnly = false;
+    };
+
+    void run();
+    void applyTargetRequest();
+    Result renderFrame(const Snapshot& snap);
+    Result waitSlot(FrameSlot& f);
+    void publishFrame(const Snapshot& snap, bool complete, uint32_t tiles, double cpuMs);
+
+    SharedState& shared_;
+    gpu::Device& device_;
+    gpu::TileAtlas& atlas_;
+    gpu::TilePipeline& pipeline_;
+    const Log& log_;
+
+    std::array<FrameSlot, kFramesInFlight> frames_{};
+    uint64_t serial_ = 0;
+    std::atomic<uint64_t> completedFrame_{0};
+
+    // Render-thread-only target state.
+    TargetKind kind_ = TargetKind::None;
+    std::unique_ptr<gpu::OffscreenTarget> offscreen_;
+    std::unique_ptr<gpu::Swapchain> swapchain_;
+    VkSurfaceKHR surface_ = VK_NULL_HANDLE;
+    bool swapchainDirty_ = false;
+    uint32_t reqWidth_ = 0, reqHeight_ = 0;
+
+    // Guarded by mutex_: requests in, frames and completion out.
+    mutable std::mutex mutex_;
+    std::condition_variable cv_;
+    TargetRequest request_;
+    bool unbindDone_ = true;
+    Frame lastFrame_;
+    bool haveFrame_ = false;
+    uint64_t completeViewSerial_ = 0;
+    std::function<void(const FrameStats&)> callback_;
+    std::chrono::steady_clock::time_point lastFrameTime_{};
+
+    std::thread thread_;
+};
+
+} // namespace iris

@@ -1,0 +1,29 @@
+// SlideSource over OpenSlide: every vendor format OpenSlide reads (Aperio, Hamamatsu,
+// Leica, MIRAX, Philips, Sakura, Trestle, Ventana, generic tiled TIFF).
+#pragma once
+
+#include "slide/slide_source.h"
+
+typedef struct _openslide openslide_t;
+
+namespace iris {
+
+class OpenSlideSource final : public SlideSource {
+public:
+    static bool detect(const std::string& path);
+    static Expected<std::unique_ptr<SlideSource>> open(const std::string& path);
+    ~OpenSlideSource() override;
+
+    const SlideInfo& info() const override { return info_; }
+    Result readTile(int level, int64_t tx, int64_t ty, uint8_t* dst) override;
+    Expected<Image> readAssociatedImage(const std::string& name) override;
+
+private:
+    OpenSlideSource(openslide_t* osr, SlideInfo info) : osr_(osr), info_(std::move(info)) {}
+    Result checkError(const char* what) const;
+
+    openslide_t* osr_; // thread-safe per OpenSlide's documentation
+    SlideInfo info_;
+};
+
+} // namespace iris

@@ -1,0 +1,83 @@
+#include "slide/slide_source.h"
+
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+#include "slide/openslide_source.h"
+
+namespace iris {
+
+namespace fs = std::filesystem;
+
+void fillTileGrid(LevelInfo& level) {
+    level.tilesX = (level.width + kTileSize - 1) / kTileSize;
+    level.tilesY = (level.height + kTileSize - 1) / kTileSize;
+}
+
+void padTileEdges(uint8_t* rgba, int validWidth, int validHeight) {
+    if (validWidth <= 0 || validHeight <= 0) {
+        std::memset(rgba, 0, kTileBytes);
+        return;
+    }
+    const size_t stride = size_t(kTileSize) * 4;
+    if (validWidth < kTileSize) {
+        for (int y = 0; y < validHeight; ++y) {
+            uint8_t* row = rgba + y * stride;
+            uint32_t last;
+            std::memcpy(&last, row + (validWidth - 1) * 4, 4);
+            for (int x = validWidth; x < kTileSize; ++x) std::memcpy(row + x * 4, &last, 4);
+        }
+    }
+    for (int y = validHeight; y < kTileSize; ++y)
+        std::memcpy(rgba + y * stride, rgba + (validHeight - 1) * stride, stride);
+}
+
+namespace {
+
+// The format table: each entry detects cheaply, then opens. Order matters: specific,
+// fast readers first; OpenSlide last as the universal reader for every vendor format.
+struct SlideFormat {
+    const char* name;
+    bool (*detect)(const std::string& path);
+    Expected<std::unique_ptr<SlideSource>> (*open)(const std::string& path);
+};
+
+const SlideFormat kFormats[] = {
+    {"openslide", &OpenSlideSource::detect, &OpenSlideSource::open},
+};
+
+} // namespace
+
+Expected<std::unique_ptr<SlideSource>> openSlideSource(const std::string& path) {
+    if (path.empty()) return Result(Status::InvalidArgument, "No slide path given");
+    std::error_code ec;
+    const fs::path p(path);
+    const auto st = fs::status(p, ec);
+    if (ec || !fs::exists(st)) {
+        return Result(Status::NotFound, "Cannot open '" + path + "': no such file");
+    }
+    if (fs::is_directory(st)) {
+        return Result(Status::NotAFile, "Cannot open '" + path + "': it is a directory, not a slide file");
+    }
+    if (!fs::is_regular_file(st)) {
+        return Result(Status::NotAFile, "Cannot open '" + path + "': not a regular file");
+    }
+    {
+        std::ifstream probe(p, std::ios::binary);
+        if (!probe) {
+            return Result(Status::IoError, "Cannot open '" + path + "': " + std::strerror(errno));
+        }
+    }
+    if (fs::file_size(p, ec) == 0) {
+        return Result(Status::UnsupportedFormat, "Cannot open '" + path + "': the file is empty");
+    }
+    for (const SlideFormat& f : kFormats) {
+        if (f.detect(path)) return f.open(path);
+    }
+    return Result(Status::UnsupportedFormat,
+                  "Cannot open '" + path + "': not a slide format Iris View can read");
+}
+
+} // namespace iris

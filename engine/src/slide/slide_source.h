@@ -1,0 +1,42 @@
+// SlideSource: one open slide, whatever its format. Implementations live beside this file
+// (openslide_source.cpp; later iris_file.cpp) and are picked by the format table in
+// slide_source.cpp, fast paths first and OpenSlide last as the universal reader.
+//
+// Threading: readTile() and readAssociatedImage() may be called concurrently from any
+// number of loader threads; implementations make that safe.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "iris/types.h"
+
+namespace iris {
+
+inline constexpr int kTileSize = 256;                        // the engine's tile grid, every level
+inline constexpr int kTileBytes = kTileSize * kTileSize * 4; // RGBA8
+
+class SlideSource {
+public:
+    virtual ~SlideSource() = default;
+    // Metadata, filled at open; levels carry the engine's tile grid.
+    virtual const SlideInfo& info() const = 0;
+    // Decodes tile (tx, ty) of `level` into dst (kTileSize² RGBA8, premultiplied alpha,
+    // row stride kTileSize·4). Pixels past the level's edge are filled by repeating the
+    // last valid column and row, so that mip levels do not darken at slide edges.
+    virtual Result readTile(int level, int64_t tx, int64_t ty, uint8_t* dst) = 0;
+    virtual Expected<Image> readAssociatedImage(const std::string& name) = 0;
+};
+
+// Opens `path` with the first format that recognises it, after checking that the path is
+// an existing, readable regular file. Errors name the file and the reason.
+Expected<std::unique_ptr<SlideSource>> openSlideSource(const std::string& path);
+
+// Fills the LevelInfo tile grid fields (tilesX/Y) from width/height.
+void fillTileGrid(LevelInfo& level);
+
+// Repeats the last valid column/row of a partially filled tile into its padding.
+void padTileEdges(uint8_t* rgba, int validWidth, int validHeight);
+
+} // namespace iris

@@ -1,0 +1,139 @@
+#include "view/view_model.h"
+
+#include <algorithm>
+#include <cmath>
+#include <unordered_set>
+
+#include "slide/slide_source.h"
+
+namespace iris {
+
+LevelChoice chooseLevels(const SlideInfo& info, double downsample) {
+    LevelChoice c;
+    const int n = int(info.levels.size());
+    c.base = n - 1;
+    c.hr = 0;
+    // Tolerance: a view set to exactly a level's downsample must pick that level.
+    for (int i = 0; i < n; ++i) {
+        if (info.levels[size_t(i)].downsample <= downsample * (1.0 + 1e-9)) c.hr = i;
+    }
+    c.lr = c.hr + 1 < n ? c.hr + 1 : -1;
+    return c;
+}
+
+TileRange visibleTiles(const LevelInfo& level, const Viewport& vp, int64_t margin) {
+    TileRange r;
+    if (vp.width == 0 || vp.height == 0 || level.tilesX == 0) return r;
+    const double s = vp.view.downsample / level.downsample; // level px per target px
+    const double ox = (vp.view.centerX - vp.width * 0.5 * vp.view.downsample) / level.downsample;
+    const double oy = (vp.view.centerY - vp.height * 0.5 * vp.view.downsample) / level.downsample;
+    const double ex = ox + vp.width * s, ey = oy + vp.height * s;
+    // A tile is visible when it overlaps [o, e) by any amount.
+    const auto lo = [](double v) { return int64_t(std::floor(v / kTileSize)); };
+    const auto hi = [](double v) { return int64_t(std::ceil(v / kTileSize)) - 1; };
+    r.x0 = std::max<int64_t>(0, lo(ox) - margin);
+    r.y0 = std::max<int64_t>(0, lo(oy) - margin);
+    r.x1 = std::min<int64_t>(level.tilesX - 1, hi(ex) + margin);
+    r.y1 = std::min<int64_t>(level.tilesY - 1, hi(ey) + margin);
+    if (ex <= 0 || ey <= 0 || ox >= double(level.width) || oy >= double(level.height)) {
+        if (margin == 0) r = TileRange{};
+    }
+    return r;
+}
+
+namespace {
+
+void appendRange(std::vector<TileRef>& out, std::unordered_set<uint64_t>& seen, const LevelInfo& level, int li,
+                 uint32_t gen, const TileRange& range, const TileRange* exclude, const Viewport& vp, TileRole role) {
+    if (range.empty()) return;
+    const size_t first = out.size();
+    // Centre of the view in this level's tile units, to order by distance.
+    const double cx = vp.view.centerX / level.downsample / kTileSize - 0.5;
+    const double cy = vp.view.centerY / level.downsample / kTileSize - 0.5;
+    for (int64_t y = range.y0; y <= range.y1; ++y) {
+        for (int64_t x = range.x0; x <= range.x1; ++x) {
+            if (exclude && exclude->contains(x, y)) continue;
+            const uint64_t k = TileKey::make(gen, li, x, y);
+            if (!seen.insert(k).second) continue;
+            out.push_back({k, li, x, y, role});
+        }
+    }
+    std::sort(out.begin() + long(first), out.end(), [&](const TileRef& a, const TileRef& b) {
+        const double da = (a.tx - cx) * (a.tx - cx) + (a.ty - cy) * (a.ty - cy);
+        const double db = (b.tx - cx) * (b.tx - cx) + (b.ty - cy) * (b.ty - cy);
+        return da < db;
+    });
+}
+
+} // namespace
+
+std::vector<TileRef> bufferRegion(const SlideInfo& info, uint32_t gen, const Viewport& vp, int perimeter) {
+    std::vector<TileRef> out;
+    if (info.levels.empty() || vp.width == 0 || vp.height == 0) return out;
+    std::unordered_set<uint64_t> seen;
+    const LevelChoice c = chooseLevels(info, vp.view.downsample);
+    const LevelInfo& base = info.levels[size_t(c.base)];
+    if (base.tilesX * base.tilesY <= kMaxResidentBaseTiles) {
+        appendRange(out, seen, base, c.base, gen, TileRange{0, 0, base.tilesX - 1, base.tilesY - 1}, nullptr, vp,
+                    TileRole::Base);
+    } else {
+        appendRange(out, seen, base, c.base, gen, visibleTiles(base, vp, 0), nullptr, vp, TileRole::Base);
+    }
+    const TileRange hrVis = visibleTiles(info.levels[size_t(c.hr)], vp, 0);
+    TileRange lrVis;
+    if (c.lr >= 0) {
+        lrVis = visibleTiles(info.levels[size_t(c.lr)], vp, 0);
+        appendRange(out, seen, info.levels[size_t(c.lr)], c.lr, gen, lrVis, nullptr, vp, TileRole::LRVisible);
+    }
+    appendRange(out, seen, info.levels[size_t(c.hr)], c.hr, gen, hrVis, nullptr, vp, TileRole::HRVisible);
+    if (perimeter > 0) {
+        if (c.lr >= 0) {
+            appendRange(out, seen, info.levels[size_t(c.lr)], c.lr, gen,
+                        visibleTiles(info.levels[size_t(c.lr)], vp, perimeter), &lrVis, vp, TileRole::LRPerimeter);
+        }
+        appendRange(out, seen, info.levels[size_t(c.hr)], c.hr, gen,
+                    visibleTiles(info.levels[size_t(c.hr)], vp, perimeter), &hrVis, vp, TileRole::HRPerimeter);
+    }
+    return out;
+}
+
+TilePlacement placeTile(const LevelInfo& level, const Viewport& vp, int64_t tx, int64_t ty) {
+    TilePlacement p{};
+    const double s = level.downsample / vp.view.downsample; // target px per level px
+    const double ox = (vp.view.centerX - vp.width * 0.5 * vp.view.downsample) / level.downsample;
+    const double oy = (vp.view.centerY - vp.height * 0.5 * vp.view.downsample) / level.downsample;
+    const int64_t lx0 = tx * kTileSize, ly0 = ty * kTileSize;
+    const int64_t lx1 = std::min<int64_t>(lx0 + kTileSize, level.width);
+    const int64_t ly1 = std::min<int64_t>(ly0 + kTileSize, level.height);
+    // Shared edges are computed by the same expression in both neighbours, so they are
+    // bit-identical and the rasteriser's top-left rule leaves no gap and no overlap.
+    p.x0 = (double(lx0) - ox) * s;
+    p.y0 = (double(ly0) - oy) * s;
+    p.x1 = (double(lx1) - ox) * s;
+    p.y1 = (double(ly1) - oy) * s;
+    p.texelsPerPixel = vp.view.downsample / level.downsample;
+    p.validW = int(lx1 - lx0);
+    p.validH = int(ly1 - ly0);
+    return p;
+}
+
+View fitView(const SlideInfo& info, uint32_t width, uint32_t height) {
+    View v;
+    v.centerX = double(info.width) * 0.5;
+    v.centerY = double(info.height) * 0.5;
+    if (width == 0 || height == 0 || info.width <= 0 || info.height <= 0) return v;
+    v.downsample = std::max(double(info.width) / width, double(info.height) / height);
+    return v;
+}
+
+double clampDownsample(const SlideInfo& info, uint32_t width, uint32_t height, double ds) {
+    if (!std::isfinite(ds) || ds <= 0) ds = 1;
+    const double minDs = 1.0 / 64.0; // 64 screen pixels per level-0 pixel
+    double maxDs = 1e6;
+    if (width > 0 && height > 0 && info.width > 0) {
+        maxDs = std::max(1.0, 4.0 * fitView(info, width, height).downsample);
+    }
+    return std::clamp(ds, minDs, maxDs);
+}
+
+} // namespace iris

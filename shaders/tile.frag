@@ -1,0 +1,21 @@
+#version 450
+// Samples one tile. The texel is computed from the fragment's own pixel centre rather than
+// from interpolated UVs, so that at 1:1 with integer alignment every fragment lands exactly
+// on a texel centre and reproduces the source bytes (linear filtering with weight 0).
+
+layout(set = 0, binding = 0) uniform sampler2DArray atlas; // 256×256 RGBA8 premultiplied, full mips
+
+layout(location = 0) flat in vec2 inOrigin;
+layout(location = 1) flat in vec4 inTexel;  // valid w, valid h, layer, lod
+layout(location = 2) flat in float inScale;
+
+layout(location = 0) out vec4 outColor;
+
+const float TILE = 256.0;
+
+void main() {
+    vec2 texel = (gl_FragCoord.xy - inOrigin) * inScale;
+    // Clamp into the tile's valid area so edge tiles never sample their padding at level 0.
+    texel = clamp(texel, vec2(0.5), inTexel.xy - vec2(0.5));
+    outColor = textureLod(atlas, vec3(texel / TILE, inTexel.z), inTexel.w);
+}

@@ -55,9 +55,6 @@ struct Engine::Impl {
         if (!std::isfinite(v.centerX) || !std::isfinite(v.centerY)) return;
         if (s.slide) {
             v.downsample = clampDownsample(s.slide->info, s.viewport.width, s.viewport.height, v.downsample);
-            // Keep some of the slide in view: the centre stays within the slide's bounds.
-            v.centerX = std::clamp(v.centerX, 0.0, double(s.slide->info.width));
-            v.centerY = std::clamp(v.centerY, 0.0, double(s.slide->info.height));
         } else if (!(v.downsample > 0) || !std::isfinite(v.downsample)) {
             return;
         }
@@ -209,6 +206,16 @@ void Engine::translate(double dx, double dy) {
         View v = s.viewport.view;
         v.centerX -= dx * v.downsample;
         v.centerY -= dy * v.downsample;
+        if (s.slide) {
+            // Panning never pushes the slide out of the target: the centre may not move past
+            // the slide's edge (a centre already outside, set by setView, is not pulled back).
+            const View& o = s.viewport.view;
+            const double w = double(s.slide->info.width), h = double(s.slide->info.height);
+            if (v.centerX < 0 && v.centerX < o.centerX) v.centerX = std::min(o.centerX, 0.0);
+            if (v.centerX > w && v.centerX > o.centerX) v.centerX = std::max(o.centerX, w);
+            if (v.centerY < 0 && v.centerY < o.centerY) v.centerY = std::min(o.centerY, 0.0);
+            if (v.centerY > h && v.centerY > o.centerY) v.centerY = std::max(o.centerY, h);
+        }
         impl_->setViewLocked(s, v);
     });
 }

@@ -272,13 +272,17 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
     auto* inst = static_cast<gpu::TileInstance*>(f.instances.mapped);
     uint32_t count = 0;
     bool complete = false;
+    // A frame drawn into a target whose size is not the published one (a rebind or resize
+    // not yet applied) shows the right view at the wrong size: it is never "complete".
+    const bool sizeMatches = kind_ != TargetKind::Offscreen ||
+                             (extent.width == snap.viewport.width && extent.height == snap.viewport.height);
     if (snap.slide) {
         const SlideInfo& info = snap.slide->info;
         const LevelChoice c = chooseLevels(info, vp.view.downsample);
         int order[3] = {c.base, c.lr, c.hr};
         if (order[1] == order[0]) order[1] = -1;
         if (order[2] == order[0]) order[0] = -1;
-        complete = true;
+        complete = sizeMatches;
         for (int li : order) {
             if (li < 0) continue;
             const LevelInfo& level = info.levels[size_t(li)];

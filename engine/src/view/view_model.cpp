@@ -131,7 +131,10 @@ double clampDownsample(const SlideInfo& info, uint32_t width, uint32_t height, d
     const double minDs = 1.0 / 64.0; // 64 screen pixels per level-0 pixel
     double maxDs = 1e6;
     if (width > 0 && height > 0 && info.width > 0) {
-        maxDs = std::max(1.0, 4.0 * fitView(info, width, height).downsample);
+        // Zooming out stops at a quarter of the fitted size, or at the coarsest level shown
+        // 1:1, whichever is further out.
+        maxDs = std::max({1.0, 4.0 * fitView(info, width, height).downsample,
+                          info.levels.empty() ? 1.0 : info.levels.back().downsample});
     }
     return std::clamp(ds, minDs, maxDs);
 }

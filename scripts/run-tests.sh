@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# Installs what is missing, builds, and runs every test:
+#   1. the debug build (dev preset): every suite, with the Vulkan validation layers on
+#      (lavapipe is the device; widget suites run under Xvfb);
+#   2. the AddressSanitizer + UBSan build (asan preset): the suites labelled "asan"
+#      (open/close/reopen cycles, bad input), where LeakSanitizer reports leaks.
+# Exits non-zero if anything fails.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+scripts/install-deps.sh
+
+export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-$(mktemp -d)}"
+JOBS="$(nproc)"
+
+echo "== dev build"
+cmake --preset dev >/dev/null
+cmake --build --preset dev -j "$JOBS"
+echo "== dev tests"
+xvfb-run -a -s "-screen 0 1920x1080x24" ctest --preset dev -j 1
+
+echo "== asan build"
+cmake --preset asan >/dev/null
+cmake --build --preset asan -j "$JOBS"
+echo "== asan tests"
+ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
+LSAN_OPTIONS="suppressions=$PWD/tests/lsan.supp:print_suppressions=0" \
+UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+  ctest --preset asan -L asan -j 1

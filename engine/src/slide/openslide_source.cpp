@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <string>
 #include <vector>
 
 #include <openslide.h>
@@ -87,6 +88,21 @@ Expected<std::unique_ptr<SlideSource>> OpenSlideSource::open(const std::string& 
     info.height = info.levels[0].height;
     info.mppX = propertyDouble(osr, OPENSLIDE_PROPERTY_NAME_MPP_X);
     info.mppY = propertyDouble(osr, OPENSLIDE_PROPERTY_NAME_MPP_Y);
+    if (info.mppX == 0 || info.mppY == 0) {
+        // OpenSlide 3.4.1 derives no mpp for generic TIFF; the TIFF resolution tags carry it
+        // when they are in pixels per centimetre. Only a microscope-like value (0.05–20 µm per
+        // pixel) is believed: a 72-dpi default (≈ 353 µm) is no scan resolution.
+        const char* unit = openslide_get_property_value(osr, "tiff.ResolutionUnit");
+        if (unit && std::string(unit) == "centimeter") {
+            const double rx = propertyDouble(osr, "tiff.XResolution");
+            const double ry = propertyDouble(osr, "tiff.YResolution");
+            const double mx = rx > 0 ? 10000.0 / rx : 0, my = ry > 0 ? 10000.0 / ry : 0;
+            if (mx >= 0.05 && mx <= 20 && my >= 0.05 && my <= 20) {
+                info.mppX = mx;
+                info.mppY = my;
+            }
+        }
+    }
     info.objectivePower = propertyDouble(osr, OPENSLIDE_PROPERTY_NAME_OBJECTIVE_POWER);
     if (const char* const* names = openslide_get_property_names(osr)) {
         for (; *names; ++names) {

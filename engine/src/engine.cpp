@@ -38,8 +38,7 @@ struct Engine::Impl {
         if (Result r = pipeline.init(); !r.ok()) return r;
         render = std::make_unique<RenderThread>(shared, device, atlas, pipeline, log);
         if (Result r = render->init(); !r.ok()) return r;
-        buffer = std::make_unique<BufferThread>(shared, cache, device, atlas, log, int(config.perimeterTiles),
-                                                render->completedFrame());
+        buffer = std::make_unique<BufferThread>(shared, cache, device, atlas, log, int(config.perimeterTiles));
         if (Result r = buffer->init(); !r.ok()) return r;
         shared.update([&](Snapshot& s) { s.background = config.background; });
         render->start();

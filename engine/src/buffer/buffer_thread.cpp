@@ -10,9 +10,8 @@ constexpr uint32_t kStagingTiles = BufferThread::kTilesPerTransaction * BufferTh
 }
 
 BufferThread::BufferThread(SharedState& shared, TileCache& cache, gpu::Device& device, gpu::TileAtlas& atlas,
-                           const Log& log, int perimeter, const std::atomic<uint64_t>& renderCompletedFrame)
-    : shared_(shared), cache_(cache), device_(device), atlas_(atlas), log_(log), perimeter_(perimeter),
-      renderCompletedFrame_(renderCompletedFrame) {}
+                           const Log& log, int perimeter)
+    : shared_(shared), cache_(cache), device_(device), atlas_(atlas), log_(log), perimeter_(perimeter) {}
 
 BufferThread::~BufferThread() {
     stop();
@@ -108,7 +107,7 @@ bool BufferThread::pollCompleted() {
     bool any = false;
     for (Transaction& t : txns_) {
         if (!t.signalValue || t.signalValue > done) continue;
-        for (int s : t.slots) atlas_.activate(s);
+        for (int s : t.slots) atlas_.map().activate(s);
         for (uint32_t s : t.staging) freeStaging_.push_back(s);
         t.slots.clear();
         t.staging.clear();
@@ -127,28 +126,31 @@ bool BufferThread::submitNew(const Snapshot& snap) {
     std::unordered_set<uint64_t> keep;
     keep.reserve(region.size() * 2);
     for (const TileRef& t : region) keep.insert(t.key);
-    const uint64_t completedFrame = renderCompletedFrame_.load(std::memory_order_acquire);
+    gpu::TileMap& map = atlas_.map();
+    const auto outsideRegion = [&](uint64_t k) { return keep.count(k) != 0; };
     auto* base = static_cast<uint8_t*>(staging_.mapped);
     for (const TileRef& t : region) {
         if (tx.slots.size() == kTilesPerTransaction || freeStaging_.empty()) break;
-        if (atlas_.present(t.key) || !cache_.isReady(t.key)) continue;
-        const int slot = atlas_.allocate(t.key, keep, completedFrame);
+        if (map.contains(t.key) || !cache_.isReady(t.key)) continue;
+        const int slot = map.allocate(t.key, outsideRegion);
         if (slot < 0) break; // atlas full of tiles that are needed or still drawn
         const uint32_t st = freeStaging_.back();
         bool failed = false;
         if (!cache_.copyOut(t.key, base + size_t(st) * kTileBytes, &failed)) {
-            atlas_.release(slot); // evicted from RAM meanwhile; a loader will decode it again
+            map.abandon(slot); // evicted from RAM meanwhile; a loader will decode it again
             continue;
         }
         freeStaging_.pop_back();
         tx.slots.push_back(slot);
         tx.staging.push_back(st);
     }
+    // A reclaim that backed off may have made a frame skip that tile: draw again.
+    if (map.takeReclaimAborted()) shared_.bump();
     if (tx.slots.empty()) return false;
     if (Result r = record(tx); !r.ok()) {
         shared_.setError(r);
         log_.error(r.message());
-        for (int s : tx.slots) atlas_.release(s);
+        for (int s : tx.slots) map.abandon(s);
         for (uint32_t s : tx.staging) freeStaging_.push_back(s);
         tx.slots.clear();
         tx.staging.clear();

@@ -24,7 +24,7 @@ namespace iris {
 class BufferThread {
 public:
     BufferThread(SharedState& shared, TileCache& cache, gpu::Device& device, gpu::TileAtlas& atlas, const Log& log,
-                 int perimeter, const std::atomic<uint64_t>& renderCompletedFrame);
+                 int perimeter);
     ~BufferThread();
     Result init();
     void start();
@@ -51,7 +51,6 @@ private:
     gpu::TileAtlas& atlas_;
     const Log& log_;
     const int perimeter_;
-    const std::atomic<uint64_t>& renderCompletedFrame_;
 
     VkCommandPool pool_ = VK_NULL_HANDLE;
     VkSemaphore timeline_ = VK_NULL_HANDLE;

@@ -151,68 +151,8 @@ Result TileAtlas::init(uint64_t vramBudgetBytes) {
     vkDestroyCommandPool(dev, pool, nullptr);
     IRIS_VK_TRY(sr);
 
-    slots_.assign(size_t(n), Slot{});
-    index_.reserve(size_t(n) * 2);
+    map_ = std::make_unique<TileMap>(uint32_t(n));
     return {};
-}
-
-int TileAtlas::acquireForFrame(uint64_t key, uint64_t frame) {
-    std::lock_guard lock(mutex_);
-    auto it = index_.find(key);
-    if (it == index_.end()) return -1;
-    Slot& s = slots_[size_t(it->second)];
-    if (s.state != State::Active) return -1;
-    s.lastUsedFrame = frame;
-    return it->second;
-}
-
-bool TileAtlas::present(uint64_t key) const {
-    std::lock_guard lock(mutex_);
-    return index_.count(key) != 0;
-}
-
-int TileAtlas::allocate(uint64_t key, const std::unordered_set<uint64_t>& keep, uint64_t completedFrame) {
-    std::lock_guard lock(mutex_);
-    int victim = -1;
-    uint64_t oldest = UINT64_MAX;
-    for (size_t i = 0; i < slots_.size(); ++i) {
-        const Slot& s = slots_[i];
-        if (s.state == State::Free) {
-            victim = int(i);
-            break;
-        }
-        if (s.state == State::Active && s.lastUsedFrame <= completedFrame && !keep.count(s.key) &&
-            s.lastUsedFrame < oldest) {
-            oldest = s.lastUsedFrame;
-            victim = int(i);
-        }
-    }
-    if (victim < 0) return -1;
-    Slot& s = slots_[size_t(victim)];
-    if (s.state != State::Free) index_.erase(s.key);
-    s.key = key;
-    s.state = State::Filling;
-    index_[key] = victim;
-    return victim;
-}
-
-void TileAtlas::activate(int slot) {
-    std::lock_guard lock(mutex_);
-    slots_[size_t(slot)].state = State::Active;
-}
-
-void TileAtlas::release(int slot) {
-    std::lock_guard lock(mutex_);
-    Slot& s = slots_[size_t(slot)];
-    index_.erase(s.key);
-    s = Slot{};
-}
-
-uint32_t TileAtlas::activeCount() const {
-    std::lock_guard lock(mutex_);
-    uint32_t n = 0;
-    for (const Slot& s : slots_) n += s.state == State::Active;
-    return n;
 }
 
 } // namespace iris::gpu

@@ -20,6 +20,8 @@ RenderThread::~RenderThread() {
     swapchain_.reset();
     offscreen_.reset();
     for (FrameSlot& f : frames_) {
+        for (int s : f.pinned) atlas_.map().unpin(s);
+        f.pinned.clear();
         if (f.fence) vkDestroyFence(dev, f.fence, nullptr);
         if (f.acquired) vkDestroySemaphore(dev, f.acquired, nullptr);
         if (f.pool) vkDestroyCommandPool(dev, f.pool, nullptr);
@@ -151,10 +153,7 @@ void RenderThread::applyTargetRequest() {
     }
     // Whatever the request, the old target goes first (after the GPU is done with it).
     device_.waitIdle();
-    for (FrameSlot& f : frames_) {
-        vkWaitForFences(device_.device(), 1, &f.fence, VK_TRUE, UINT64_MAX);
-        if (f.serial) completedFrame_.store(std::max(completedFrame_.load(), f.serial), std::memory_order_release);
-    }
+    for (FrameSlot& f : frames_) waitSlot(f);
     offscreen_.reset();
     if (req.kind != TargetKind::Surface || req.surface != surface_) swapchain_.reset();
     kind_ = req.kind;
@@ -216,11 +215,10 @@ void RenderThread::run() {
 
 Result RenderThread::waitSlot(FrameSlot& f) {
     IRIS_VK_TRY(vkWaitForFences(device_.device(), 1, &f.fence, VK_TRUE, UINT64_MAX));
-    if (f.serial) {
-        // release: pairs with the buffer thread's acquire load before reclaiming slots
-        uint64_t prev = completedFrame_.load(std::memory_order_relaxed);
-        if (f.serial > prev) completedFrame_.store(f.serial, std::memory_order_release);
-    }
+    // The GPU is done with this frame: its slots may be reclaimed.
+    gpu::TileMap& map = atlas_.map();
+    for (int s : f.pinned) map.unpin(s);
+    f.pinned.clear();
     return {};
 }
 
@@ -292,11 +290,12 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
             for (int64_t ty = range.y0; ty <= range.y1; ++ty) {
                 for (int64_t tx = range.x0; tx <= range.x1; ++tx) {
                     const uint64_t key = TileKey::make(snap.slide->generation, li, tx, ty);
-                    const int layer = count < kMaxInstances ? atlas_.acquireForFrame(key, serial) : -1;
+                    const int layer = count < kMaxInstances ? atlas_.map().pin(key, serial) : -1;
                     if (layer < 0) {
                         if (isHr) complete = false;
                         continue;
                     }
+                    f.pinned.push_back(layer);
                     const TilePlacement p = placeTile(level, vp, tx, ty);
                     inst[count++] = gpu::TileInstance{
                         .rect = {float(p.x0), float(p.y0), float(p.x1), float(p.y1)},
@@ -435,7 +434,14 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
                            .pCommandBufferInfos = &cbi,
                            .signalSemaphoreInfoCount = surface ? 1u : 0u,
                            .pSignalSemaphoreInfos = &sigDone};
-    IRIS_VK_TRY(device_.submit(si, f.fence));
+    if (const VkResult sr = device_.submit(si, f.fence); sr != VK_SUCCESS) {
+        // The fence was reset but nothing will signal it: replace it with a signalled one so
+        // the next use of this frame slot does not wait forever.
+        vkDestroyFence(dev, f.fence, nullptr);
+        const VkFenceCreateInfo fci{.sType = VK_STRUCTURE_TYPE_FENCE_CREATE_INFO, .pNext = nullptr, .flags = VK_FENCE_CREATE_SIGNALED_BIT};
+        vkCreateFence(dev, &fci, nullptr, &f.fence);
+        return vk::check(sr, "vkQueueSubmit2 (frame)");
+    }
 
     if (surface) {
         VkSwapchainKHR sc = swapchain_->handle();

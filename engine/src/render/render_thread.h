@@ -12,6 +12,7 @@
 #include <memory>
 #include <mutex>
 #include <thread>
+#include <vector>
 
 #include "core/log.h"
 #include "core/shared_state.h"
@@ -39,9 +40,6 @@ public:
     Result waitForFrame(uint64_t viewSerial, std::chrono::milliseconds timeout);
     void setFrameCallback(std::function<void(const FrameStats&)> cb);
 
-    // The newest frame whose GPU work has finished; the atlas may reuse slots it drew.
-    // release store after the fence wait; the buffer thread's acquire load pairs with it.
-    const std::atomic<uint64_t>& completedFrame() const { return completedFrame_; }
 
 private:
     static constexpr uint32_t kFramesInFlight = 2;
@@ -53,6 +51,7 @@ private:
         VkSemaphore acquired = VK_NULL_HANDLE;
         vk::MappedBuffer instances;
         uint64_t serial = 0;
+        std::vector<int> pinned; // atlas slots this frame samples, unpinned after its fence
     };
     enum class TargetKind { None, Offscreen, Surface };
     struct TargetRequest {
@@ -77,7 +76,6 @@ private:
 
     std::array<FrameSlot, kFramesInFlight> frames_{};
     uint64_t serial_ = 0;
-    std::atomic<uint64_t> completedFrame_{0};
 
     // Render-thread-only target state.
     TargetKind kind_ = TargetKind::None;

@@ -10,7 +10,9 @@
 #include "cache/tile_cache.h"
 #include "core/log.h"
 #include "core/shared_state.h"
+#include "buffer/handover.h"
 #include "gpu/device.h"
+#include "gpu/mip_pipeline.h"
 #include "gpu/tile_atlas.h"
 #include "gpu/tile_pipeline.h"
 #include "render/render_thread.h"
@@ -20,7 +22,8 @@ namespace iris {
 
 struct Engine::Impl {
     explicit Impl(const EngineConfig& c)
-        : config(c), log(c.log), device(log), atlas(device), pipeline(device, atlas), cache(c.ramBudgetBytes) {}
+        : config(c), log(c.log), device(log), atlas(device), pipeline(device, atlas), mips(device, atlas),
+          cache(c.ramBudgetBytes) {}
 
     ~Impl() {
         shared.stopping.store(true, std::memory_order_release);
@@ -36,9 +39,12 @@ struct Engine::Impl {
         if (Result r = device.init(config); !r.ok()) return r;
         if (Result r = atlas.init(config.vramBudgetBytes); !r.ok()) return r;
         if (Result r = pipeline.init(); !r.ok()) return r;
-        render = std::make_unique<RenderThread>(shared, device, atlas, pipeline, log);
+        if (Result r = mips.init(); !r.ok()) return r;
+        handover = std::make_unique<Handover>(atlas.slotCount());
+        render = std::make_unique<RenderThread>(shared, device, atlas, pipeline, *handover, log);
         if (Result r = render->init(); !r.ok()) return r;
-        buffer = std::make_unique<BufferThread>(shared, cache, device, atlas, log, int(config.perimeterTiles));
+        buffer = std::make_unique<BufferThread>(shared, cache, device, atlas, mips, *handover, log,
+                                                int(config.perimeterTiles));
         if (Result r = buffer->init(); !r.ok()) return r;
         shared.update([&](Snapshot& s) { s.background = config.background; });
         render->start();
@@ -66,6 +72,8 @@ struct Engine::Impl {
     gpu::Device device;
     gpu::TileAtlas atlas;
     gpu::TilePipeline pipeline;
+    gpu::MipPipeline mips;
+    std::unique_ptr<Handover> handover;
     TileCache cache;
     std::unique_ptr<RenderThread> render;
     std::unique_ptr<BufferThread> buffer;

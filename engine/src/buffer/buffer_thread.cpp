@@ -10,45 +10,74 @@ constexpr uint32_t kStagingTiles = BufferThread::kTilesPerTransaction * BufferTh
 }
 
 BufferThread::BufferThread(SharedState& shared, TileCache& cache, gpu::Device& device, gpu::TileAtlas& atlas,
-                           const Log& log, int perimeter)
-    : shared_(shared), cache_(cache), device_(device), atlas_(atlas), log_(log), perimeter_(perimeter) {}
+                           gpu::MipPipeline& mips, Handover& handover, const Log& log, int perimeter)
+    : shared_(shared), cache_(cache), device_(device), atlas_(atlas), mips_(mips), handover_(handover), log_(log),
+      perimeter_(perimeter) {}
 
 BufferThread::~BufferThread() {
     stop();
     VkDevice dev = device_.device();
     if (!dev) return;
     if (pool_) vkDestroyCommandPool(dev, pool_, nullptr);
+    if (copyPool_) vkDestroyCommandPool(dev, copyPool_, nullptr);
     if (timeline_) vkDestroySemaphore(dev, timeline_, nullptr);
+    if (copyTimeline_) vkDestroySemaphore(dev, copyTimeline_, nullptr);
     vk::destroyMappedBuffer(dev, staging_);
 }
 
 Result BufferThread::init() {
     VkDevice dev = device_.device();
-    const VkCommandPoolCreateInfo pci{.sType = VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO,
-                                      .pNext = nullptr,
-                                      .flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT,
-                                      .queueFamilyIndex = device_.queueFamily()};
-    IRIS_VK_TRY(vkCreateCommandPool(dev, &pci, nullptr, &pool_));
-    const VkSemaphoreTypeCreateInfo tci{.sType = VK_STRUCTURE_TYPE_SEMAPHORE_TYPE_CREATE_INFO,
-                                        .pNext = nullptr,
-                                        .semaphoreType = VK_SEMAPHORE_TYPE_TIMELINE,
-                                        .initialValue = 0};
-    const VkSemaphoreCreateInfo sci{.sType = VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO, .pNext = &tci, .flags = 0};
-    IRIS_VK_TRY(vkCreateSemaphore(dev, &sci, nullptr, &timeline_));
+    using Role = gpu::Device::Role;
+    transferFamily_ = device_.family(Role::Transfer);
+    computeFamily_ = device_.family(Role::Compute);
+    graphicsFamily_ = device_.family(Role::Graphics);
+    separateCopy_ = transferFamily_ != computeFamily_;
+    const auto makePool = [&](uint32_t family, VkCommandPool& pool) -> Result {
+        const VkCommandPoolCreateInfo pci{.sType = VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO,
+                                          .pNext = nullptr,
+                                          .flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT,
+                                          .queueFamilyIndex = family};
+        IRIS_VK_TRY(vkCreateCommandPool(dev, &pci, nullptr, &pool));
+        return {};
+    };
+    const auto makeTimeline = [&](VkSemaphore& sem) -> Result {
+        const VkSemaphoreTypeCreateInfo tci{.sType = VK_STRUCTURE_TYPE_SEMAPHORE_TYPE_CREATE_INFO,
+                                            .pNext = nullptr,
+                                            .semaphoreType = VK_SEMAPHORE_TYPE_TIMELINE,
+                                            .initialValue = 0};
+        const VkSemaphoreCreateInfo sci{.sType = VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO, .pNext = &tci, .flags = 0};
+        IRIS_VK_TRY(vkCreateSemaphore(dev, &sci, nullptr, &sem));
+        return {};
+    };
+    if (Result r = makePool(computeFamily_, pool_); !r.ok()) return r;
+    if (Result r = makeTimeline(timeline_); !r.ok()) return r;
+    if (separateCopy_) {
+        if (Result r = makePool(transferFamily_, copyPool_); !r.ok()) return r;
+        if (Result r = makeTimeline(copyTimeline_); !r.ok()) return r;
+    }
+    handover_.needed = computeFamily_ != graphicsFamily_;
+    handover_.srcFamily = computeFamily_;
+    handover_.uploadTimeline = timeline_;
     if (Result r = vk::createMappedBuffer(device_.physical(), dev, VkDeviceSize(kStagingTiles) * kTileBytes,
                                           VK_BUFFER_USAGE_TRANSFER_SRC_BIT, /*preferCached=*/false, staging_);
         !r.ok())
         return r;
     for (uint32_t i = kStagingTiles; i-- > 0;) freeStaging_.push_back(i);
     txns_.resize(kMaxTransactions);
-    std::vector<VkCommandBuffer> cmds(kMaxTransactions);
-    const VkCommandBufferAllocateInfo cai{.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO,
-                                          .pNext = nullptr,
-                                          .commandPool = pool_,
-                                          .level = VK_COMMAND_BUFFER_LEVEL_PRIMARY,
-                                          .commandBufferCount = kMaxTransactions};
-    IRIS_VK_TRY(vkAllocateCommandBuffers(dev, &cai, cmds.data()));
-    for (uint32_t i = 0; i < kMaxTransactions; ++i) txns_[i].cmd = cmds[i];
+    const auto alloc = [&](VkCommandPool pool, VkCommandBuffer* out) -> Result {
+        const VkCommandBufferAllocateInfo cai{.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO,
+                                              .pNext = nullptr,
+                                              .commandPool = pool,
+                                              .level = VK_COMMAND_BUFFER_LEVEL_PRIMARY,
+                                              .commandBufferCount = 1};
+        IRIS_VK_TRY(vkAllocateCommandBuffers(dev, &cai, out));
+        return {};
+    };
+    for (Transaction& t : txns_) {
+        if (Result r = alloc(pool_, &t.cmd); !r.ok()) return r;
+        if (separateCopy_)
+            if (Result r = alloc(copyPool_, &t.copyCmd); !r.ok()) return r;
+    }
     return {};
 }
 
@@ -107,7 +136,13 @@ bool BufferThread::pollCompleted() {
     bool any = false;
     for (Transaction& t : txns_) {
         if (!t.signalValue || t.signalValue > done) continue;
-        for (int s : t.slots) atlas_.map().activate(s);
+        // Single family: the compute submission made the tiles visible to fragment reads, so
+        // they can be drawn now. Separate families: the render thread must first record the
+        // acquire half of the compute → graphics ownership transfer; it activates them then.
+        for (int s : t.slots) {
+            if (handover_.needed) handover_.push({s, t.signalValue});
+            else atlas_.map().activate(s);
+        }
         for (uint32_t s : t.staging) freeStaging_.push_back(s);
         t.slots.clear();
         t.staging.clear();
@@ -157,26 +192,9 @@ bool BufferThread::submitNew(const Snapshot& snap) {
         return false;
     }
     tx.signalValue = ++nextValue_;
-    const VkCommandBufferSubmitInfo cbi{
-        .sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_SUBMIT_INFO, .pNext = nullptr, .commandBuffer = tx.cmd, .deviceMask = 0};
-    const VkSemaphoreSubmitInfo sig{.sType = VK_STRUCTURE_TYPE_SEMAPHORE_SUBMIT_INFO,
-                                    .pNext = nullptr,
-                                    .semaphore = timeline_,
-                                    .value = tx.signalValue,
-                                    .stageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
-                                    .deviceIndex = 0};
-    const VkSubmitInfo2 si{.sType = VK_STRUCTURE_TYPE_SUBMIT_INFO_2,
-                           .pNext = nullptr,
-                           .flags = 0,
-                           .waitSemaphoreInfoCount = 0,
-                           .pWaitSemaphoreInfos = nullptr,
-                           .commandBufferInfoCount = 1,
-                           .pCommandBufferInfos = &cbi,
-                           .signalSemaphoreInfoCount = 1,
-                           .pSignalSemaphoreInfos = &sig};
-    const VkResult vr = device_.submit(si, VK_NULL_HANDLE);
-    if (vr != VK_SUCCESS) {
-        shared_.setError(vk::check(vr, "vkQueueSubmit2 (tile upload)"));
+    if (Result r = submit(tx); !r.ok()) {
+        shared_.setError(r);
+        log_.error(r.message());
         // The GPU state is unknown after a failed submit: leave the slots FILLING (never drawn).
         tx.signalValue = 0;
         return false;
@@ -184,29 +202,89 @@ bool BufferThread::submitNew(const Snapshot& snap) {
     return true;
 }
 
-Result BufferThread::record(Transaction& t) {
-    VkCommandBuffer cmd = t.cmd;
+Result BufferThread::submit(Transaction& tx) {
+    using Role = gpu::Device::Role;
+    const auto cmdInfo = [](VkCommandBuffer c) {
+        return VkCommandBufferSubmitInfo{
+            .sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_SUBMIT_INFO, .pNext = nullptr, .commandBuffer = c, .deviceMask = 0};
+    };
+    const auto semInfo = [](VkSemaphore sem, uint64_t value, VkPipelineStageFlags2 stage) {
+        return VkSemaphoreSubmitInfo{.sType = VK_STRUCTURE_TYPE_SEMAPHORE_SUBMIT_INFO,
+                                     .pNext = nullptr,
+                                     .semaphore = sem,
+                                     .value = value,
+                                     .stageMask = stage,
+                                     .deviceIndex = 0};
+    };
+    VkSemaphoreSubmitInfo copyDone = semInfo(copyTimeline_, tx.signalValue, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT);
+    if (separateCopy_) {
+        const VkCommandBufferSubmitInfo cbi = cmdInfo(tx.copyCmd);
+        const VkSubmitInfo2 si{.sType = VK_STRUCTURE_TYPE_SUBMIT_INFO_2,
+                               .pNext = nullptr,
+                               .flags = 0,
+                               .waitSemaphoreInfoCount = 0,
+                               .pWaitSemaphoreInfos = nullptr,
+                               .commandBufferInfoCount = 1,
+                               .pCommandBufferInfos = &cbi,
+                               .signalSemaphoreInfoCount = 1,
+                               .pSignalSemaphoreInfos = &copyDone};
+        IRIS_VK_TRY(device_.submit(Role::Transfer, si, VK_NULL_HANDLE));
+    }
+    // The compute stage waits for the copy (its acquire barrier needs the release to have run).
+    const VkSemaphoreSubmitInfo waitCopy = semInfo(copyTimeline_, tx.signalValue, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT);
+    const VkSemaphoreSubmitInfo sig = semInfo(timeline_, tx.signalValue, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT);
+    const VkCommandBufferSubmitInfo cbi = cmdInfo(tx.cmd);
+    const VkSubmitInfo2 si{.sType = VK_STRUCTURE_TYPE_SUBMIT_INFO_2,
+                           .pNext = nullptr,
+                           .flags = 0,
+                           .waitSemaphoreInfoCount = separateCopy_ ? 1u : 0u,
+                           .pWaitSemaphoreInfos = &waitCopy,
+                           .commandBufferInfoCount = 1,
+                           .pCommandBufferInfos = &cbi,
+                           .signalSemaphoreInfoCount = 1,
+                           .pSignalSemaphoreInfos = &sig};
+    IRIS_VK_TRY(device_.submit(Role::Compute, si, VK_NULL_HANDLE));
+    return {};
+}
+
+namespace {
+
+VkImageMemoryBarrier2 ownership(VkImage img, VkPipelineStageFlags2 srcStage, VkAccessFlags2 srcAccess,
+                                VkPipelineStageFlags2 dstStage, VkAccessFlags2 dstAccess, VkImageLayout oldLayout,
+                                uint32_t srcFamily, uint32_t dstFamily, VkImageSubresourceRange range) {
+    VkImageMemoryBarrier2 b = vk::imageBarrier(img, srcStage, srcAccess, dstStage, dstAccess, oldLayout,
+                                               VK_IMAGE_LAYOUT_GENERAL, range);
+    if (srcFamily != dstFamily) {
+        b.srcQueueFamilyIndex = srcFamily;
+        b.dstQueueFamilyIndex = dstFamily;
+    }
+    return b;
+}
+
+Result beginCommands(VkCommandBuffer cmd) {
     IRIS_VK_TRY(vkResetCommandBuffer(cmd, 0));
     const VkCommandBufferBeginInfo bi{.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO,
                                       .pNext = nullptr,
                                       .flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT,
                                       .pInheritanceInfo = nullptr};
     IRIS_VK_TRY(vkBeginCommandBuffer(cmd, &bi));
+    return {};
+}
+
+} // namespace
+
+Result BufferThread::record(Transaction& t) {
     VkImage img = atlas_.image();
     const uint32_t n = uint32_t(t.slots.size());
-    constexpr VkPipelineStageFlags2 kXfer = VK_PIPELINE_STAGE_2_COPY_BIT | VK_PIPELINE_STAGE_2_BLIT_BIT;
-
-    // Reused slots: earlier frames may still sample them (write-after-read: an execution
-    // dependency on the fragment stage) and an earlier upload wrote them (write-after-write).
-    std::vector<VkImageMemoryBarrier2> barriers;
-    barriers.reserve(n);
-    for (int s : t.slots) {
-        barriers.push_back(vk::imageBarrier(img, VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | kXfer, VK_ACCESS_2_TRANSFER_WRITE_BIT,
-                                            kXfer, VK_ACCESS_2_TRANSFER_WRITE_BIT | VK_ACCESS_2_TRANSFER_READ_BIT,
-                                            VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_GENERAL,
-                                            vk::colorRange(0, gpu::kTileMipLevels, uint32_t(s), 1)));
-    }
-    vk::pipelineBarrier(cmd, barriers.data(), n);
+    constexpr VkPipelineStageFlags2 kCopy = VK_PIPELINE_STAGE_2_COPY_BIT;
+    constexpr VkPipelineStageFlags2 kCompute = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT;
+    constexpr VkPipelineStageFlags2 kFragment = VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT;
+    const uint32_t T = transferFamily_, C = computeFamily_, G = graphicsFamily_;
+    const auto base = [](int s) { return vk::colorRange(0, 1, uint32_t(s), 1); };
+    const auto mips = [](int s) { return vk::colorRange(1, gpu::kTileMipLevels - 1, uint32_t(s), 1); };
+    const auto all = [](int s) { return vk::colorRange(0, gpu::kTileMipLevels, uint32_t(s), 1); };
+    std::vector<VkImageMemoryBarrier2> b;
+    b.reserve(2 * n);
 
     std::vector<VkBufferImageCopy> copies(n);
     for (uint32_t i = 0; i < n; ++i) {
@@ -219,36 +297,69 @@ Result BufferThread::record(Transaction& t) {
             .imageExtent = {uint32_t(kTileSize), uint32_t(kTileSize), 1},
         };
     }
-    vkCmdCopyBufferToImage(cmd, staging_.buffer, img, VK_IMAGE_LAYOUT_GENERAL, n, copies.data());
+    // A reclaimed slot's old content is discarded (oldLayout UNDEFINED), which also lets the
+    // uploading queue family take it without an ownership transfer back from graphics. Frames
+    // that sampled it have completed (the tile map reclaims only unpinned slots, and frames
+    // unpin after their fence), so only the stage order below is needed.
+    if (separateCopy_) {
+        // Transfer queue: discard + copy the base level, then release it to the compute family.
+        if (Result r = beginCommands(t.copyCmd); !r.ok()) return r;
+        for (int s : t.slots)
+            b.push_back(vk::imageBarrier(img, VK_PIPELINE_STAGE_2_NONE, VK_ACCESS_2_NONE, kCopy,
+                                         VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
+                                         VK_IMAGE_LAYOUT_GENERAL, base(s)));
+        vk::pipelineBarrier(t.copyCmd, b.data(), n);
+        vkCmdCopyBufferToImage(t.copyCmd, staging_.buffer, img, VK_IMAGE_LAYOUT_GENERAL, n, copies.data());
+        b.clear();
+        for (int s : t.slots) // release: dst stage/access NONE (the acquire supplies them)
+            b.push_back(ownership(img, kCopy, VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_NONE, VK_ACCESS_2_NONE,
+                                  VK_IMAGE_LAYOUT_GENERAL, T, C, base(s)));
+        vk::pipelineBarrier(t.copyCmd, b.data(), n);
+        IRIS_VK_TRY(vkEndCommandBuffer(t.copyCmd));
+    }
 
-    std::vector<VkImageBlit> blits(n);
-    for (uint32_t m = 1; m < gpu::kTileMipLevels; ++m) {
-        barriers.clear();
-        for (int s : t.slots) {
-            barriers.push_back(vk::imageBarrier(img, kXfer, VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_BLIT_BIT,
-                                                VK_ACCESS_2_TRANSFER_READ_BIT, VK_IMAGE_LAYOUT_GENERAL,
-                                                VK_IMAGE_LAYOUT_GENERAL, vk::colorRange(m - 1, 1, uint32_t(s), 1)));
+    // Compute queue.
+    VkCommandBuffer cmd = t.cmd;
+    if (Result r = beginCommands(cmd); !r.ok()) return r;
+    b.clear();
+    if (separateCopy_) {
+        for (int s : t.slots) { // acquire from transfer: src stage/access NONE (the release supplied them)
+            b.push_back(ownership(img, VK_PIPELINE_STAGE_2_NONE, VK_ACCESS_2_NONE, kCompute,
+                                  VK_ACCESS_2_SHADER_STORAGE_READ_BIT, VK_IMAGE_LAYOUT_GENERAL, T, C, base(s)));
+            b.push_back(vk::imageBarrier(img, VK_PIPELINE_STAGE_2_NONE, VK_ACCESS_2_NONE, kCompute,
+                                         VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
+                                         VK_IMAGE_LAYOUT_GENERAL, mips(s)));
         }
-        vk::pipelineBarrier(cmd, barriers.data(), n);
-        const int32_t src = kTileSize >> (m - 1), dst = kTileSize >> m;
-        for (uint32_t i = 0; i < n; ++i) {
-            blits[i] = VkImageBlit{
-                .srcSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, m - 1, uint32_t(t.slots[i]), 1},
-                .srcOffsets = {{0, 0, 0}, {src, src, 1}},
-                .dstSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, m, uint32_t(t.slots[i]), 1},
-                .dstOffsets = {{0, 0, 0}, {dst, dst, 1}},
-            };
-        }
-        vkCmdBlitImage(cmd, img, VK_IMAGE_LAYOUT_GENERAL, img, VK_IMAGE_LAYOUT_GENERAL, n, blits.data(), VK_FILTER_LINEAR);
+        vk::pipelineBarrier(cmd, b.data(), uint32_t(b.size()));
+    } else {
+        for (int s : t.slots)
+            b.push_back(vk::imageBarrier(img, kFragment, VK_ACCESS_2_NONE, kCopy | kCompute,
+                                         VK_ACCESS_2_TRANSFER_WRITE_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                                         VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL, all(s)));
+        vk::pipelineBarrier(cmd, b.data(), n);
+        vkCmdCopyBufferToImage(cmd, staging_.buffer, img, VK_IMAGE_LAYOUT_GENERAL, n, copies.data());
+        b.clear();
+        for (int s : t.slots)
+            b.push_back(vk::imageBarrier(img, kCopy, VK_ACCESS_2_TRANSFER_WRITE_BIT, kCompute,
+                                         VK_ACCESS_2_SHADER_STORAGE_READ_BIT, VK_IMAGE_LAYOUT_GENERAL,
+                                         VK_IMAGE_LAYOUT_GENERAL, base(s)));
+        vk::pipelineBarrier(cmd, b.data(), n);
     }
-    // Hand-over to rendering: the whole mip chain becomes visible to fragment-shader reads.
-    barriers.clear();
+    mips_.record(cmd, t.slots.data(), n);
+    b.clear();
     for (int s : t.slots) {
-        barriers.push_back(vk::imageBarrier(img, kXfer, VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT,
-                                            VK_ACCESS_2_SHADER_SAMPLED_READ_BIT, VK_IMAGE_LAYOUT_GENERAL,
-                                            VK_IMAGE_LAYOUT_GENERAL, vk::colorRange(0, gpu::kTileMipLevels, uint32_t(s), 1)));
+        if (C != G) {
+            // Release to the graphics family; the render thread records the matching acquire.
+            b.push_back(ownership(img, kCompute | kCopy, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                                  VK_PIPELINE_STAGE_2_NONE, VK_ACCESS_2_NONE, VK_IMAGE_LAYOUT_GENERAL, C, G, all(s)));
+        } else {
+            b.push_back(vk::imageBarrier(img, kCompute | kCopy,
+                                         VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT, kFragment,
+                                         VK_ACCESS_2_SHADER_SAMPLED_READ_BIT, VK_IMAGE_LAYOUT_GENERAL,
+                                         VK_IMAGE_LAYOUT_GENERAL, all(s)));
+        }
     }
-    vk::pipelineBarrier(cmd, barriers.data(), n);
+    vk::pipelineBarrier(cmd, b.data(), n);
     IRIS_VK_TRY(vkEndCommandBuffer(cmd));
     return {};
 }

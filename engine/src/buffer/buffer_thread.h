@@ -1,12 +1,16 @@
 // The buffer thread: moves decoded tiles from the RAM cache into the GPU tile atlas in small
-// microtransactions (a few tiles each: staging copy → mip chain → hand-over to rendering).
-// Each pass recomputes the buffer region from the newest published view, asks the atlas
-// what is missing, and takes only tiles already decoded in RAM (it never waits for a
-// loader). Many transactions may be in flight; completion is read from a timeline
-// semaphore and only then do the tiles' slots flip to ACTIVE.
+// microtransactions (up to 8 tiles: staging copy → mip chain → hand-over to rendering). Each
+// pass recomputes the buffer region from the newest published view, asks the tile map what is
+// missing, and takes only tiles already decoded in RAM (it never waits for a loader). Up to 8
+// transactions are in flight; completion is read from the upload timeline semaphore without
+// waiting, and only then are the tiles handed to rendering.
 //
-// Mips (this slice): a plain 2× box filter, one vkCmdBlitImage per level over all tiles of
-// the transaction. The reduction-enhancement compute pipeline replaces it (issue 6).
+// Queues: the copy runs on the transfer queue, the mip dispatch on the compute queue, drawing
+// on the graphics queue. Where those families differ, each crossing is a matched release /
+// acquire ownership-transfer pair with a semaphore between: transfer → compute inside the
+// transaction (transfer timeline semaphore), compute → graphics through the Handover ring
+// (the render thread records the acquire and waits on the upload timeline). Where they are
+// one family (lavapipe) everything is one command buffer on one queue.
 #pragma once
 
 #include <atomic>
@@ -16,6 +20,8 @@
 #include "cache/tile_cache.h"
 #include "core/log.h"
 #include "core/shared_state.h"
+#include "buffer/handover.h"
+#include "gpu/mip_pipeline.h"
 #include "gpu/tile_atlas.h"
 #include "gpu/vk_util.h"
 
@@ -23,8 +29,8 @@ namespace iris {
 
 class BufferThread {
 public:
-    BufferThread(SharedState& shared, TileCache& cache, gpu::Device& device, gpu::TileAtlas& atlas, const Log& log,
-                 int perimeter);
+    BufferThread(SharedState& shared, TileCache& cache, gpu::Device& device, gpu::TileAtlas& atlas,
+                 gpu::MipPipeline& mips, Handover& handover, const Log& log, int perimeter);
     ~BufferThread();
     Result init();
     void start();
@@ -35,7 +41,8 @@ public:
 
 private:
     struct Transaction {
-        VkCommandBuffer cmd = VK_NULL_HANDLE;
+        VkCommandBuffer copyCmd = VK_NULL_HANDLE; // transfer queue (only when its family differs)
+        VkCommandBuffer cmd = VK_NULL_HANDLE;     // compute queue
         uint64_t signalValue = 0; // 0: idle
         std::vector<int> slots;
         std::vector<uint32_t> staging;
@@ -44,16 +51,23 @@ private:
     bool pollCompleted();
     bool submitNew(const Snapshot& snap);
     Result record(Transaction& t);
+    Result submit(Transaction& t);
 
     SharedState& shared_;
     TileCache& cache_;
     gpu::Device& device_;
     gpu::TileAtlas& atlas_;
+    gpu::MipPipeline& mips_;
+    Handover& handover_;
     const Log& log_;
     const int perimeter_;
 
-    VkCommandPool pool_ = VK_NULL_HANDLE;
-    VkSemaphore timeline_ = VK_NULL_HANDLE;
+    VkCommandPool pool_ = VK_NULL_HANDLE;         // compute family
+    VkCommandPool copyPool_ = VK_NULL_HANDLE;     // transfer family, when separate
+    VkSemaphore timeline_ = VK_NULL_HANDLE;       // upload timeline: signalled by the compute stage
+    VkSemaphore copyTimeline_ = VK_NULL_HANDLE;   // transfer → compute, when separate
+    bool separateCopy_ = false;
+    uint32_t transferFamily_ = 0, computeFamily_ = 0, graphicsFamily_ = 0;
     uint64_t nextValue_ = 0;
     vk::MappedBuffer staging_;
     std::vector<uint32_t> freeStaging_;

@@ -1,5 +1,6 @@
 #include "gpu/device.h"
 
+#include <algorithm>
 #include <cstdlib>
 #include <cstring>
 #include <vector>
@@ -199,9 +200,7 @@ Result Device::pickPhysicalDevice() {
     if (families_.transfer == UINT32_MAX) families_.transfer = families_.graphics;
     log_.info(std::string("Vulkan device: ") + props_.deviceName + " (" + driver_ + "); queue families: graphics " +
               std::to_string(families_.graphics) + ", compute " + std::to_string(families_.compute) + ", transfer " +
-              std::to_string(families_.transfer) + (families_.compute == families_.graphics && families_.transfer == families_.graphics
-                                                        ? " (one family: all work serialised on one queue)"
-                                                        : " (this build submits all work to the graphics queue)"));
+              std::to_string(families_.transfer));
     return {};
 }
 
@@ -217,15 +216,32 @@ Result Device::createDevice() {
             hasSwapchain_ = true;
         }
     }
+    // One queue per distinct family among the roles; IRIS_QUEUES=single forces the
+    // single-queue path on any device (to test both paths on one machine).
+    const char* mode = std::getenv("IRIS_QUEUES");
+    const bool single = mode && std::strcmp(mode, "single") == 0;
+    const uint32_t roleFamily[3] = {families_.graphics, single ? families_.graphics : families_.compute,
+                                    single ? families_.graphics : families_.transfer};
+    std::vector<uint32_t> distinct;
+    for (int r = 0; r < 3; ++r) {
+        auto it = std::find(distinct.begin(), distinct.end(), roleFamily[r]);
+        if (it == distinct.end()) {
+            queueIndex_[r] = int(distinct.size());
+            distinct.push_back(roleFamily[r]);
+        } else {
+            queueIndex_[r] = int(it - distinct.begin());
+        }
+    }
     const float priority = 1.0f;
-    const VkDeviceQueueCreateInfo qci{
-        .sType = VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO,
-        .pNext = nullptr,
-        .flags = 0,
-        .queueFamilyIndex = families_.graphics,
-        .queueCount = 1,
-        .pQueuePriorities = &priority,
-    };
+    std::vector<VkDeviceQueueCreateInfo> qcis;
+    for (uint32_t fam : distinct) {
+        qcis.push_back({.sType = VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO,
+                        .pNext = nullptr,
+                        .flags = 0,
+                        .queueFamilyIndex = fam,
+                        .queueCount = 1,
+                        .pQueuePriorities = &priority});
+    }
     VkPhysicalDeviceVulkan13Features f13{.sType = VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES};
     f13.synchronization2 = VK_TRUE;
     f13.dynamicRendering = VK_TRUE;
@@ -236,8 +252,8 @@ Result Device::createDevice() {
         .sType = VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO,
         .pNext = &f2,
         .flags = 0,
-        .queueCreateInfoCount = 1,
-        .pQueueCreateInfos = &qci,
+        .queueCreateInfoCount = uint32_t(qcis.size()),
+        .pQueueCreateInfos = qcis.data(),
         .enabledLayerCount = 0,
         .ppEnabledLayerNames = nullptr,
         .enabledExtensionCount = uint32_t(enable.size()),
@@ -245,22 +261,31 @@ Result Device::createDevice() {
         .pEnabledFeatures = nullptr,
     };
     IRIS_VK_TRY(vkCreateDevice(physical_, &dci, nullptr, &device_));
-    vkGetDeviceQueue(device_, families_.graphics, 0, &queue_);
+    for (size_t i = 0; i < distinct.size(); ++i) {
+        vkGetDeviceQueue(device_, distinct[i], 0, &queues_[i]);
+        queueFamily_[i] = distinct[i];
+    }
+    log_.info("queues in use: graphics family " + std::to_string(family(Role::Graphics)) + ", compute family " +
+              std::to_string(family(Role::Compute)) + ", transfer family " + std::to_string(family(Role::Transfer)) +
+              (separateFamilies() ? " (separate families: ownership transfers between them)" : " (one queue)"));
     return {};
 }
 
-VkResult Device::submit(const VkSubmitInfo2& info, VkFence fence) {
-    std::lock_guard lock(queueMutex_);
-    return vkQueueSubmit2(queue_, 1, &info, fence);
+VkResult Device::submit(Role role, const VkSubmitInfo2& info, VkFence fence) {
+    const int q = queueIndex_[int(role)];
+    std::lock_guard lock(queueMutex_[q]);
+    return vkQueueSubmit2(queues_[q], 1, &info, fence);
 }
 
 VkResult Device::present(const VkPresentInfoKHR& info) {
-    std::lock_guard lock(queueMutex_);
-    return vkQueuePresentKHR(queue_, &info);
+    const int q = queueIndex_[int(Role::Graphics)];
+    std::lock_guard lock(queueMutex_[q]);
+    return vkQueuePresentKHR(queues_[q], &info);
 }
 
 void Device::waitIdle() {
-    std::lock_guard lock(queueMutex_);
+    // vkDeviceWaitIdle needs every queue externally synchronised.
+    std::scoped_lock lock(queueMutex_[0], queueMutex_[1], queueMutex_[2]);
     vkDeviceWaitIdle(device_);
 }
 

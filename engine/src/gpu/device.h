@@ -37,11 +37,18 @@ public:
     bool hasSwapchain() const { return hasSwapchain_; }
     const std::string& driverName() const { return driver_; }
 
-    // The single queue of this slice (graphics family). VkQueue access must be externally
-    // synchronised: every submit/present goes through submit()/present() under queueMutex_.
-    VkQueue queue() const { return queue_; }
-    uint32_t queueFamily() const { return families_.graphics; }
-    VkResult submit(const VkSubmitInfo2& info, VkFence fence);
+    // Queues. Graphics draws and presents; compute generates mips; transfer uploads. Where
+    // the device has separate compute / transfer families (and IRIS_QUEUES is not "single"),
+    // each role has its own VkQueue of its own family; otherwise roles share the graphics
+    // queue. A VkQueue must be externally synchronised: every submit/present goes through
+    // submit()/present(), under that queue's mutex.
+    enum class Role { Graphics = 0, Compute = 1, Transfer = 2 };
+    VkQueue queue(Role r = Role::Graphics) const { return queues_[queueIndex_[int(r)]]; }
+    uint32_t family(Role r) const { return queueFamily_[queueIndex_[int(r)]]; }
+    uint32_t queueFamily() const { return family(Role::Graphics); }
+    bool separateFamilies() const { return family(Role::Compute) != family(Role::Graphics) || family(Role::Transfer) != family(Role::Graphics); }
+    VkResult submit(const VkSubmitInfo2& info, VkFence fence) { return submit(Role::Graphics, info, fence); }
+    VkResult submit(Role role, const VkSubmitInfo2& info, VkFence fence);
     VkResult present(const VkPresentInfoKHR& info);
     void waitIdle();
 
@@ -63,8 +70,10 @@ private:
     VkPhysicalDeviceProperties props_{};
     VkDevice device_ = VK_NULL_HANDLE;
     QueueFamilies families_;
-    VkQueue queue_ = VK_NULL_HANDLE;
-    std::mutex queueMutex_;
+    VkQueue queues_[3] = {};          // distinct VkQueues (up to one per role)
+    uint32_t queueFamily_[3] = {};    // family of each distinct queue
+    int queueIndex_[3] = {0, 0, 0};   // role → distinct queue
+    std::mutex queueMutex_[3];
     bool hasSwapchain_ = false;
     std::string driver_;
     std::atomic<uint64_t> validationMessages_{0}; // a counter only: relaxed is enough

@@ -20,6 +20,8 @@ TileAtlas::~TileAtlas() {
     VkDevice dev = device_.device();
     if (!dev) return;
     if (sampler_) vkDestroySampler(dev, sampler_, nullptr);
+    for (VkImageView v : mipViews_)
+        if (v) vkDestroyImageView(dev, v, nullptr);
     if (view_) vkDestroyImageView(dev, view_, nullptr);
     if (image_) vkDestroyImage(dev, image_, nullptr);
     if (memory_) vkFreeMemory(dev, memory_, nullptr);
@@ -35,9 +37,9 @@ Result TileAtlas::init(uint64_t vramBudgetBytes) {
     VkFormatProperties fp;
     vkGetPhysicalDeviceFormatProperties(device_.physical(), kFormat, &fp);
     const VkFormatFeatureFlags need = VK_FORMAT_FEATURE_SAMPLED_IMAGE_BIT | VK_FORMAT_FEATURE_SAMPLED_IMAGE_FILTER_LINEAR_BIT |
-                                      VK_FORMAT_FEATURE_BLIT_SRC_BIT | VK_FORMAT_FEATURE_BLIT_DST_BIT;
+                                      VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT;
     if ((fp.optimalTilingFeatures & need) != need) {
-        return Result(Status::Vulkan, "The device cannot sample and blit RGBA8 images with linear filtering");
+        return Result(Status::Vulkan, "The device cannot sample (linear) and store RGBA8 images");
     }
 
     VkResult vr = VK_ERROR_OUT_OF_DEVICE_MEMORY;
@@ -54,7 +56,7 @@ Result TileAtlas::init(uint64_t vramBudgetBytes) {
             .arrayLayers = uint32_t(n),
             .samples = VK_SAMPLE_COUNT_1_BIT,
             .tiling = VK_IMAGE_TILING_OPTIMAL,
-            .usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
+            .usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_STORAGE_BIT,
             .sharingMode = VK_SHARING_MODE_EXCLUSIVE,
             .queueFamilyIndexCount = 0,
             .pQueueFamilyIndices = nullptr,
@@ -85,6 +87,12 @@ Result TileAtlas::init(uint64_t vramBudgetBytes) {
         .subresourceRange = vk::colorRange(),
     };
     IRIS_VK_TRY(vkCreateImageView(dev, &vci, nullptr, &view_));
+
+    for (uint32_t m = 0; m < kTileMipLevels; ++m) {
+        VkImageViewCreateInfo mci = vci;
+        mci.subresourceRange = vk::colorRange(m, 1);
+        IRIS_VK_TRY(vkCreateImageView(dev, &mci, nullptr, &mipViews_[m]));
+    }
 
     const VkSamplerCreateInfo sci{
         .sType = VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO,

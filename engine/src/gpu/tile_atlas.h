@@ -26,6 +26,8 @@ public:
     static uint64_t bytesPerSlot();
     VkImage image() const { return image_; }
     VkImageView view() const { return view_; }
+    // Storage views of one mip level across all layers (for the mip compute pass).
+    VkImageView mipView(uint32_t level) const { return mipViews_[level]; }
     VkSampler sampler() const { return sampler_; }
     uint32_t slotCount() const { return map_ ? map_->slotCount() : 0; }
 
@@ -37,6 +39,7 @@ private:
     VkImage image_ = VK_NULL_HANDLE;
     VkDeviceMemory memory_ = VK_NULL_HANDLE;
     VkImageView view_ = VK_NULL_HANDLE;
+    VkImageView mipViews_[kTileMipLevels] = {};
     VkSampler sampler_ = VK_NULL_HANDLE;
 
     std::unique_ptr<TileMap> map_;

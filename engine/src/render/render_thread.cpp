@@ -1,6 +1,7 @@
 #include "render/render_thread.h"
 
 #include <cmath>
+#include <algorithm>
 #include <cstring>
 #include <vector>
 
@@ -9,8 +10,8 @@ namespace iris {
 using Clock = std::chrono::steady_clock;
 
 RenderThread::RenderThread(SharedState& shared, gpu::Device& device, gpu::TileAtlas& atlas, gpu::TilePipeline& pipeline,
-                           const Log& log)
-    : shared_(shared), device_(device), atlas_(atlas), pipeline_(pipeline), log_(log) {}
+                           Handover& handover, const Log& log)
+    : shared_(shared), device_(device), atlas_(atlas), pipeline_(pipeline), handover_(handover), log_(log) {}
 
 RenderThread::~RenderThread() {
     stop();
@@ -263,6 +264,25 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
     const uint64_t serial = ++serial_;
     f.serial = serial;
 
+    // Tiles whose mips were made on another queue family: record the acquire half of their
+    // compute → graphics ownership transfer (the buffer thread recorded the release), wait on
+    // the upload timeline value that covered the release, and only then let them be drawn.
+    std::vector<VkImageMemoryBarrier2> acquires;
+    uint64_t uploadWait = 0;
+    if (handover_.needed) {
+        handover_.drain([&](const HandoverItem& h) {
+            VkImageMemoryBarrier2 b = vk::imageBarrier(
+                atlas_.image(), VK_PIPELINE_STAGE_2_NONE, VK_ACCESS_2_NONE, VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT,
+                VK_ACCESS_2_SHADER_SAMPLED_READ_BIT, VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_GENERAL,
+                vk::colorRange(0, gpu::kTileMipLevels, uint32_t(h.slot), 1));
+            b.srcQueueFamilyIndex = handover_.srcFamily;
+            b.dstQueueFamilyIndex = device_.queueFamily();
+            acquires.push_back(b);
+            uploadWait = std::max(uploadWait, h.uploadValue);
+            atlas_.map().activate(h.slot);
+        });
+    }
+
     // Draw list: base, LR, HR, each only where its tiles are ACTIVE.
     Viewport vp = snap.viewport;
     vp.width = extent.width;
@@ -321,6 +341,7 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
         VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
         VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, vk::colorRange(0, 1, 0, 1));
     vk::pipelineBarrier(cmd, &toColor, 1);
+    if (!acquires.empty()) vk::pipelineBarrier(cmd, acquires.data(), uint32_t(acquires.size()));
     const VkRenderingAttachmentInfo color{
         .sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO,
         .pNext = nullptr,
@@ -425,11 +446,22 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
                                         .value = 0,
                                         .stageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
                                         .deviceIndex = 0};
+    VkSemaphoreSubmitInfo waits[2];
+    uint32_t waitCount = 0;
+    if (surface) waits[waitCount++] = waitAcq;
+    if (uploadWait) {
+        waits[waitCount++] = VkSemaphoreSubmitInfo{.sType = VK_STRUCTURE_TYPE_SEMAPHORE_SUBMIT_INFO,
+                                                   .pNext = nullptr,
+                                                   .semaphore = handover_.uploadTimeline,
+                                                   .value = uploadWait,
+                                                   .stageMask = VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT,
+                                                   .deviceIndex = 0};
+    }
     const VkSubmitInfo2 si{.sType = VK_STRUCTURE_TYPE_SUBMIT_INFO_2,
                            .pNext = nullptr,
                            .flags = 0,
-                           .waitSemaphoreInfoCount = surface ? 1u : 0u,
-                           .pWaitSemaphoreInfos = &waitAcq,
+                           .waitSemaphoreInfoCount = waitCount,
+                           .pWaitSemaphoreInfos = waits,
                            .commandBufferInfoCount = 1,
                            .pCommandBufferInfos = &cbi,
                            .signalSemaphoreInfoCount = surface ? 1u : 0u,

@@ -14,6 +14,7 @@
 #include <thread>
 #include <vector>
 
+#include "buffer/handover.h"
 #include "core/log.h"
 #include "core/shared_state.h"
 #include "gpu/render_target.h"
@@ -24,7 +25,8 @@ namespace iris {
 
 class RenderThread {
 public:
-    RenderThread(SharedState& shared, gpu::Device& device, gpu::TileAtlas& atlas, gpu::TilePipeline& pipeline, const Log& log);
+    RenderThread(SharedState& shared, gpu::Device& device, gpu::TileAtlas& atlas, gpu::TilePipeline& pipeline,
+                 Handover& handover, const Log& log);
     ~RenderThread();
     Result init();
     void start();
@@ -72,6 +74,7 @@ private:
     gpu::Device& device_;
     gpu::TileAtlas& atlas_;
     gpu::TilePipeline& pipeline_;
+    Handover& handover_;
     const Log& log_;
 
     std::array<FrameSlot, kFramesInFlight> frames_{};

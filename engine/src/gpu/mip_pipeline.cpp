@@ -1,0 +1,90 @@
+#include "gpu/mip_pipeline.h"
+
+#include "gpu/vk_util.h"
+#include <iris_shaders/mip_reduce_comp.h>
+
+namespace iris::gpu {
+
+MipPipeline::~MipPipeline() {
+    VkDevice dev = device_.device();
+    if (!dev) return;
+    if (pipeline_) vkDestroyPipeline(dev, pipeline_, nullptr);
+    if (pool_) vkDestroyDescriptorPool(dev, pool_, nullptr);
+    if (layout_) vkDestroyPipelineLayout(dev, layout_, nullptr);
+    if (setLayout_) vkDestroyDescriptorSetLayout(dev, setLayout_, nullptr);
+    if (module_) vkDestroyShaderModule(dev, module_, nullptr);
+}
+
+Result MipPipeline::init() {
+    VkDevice dev = device_.device();
+    const VkShaderModuleCreateInfo smci{.sType = VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO,
+                                        .pNext = nullptr,
+                                        .flags = 0,
+                                        .codeSize = sizeof(mip_reduce_comp_spv),
+                                        .pCode = mip_reduce_comp_spv};
+    IRIS_VK_TRY(vkCreateShaderModule(dev, &smci, nullptr, &module_));
+    const VkDescriptorSetLayoutBinding bindings[2] = {
+        {.binding = 0, .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, .descriptorCount = 1,
+         .stageFlags = VK_SHADER_STAGE_COMPUTE_BIT, .pImmutableSamplers = nullptr},
+        {.binding = 1, .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, .descriptorCount = kTileMipLevels - 1,
+         .stageFlags = VK_SHADER_STAGE_COMPUTE_BIT, .pImmutableSamplers = nullptr},
+    };
+    const VkDescriptorSetLayoutCreateInfo dslci{
+        .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO, .pNext = nullptr, .flags = 0, .bindingCount = 2, .pBindings = bindings};
+    IRIS_VK_TRY(vkCreateDescriptorSetLayout(dev, &dslci, nullptr, &setLayout_));
+    const VkPushConstantRange push{.stageFlags = VK_SHADER_STAGE_COMPUTE_BIT, .offset = 0, .size = sizeof(uint32_t) * kMaxTiles};
+    const VkPipelineLayoutCreateInfo plci{.sType = VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO,
+                                          .pNext = nullptr,
+                                          .flags = 0,
+                                          .setLayoutCount = 1,
+                                          .pSetLayouts = &setLayout_,
+                                          .pushConstantRangeCount = 1,
+                                          .pPushConstantRanges = &push};
+    IRIS_VK_TRY(vkCreatePipelineLayout(dev, &plci, nullptr, &layout_));
+    const VkComputePipelineCreateInfo cpci{
+        .sType = VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO,
+        .pNext = nullptr,
+        .flags = 0,
+        .stage = {.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, .pNext = nullptr, .flags = 0,
+                  .stage = VK_SHADER_STAGE_COMPUTE_BIT, .module = module_, .pName = "main", .pSpecializationInfo = nullptr},
+        .layout = layout_,
+        .basePipelineHandle = VK_NULL_HANDLE,
+        .basePipelineIndex = -1,
+    };
+    IRIS_VK_TRY(vkCreateComputePipelines(dev, VK_NULL_HANDLE, 1, &cpci, nullptr, &pipeline_));
+
+    const VkDescriptorPoolSize ps{.type = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, .descriptorCount = kTileMipLevels};
+    const VkDescriptorPoolCreateInfo dpci{
+        .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO, .pNext = nullptr, .flags = 0, .maxSets = 1, .poolSizeCount = 1, .pPoolSizes = &ps};
+    IRIS_VK_TRY(vkCreateDescriptorPool(dev, &dpci, nullptr, &pool_));
+    const VkDescriptorSetAllocateInfo dsai{.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO,
+                                           .pNext = nullptr,
+                                           .descriptorPool = pool_,
+                                           .descriptorSetCount = 1,
+                                           .pSetLayouts = &setLayout_};
+    IRIS_VK_TRY(vkAllocateDescriptorSets(dev, &dsai, &set_));
+    VkDescriptorImageInfo infos[kTileMipLevels];
+    for (uint32_t m = 0; m < kTileMipLevels; ++m)
+        infos[m] = {.sampler = VK_NULL_HANDLE, .imageView = atlas_.mipView(m), .imageLayout = VK_IMAGE_LAYOUT_GENERAL};
+    const VkWriteDescriptorSet writes[2] = {
+        {.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .pNext = nullptr, .dstSet = set_, .dstBinding = 0, .dstArrayElement = 0,
+         .descriptorCount = 1, .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, .pImageInfo = &infos[0],
+         .pBufferInfo = nullptr, .pTexelBufferView = nullptr},
+        {.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .pNext = nullptr, .dstSet = set_, .dstBinding = 1, .dstArrayElement = 0,
+         .descriptorCount = kTileMipLevels - 1, .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, .pImageInfo = &infos[1],
+         .pBufferInfo = nullptr, .pTexelBufferView = nullptr},
+    };
+    vkUpdateDescriptorSets(dev, 2, writes, 0, nullptr);
+    return {};
+}
+
+void MipPipeline::record(VkCommandBuffer cmd, const int* layers, uint32_t count) const {
+    uint32_t push[kMaxTiles] = {};
+    for (uint32_t i = 0; i < count && i < kMaxTiles; ++i) push[i] = uint32_t(layers[i]);
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_);
+    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 1, &set_, 0, nullptr);
+    vkCmdPushConstants(cmd, layout_, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push), push);
+    vkCmdDispatch(cmd, count, 1, 1);
+}
+
+} // namespace iris::gpu

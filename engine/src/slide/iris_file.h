@@ -1,0 +1,132 @@
+// SlideSource for .iris files (the Iris File Extension, version 1.x: 1.0 with the 1.1
+// additions, and newer minor versions read through the fields this reader knows). The layout
+// is in shared/formats/iris-file-extension.md.
+//
+// The file is memory-mapped read-only and its whole structure is validated at open (every
+// block, array, tile stream and attribute), so that readTile() only has to decode. Tiles are
+// 256×256 JPEG (or AVIF, refused per tile in this build) and the engine's grid is 256×256 as
+// well, so one engine tile is exactly one .iris tile, decoded straight into the caller's
+// buffer.
+//
+// Levels: .iris layer 0 is the LOWEST resolution; the engine's level 0 is the finest. Engine
+// level l is .iris layer (layerCount − 1 − l), with downsample = finest SCALE / layer SCALE.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "slide/slide_source.h"
+
+namespace iris {
+
+// The parsed and validated structure of an .iris file (values as stored unless said).
+namespace ife {
+
+inline constexpr uint64_t kNullOffset = 0xFFFFFFFFFFFFFFFFull;
+inline constexpr uint64_t kNullTile = 0xFFFFFFFFFFull; // u40
+inline constexpr int kMaxLayers = 64;                   // the engine's tile key holds 6 level bits
+
+enum TileEncoding : uint8_t { kEncodingUndefined = 0, kEncodingIris = 1, kEncodingJpeg = 2, kEncodingAvif = 3 };
+enum ImageEncoding : uint8_t { kImageUndefined = 0, kImagePng = 1, kImageJpeg = 2, kImageAvif = 3 };
+
+struct Layer {
+    uint32_t xTiles = 0;
+    uint32_t yTiles = 0;
+    float scale = 0;         // as stored: 1 at the lowest resolution, growing
+    uint64_t firstTile = 0;  // index of its tile (0, 0) in TILE_OFFSETS
+    int64_t width = 0;       // derived true pixel size (see parse())
+    int64_t height = 0;
+    double downsample = 1;   // finest scale / this scale
+};
+
+struct AssociatedImage {
+    std::string name;        // the IMAGE_BYTES title ("label", "macro", "thumbnail", …)
+    uint64_t offset = 0;     // the encoded image's bytes in the file
+    uint32_t size = 0;
+    uint32_t width = 0;      // as the IMAGES entry states them
+    uint32_t height = 0;
+    uint8_t encoding = 0;    // ImageEncoding
+    uint8_t format = 0;      // pixel format
+    float orientation = 0;   // degrees
+};
+
+struct TileStream {
+    uint64_t offset = 0;
+    uint32_t size = 0;       // 0: no data (NULL_TILE), drawn as transparent
+};
+
+struct Layout {
+    uint16_t major = 0, minor = 0;
+    uint32_t revision = 0;
+    uint8_t encoding = 0;    // TileEncoding
+    uint8_t pixelFormat = 0;
+    uint32_t tileLength = 256;
+    uint32_t xExtent = 0, yExtent = 0;  // as stored
+    bool extentIsLowestLayer = false;   // which reading of X/Y_EXTENT matched
+    std::vector<Layer> layers;          // as stored: lowest resolution first
+    uint64_t tileEntries = 0;           // file offset of TILE_OFFSETS entry 0
+    uint16_t tileStride = 0;
+    uint64_t tileCount = 0;
+    int64_t width = 0, height = 0;      // the highest-resolution layer's true size
+    uint16_t codecMajor = 0, codecMinor = 0, codecBuild = 0;
+    float micronsPerPixel = 0;          // at scale 1 (the lowest-resolution layer)
+    float magnification = 0;            // at scale 1
+    float micronsPlane = 0;             // 1.1; 0 when absent
+    bool hasAttributes = false;
+    uint8_t attributeFormat = 0;
+    uint16_t attributeVersion = 0;
+    std::vector<std::pair<std::string, std::string>> attributes; // in file order
+    std::vector<AssociatedImage> images;
+    bool hasIcc = false;
+    uint64_t iccOffset = 0;
+    uint32_t iccSize = 0;
+    bool hasAnnotations = false;
+    uint32_t annotationCount = 0;
+    bool hasClinical = false;
+    uint32_t clinicalSize = 0;
+    uint8_t clinicalEncoding = 0;
+};
+
+// Parses and validates the whole structure of an .iris file held in memory. Never reads
+// outside [data, data + size), whatever the bytes say; every offset and length is checked
+// with overflow-safe arithmetic. `name` is the file name the messages use ("Cannot open
+// 'NAME': …"). Returns CorruptData for a broken file and UnsupportedFormat for a valid one
+// this reader cannot show (another major version, encrypted tiles, the reserved IRIS codec,
+// tiles other than 256 pixels).
+Expected<Layout> parse(const uint8_t* data, uint64_t size, const std::string& name);
+
+// The tile stream of tile (x, y) of `layer` (indices as stored); the layout must come from
+// parse() of the same bytes, and x, y must lie inside the layer.
+TileStream tileStream(const uint8_t* data, const Layout& layout, size_t layer, uint32_t x, uint32_t y);
+
+} // namespace ife
+
+class IrisFileSource final : public SlideSource {
+public:
+    // The name ends in .iris (any case) or the file starts with the magic bytes "sirI"; a
+    // file named .iris that is broken is then explained by open() instead of OpenSlide.
+    static bool detect(const std::string& path);
+    static Expected<std::unique_ptr<SlideSource>> open(const std::string& path);
+    ~IrisFileSource() override;
+    IrisFileSource(const IrisFileSource&) = delete;
+    IrisFileSource& operator=(const IrisFileSource&) = delete;
+
+    const SlideInfo& info() const override { return info_; }
+    Result readTile(int level, int64_t tx, int64_t ty, uint8_t* dst) override;
+    Expected<Image> readAssociatedImage(const std::string& name) override;
+
+    const ife::Layout& layout() const { return layout_; }
+
+private:
+    IrisFileSource(const uint8_t* map, uint64_t size, std::string fileName, ife::Layout layout, SlideInfo info);
+
+    const uint8_t* map_; // read-only mapping of the whole file, immutable: readers share it freely
+    uint64_t size_;
+    std::string fileName_;
+    ife::Layout layout_;
+    SlideInfo info_;
+};
+
+} // namespace iris

@@ -307,6 +307,16 @@ DeviceInfo Engine::device() const {
     return d;
 }
 
+MemoryStats Engine::memoryStats() const {
+    MemoryStats m;
+    m.ramCacheBytes = impl_->cache.bytesUsed();
+    m.ramBudgetBytes = impl_->cache.budgetBytes();
+    m.vramAtlasBytes = uint64_t(impl_->atlas.slotCount()) * gpu::TileAtlas::bytesPerSlot();
+    m.atlasSlots = impl_->atlas.slotCount();
+    m.atlasActive = impl_->atlas.map().countActive();
+    return m;
+}
+
 uint64_t Engine::validationMessageCount() const { return impl_->device.validationMessages(); }
 
 } // namespace iris

@@ -57,7 +57,8 @@ public:
     void setVisible(bool visible);
 
     // --- slide ---------------------------------------------------------------------
-    // Opens a slide (replacing the current one) and fits it into the target. Returns a
+    // Opens a slide (replacing the current one) and fits it into the target. A path of the
+    // form "synthetic:WIDTHxHEIGHT" opens a procedural test slide of that size. Returns a
     // clear error for missing, unreadable, corrupt or unsupported files; on error the
     // previous slide is closed and the engine stays usable.
     Result open(const std::string& path);
@@ -101,6 +102,7 @@ public:
     Result error() const;
     void clearError();
     DeviceInfo device() const;
+    MemoryStats memoryStats() const;
     // Messages the Vulkan validation layers reported (tests require zero).
     uint64_t validationMessageCount() const;
 

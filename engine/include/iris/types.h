@@ -142,6 +142,15 @@ struct DeviceInfo {
     uint32_t atlasSlots = 0;     // tile slots the VRAM budget bought
 };
 
+// Memory the engine holds, readable at any time.
+struct MemoryStats {
+    uint64_t ramCacheBytes = 0;   // decoded tiles in the RAM cache plus its recycled buffers
+    uint64_t ramBudgetBytes = 0;  // EngineConfig::ramBudgetBytes as applied
+    uint64_t vramAtlasBytes = 0;  // the tile atlas, allocated once at create()
+    uint32_t atlasSlots = 0;
+    uint32_t atlasActive = 0;     // slots holding a drawable tile
+};
+
 enum class LogLevel { Debug, Info, Warning, Error };
 using LogCallback = std::function<void(LogLevel, std::string_view)>;
 

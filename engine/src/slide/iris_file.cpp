@@ -290,34 +290,57 @@ Result parseTiles(const Parser& p, uint64_t off, uint64_t fileSize, Layout& out)
     return {};
 }
 
+// Rounds a pixel size; -1 when it is not a sane number of pixels.
+int64_t roundPixels(double v) {
+    return (std::isfinite(v) && v >= 0 && v < 4e15) ? std::llround(v) : -1;
+}
+
 // True sizes. X_EXTENT/Y_EXTENT are the highest-resolution layer's size in the schema and
 // the lowest-resolution layer's in what the reference encoder writes; whichever reading the
-// tile grid allows is taken, the encoder's when both do. Every layer's size must then agree
-// with its tile grid to within a tile.
+// tile grids allow is taken, the encoder's when both do. Every layer's size (the finest
+// size divided by the layer's downsample) must then agree with its tile grid to within a
+// tile, and is clamped into it so that the engine's grid is the file's.
 Result deriveSizes(const Parser& p, Layout& out) {
-    const uint64_t tl = out.tileLength;
-    auto fits = [tl](uint64_t v, uint32_t tiles) { return v > uint64_t(tiles - 1) * tl && v <= uint64_t(tiles) * tl; };
+    const int64_t tl = out.tileLength;
+    auto fits = [tl](uint64_t v, uint32_t tiles) {
+        return v > uint64_t(tiles - 1) * uint64_t(tl) && v <= uint64_t(tiles) * uint64_t(tl);
+    };
+    auto near = [tl](int64_t px, uint32_t tiles) {
+        return px > 0 && std::abs((px + tl - 1) / tl - int64_t(tiles)) <= 1;
+    };
+    auto clampTo = [tl](int64_t v, uint32_t tiles) {
+        return std::clamp<int64_t>(v, int64_t(tiles - 1) * tl + 1, int64_t(tiles) * tl);
+    };
     const Layer& lo = out.layers.front();
     const Layer& hi = out.layers.back();
     const uint64_t x = out.xExtent, y = out.yExtent;
     const double hiScale = hi.scale;
-    const bool loFits = fits(x, lo.xTiles) && fits(y, lo.yTiles);
+    const bool multi = out.layers.size() > 1;
+    const bool loFits = multi && fits(x, lo.xTiles) && fits(y, lo.yTiles);
     const bool hiFits = fits(x, hi.xTiles) && fits(y, hi.yTiles);
-    auto clampTo = [tl](int64_t v, uint32_t tiles) {
-        return std::clamp<int64_t>(v, int64_t(tiles - 1) * int64_t(tl) + 1, int64_t(tiles) * int64_t(tl));
-    };
-    if (out.layers.size() > 1 && loFits) {
+    int64_t loW = -1, loH = -1; // the finest size under the encoder's reading
+    if (loFits) {
+        loW = roundPixels(double(x) * hiScale / double(lo.scale));
+        loH = roundPixels(double(y) * hiScale / double(lo.scale));
+    }
+    if (loFits && near(loW, hi.xTiles) && near(loH, hi.yTiles)) {
         out.extentIsLowestLayer = true;
-        out.width = clampTo(std::llround(double(x) * hiScale / double(lo.scale)), hi.xTiles);
-        out.height = clampTo(std::llround(double(y) * hiScale / double(lo.scale)), hi.yTiles);
+        out.width = clampTo(loW, hi.xTiles);
+        out.height = clampTo(loH, hi.yTiles);
     } else if (hiFits) {
         out.width = int64_t(x);
         out.height = int64_t(y);
+    } else if (loFits) {
+        return p.corrupt("the layer extents disagree: X_EXTENT x Y_EXTENT (" + num(x) + "x" + num(y) +
+                         ") is the size of layer 0, whose SCALE " + fmt(lo.scale) + " and layer " +
+                         num(out.layers.size() - 1) + "'s SCALE " + fmt(hi.scale) + " make layer " +
+                         num(out.layers.size() - 1) + " about " + std::to_string(loW) + "x" + std::to_string(loH) +
+                         " pixels, not " + num(hi.xTiles) + "x" + num(hi.yTiles) + " tiles");
     } else {
         return p.corrupt("X_EXTENT x Y_EXTENT (" + num(x) + "x" + num(y) +
                          ") fits neither the highest-resolution layer (" + num(hi.xTiles) + "x" + num(hi.yTiles) +
                          " tiles) nor the lowest-resolution layer (" + num(lo.xTiles) + "x" + num(lo.yTiles) +
-                         " tiles of " + num(tl) + " pixels)");
+                         " tiles of " + num(uint64_t(tl)) + " pixels)");
     }
     for (size_t i = 0; i < out.layers.size(); ++i) {
         Layer& l = out.layers[i];
@@ -332,13 +355,12 @@ Result deriveSizes(const Parser& p, Layout& out) {
             l.height = int64_t(y);
             continue;
         }
-        const int64_t w = std::max<int64_t>(1, std::llround(double(out.width) / l.downsample));
-        const int64_t h = std::max<int64_t>(1, std::llround(double(out.height) / l.downsample));
-        const int64_t tw = (w + int64_t(tl) - 1) / int64_t(tl), th = (h + int64_t(tl) - 1) / int64_t(tl);
-        if (std::abs(tw - int64_t(l.xTiles)) > 1 || std::abs(th - int64_t(l.yTiles)) > 1) {
-            return p.corrupt("layer " + num(i) + " is " + num(l.xTiles) + "x" + num(l.yTiles) + " tiles, but its SCALE " +
-                             fmt(l.scale) + " makes it " + num(uint64_t(w)) + "x" + num(uint64_t(h)) +
-                             " pixels: the layer extents disagree");
+        const int64_t w = std::max<int64_t>(1, roundPixels(double(out.width) / l.downsample));
+        const int64_t h = std::max<int64_t>(1, roundPixels(double(out.height) / l.downsample));
+        if (!near(w, l.xTiles) || !near(h, l.yTiles)) {
+            return p.corrupt("the layer extents disagree: layer " + num(i) + " is " + num(l.xTiles) + "x" +
+                             num(l.yTiles) + " tiles, but its SCALE " + fmt(l.scale) + " makes it " +
+                             std::to_string(w) + "x" + std::to_string(h) + " pixels");
         }
         l.width = clampTo(w, l.xTiles);
         l.height = clampTo(h, l.yTiles);

@@ -6,6 +6,7 @@
 #include <fstream>
 
 #include "slide/openslide_source.h"
+#include "slide/synthetic_source.h"
 
 namespace iris {
 
@@ -52,6 +53,7 @@ const SlideFormat kFormats[] = {
 
 Expected<std::unique_ptr<SlideSource>> openSlideSource(const std::string& path) {
     if (path.empty()) return Result(Status::InvalidArgument, "No slide path given");
+    if (SyntheticSource::detect(path)) return SyntheticSource::open(path); // not a file
     std::error_code ec;
     const fs::path p(path);
     const auto st = fs::status(p, ec);

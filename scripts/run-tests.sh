@@ -3,7 +3,9 @@
 #   1. the debug build (dev preset): every suite, with the Vulkan validation layers on
 #      (lavapipe is the device; widget suites run under Xvfb);
 #   2. the AddressSanitizer + UBSan build (asan preset): the suites labelled "asan"
-#      (open/close/reopen cycles, bad input), where LeakSanitizer reports leaks.
+#      (open/close/reopen cycles, bad input, the API storm), where LeakSanitizer reports leaks;
+#   3. the ThreadSanitizer build (tsan preset, engine only): the suites labelled "tsan"
+#      (the lock-free tile map under concurrent pin/reclaim, the API storm).
 # Exits non-zero if anything fails.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -24,3 +26,9 @@ cmake --build --preset asan -j "$JOBS"
 echo "== asan tests"
 # (the sanitizer options and the LeakSanitizer suppressions come from tests/CMakeLists.txt)
 xvfb-run -a -s "-screen 0 1920x1080x24" ctest --preset asan -L asan -j 1
+
+echo "== tsan build"
+cmake --preset tsan >/dev/null
+cmake --build --preset tsan -j "$JOBS"
+echo "== tsan tests"
+ctest --preset tsan -L tsan -j 1

@@ -193,6 +193,15 @@ void TileMap::activate(int slot) {
     slots_[size_t(slot)].status.store(uint32_t(Status::Active), std::memory_order_release);
 }
 
+void TileMap::activatePinned(int slot, uint64_t frame) {
+    Slot& s = slots_[size_t(slot)];
+    // The count is raised before the status flips, so the writer's CAS (which needs ACTIVE)
+    // can only happen once refs ≥ 1 is visible to its seq_cst load: it backs off.
+    s.refs.fetch_add(1, std::memory_order_seq_cst);
+    s.lastUsed.store(frame, std::memory_order_relaxed);
+    s.status.store(uint32_t(Status::Active), std::memory_order_seq_cst);
+}
+
 void TileMap::abandon(int slot) {
     Slot& s = slots_[size_t(slot)];
     erase(s.key.load(std::memory_order_relaxed));

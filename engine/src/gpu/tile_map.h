@@ -62,6 +62,10 @@ public:
     template <class Keep>
     int allocate(uint64_t key, Keep&& keep);
     void activate(int slot);
+    // Render thread, for tiles handed over from another queue family: makes the slot ACTIVE
+    // already pinned by the frame that acquires it, so it cannot be reclaimed (and released
+    // again) before that frame's acquire has executed. Unpin after the frame's fence.
+    void activatePinned(int slot, uint64_t frame);
     // Gives up a FILLING slot (its upload was abandoned): it becomes FREE and unindexed.
     void abandon(int slot);
 

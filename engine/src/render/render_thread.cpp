@@ -9,6 +9,15 @@ namespace iris {
 
 using Clock = std::chrono::steady_clock;
 
+namespace {
+// A clear value that lands on the intended byte whether the device rounds or truncates when it
+// converts float to UNORM8 (lavapipe rounds, other drivers may not): k/255 plus a quarter step.
+float clearUnorm(float v) {
+    const float k = std::round(std::clamp(v, 0.0f, 1.0f) * 255.0f);
+    return std::min(1.0f, (k + 0.25f) / 255.0f);
+}
+} // namespace
+
 RenderThread::RenderThread(SharedState& shared, gpu::Device& device, gpu::TileAtlas& atlas, gpu::TilePipeline& pipeline,
                            Handover& handover, const Log& log)
     : shared_(shared), device_(device), atlas_(atlas), pipeline_(pipeline), handover_(handover), log_(log) {}
@@ -279,7 +288,8 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
             b.dstQueueFamilyIndex = device_.queueFamily();
             acquires.push_back(b);
             uploadWait = std::max(uploadWait, h.uploadValue);
-            atlas_.map().activate(h.slot);
+            atlas_.map().activatePinned(h.slot, serial);
+            f.pinned.push_back(h.slot); // held until this frame's fence
         });
     }
 
@@ -352,7 +362,8 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
         .resolveImageLayout = VK_IMAGE_LAYOUT_UNDEFINED,
         .loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR,
         .storeOp = VK_ATTACHMENT_STORE_OP_STORE,
-        .clearValue = {.color = {{snap.background[0], snap.background[1], snap.background[2], 1.0f}}},
+        .clearValue = {.color = {{clearUnorm(snap.background[0]), clearUnorm(snap.background[1]),
+                                  clearUnorm(snap.background[2]), 1.0f}}},
     };
     const VkRenderingInfo ri{
         .sType = VK_STRUCTURE_TYPE_RENDERING_INFO,

@@ -1,0 +1,192 @@
+// Shared helpers of the engine suites (tests/engine/tst_*.cpp).
+//
+// Nothing here uses Qt Test macros: helpers return values or messages and the suites
+// assert on them, so that a failure is reported in the test function that made it.
+//
+//   * where the test data is ($IRIS_TESTDATA, else $IRIS_TESTDATA_DEFAULT; a folder holding
+//     slides/), the sample slide ($IRIS_TEST_SAMPLE) and the output folder ($IRIS_TEST_OUT);
+//   * an Engine made the way every suite makes it (validation layers on, two loader threads,
+//     a log callback that keeps Error lines, a background colour no slide pixel is likely to
+//     have);
+//   * an OpenSlide reader that returns exact level pixels as straight-alpha RGBA (the
+//     reference the engine's frames are compared with);
+//   * image comparison, PNG output, and failure artefacts written to $IRIS_TEST_OUT.
+#pragma once
+
+#include <array>
+#include <chrono>
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <iris/engine.h>
+
+struct _openslide; // openslide_t, kept out of the suites' includes
+
+namespace iristest {
+
+namespace fs = std::filesystem;
+
+// ---- locations ------------------------------------------------------------------------
+
+// The test data folder (it contains slides/): $IRIS_TESTDATA, else $IRIS_TESTDATA_DEFAULT.
+// nullopt when neither names a folder with slides/ in it (suites then QSKIP what needs it).
+std::optional<fs::path> testDataDir();
+// testDataDir()/slides/<sub>, or nullopt.
+std::optional<fs::path> slidesDir(const std::string& sub = {});
+// $IRIS_TEST_SAMPLE when it is set (the file may be missing: the fixture makes it).
+std::optional<fs::path> sampleSlidePath();
+// $IRIS_TEST_OUT (created when missing), else <temp>/iris-test-out.
+fs::path testOutDir();
+// Regular files under dir (recursively when asked), sorted by path.
+std::vector<fs::path> filesUnder(const fs::path& dir, bool recursive);
+
+// ---- engine ---------------------------------------------------------------------------
+
+// Log lines of one Engine; the callback may run on any engine thread.
+class LogSink {
+public:
+    void add(iris::LogLevel level, std::string_view line);
+    std::vector<std::string> errors() const;        // Error-level lines so far
+    std::vector<std::string> takeErrors();          // ... and forget them
+    std::size_t errorCount() const;
+
+private:
+    mutable std::mutex mutex_;
+    std::vector<std::string> errors_;
+};
+
+// The colour the suites ask the engine to draw outside the slide. Not grey, so that it
+// cannot be confused with glass (near-white) or with a black/transparent failure.
+inline constexpr std::array<float, 3> kBackground{0.2f, 0.4f, 0.6f};
+// EngineConfig::background ×255, rounded: what the RGBA8 target must hold outside the slide.
+std::array<uint8_t, 3> backgroundBytes(const std::array<float, 3>& bg = kBackground);
+
+struct TestEngine {
+    std::shared_ptr<LogSink> log;
+    std::unique_ptr<iris::Engine> engine;
+    iris::Result error; // why create() failed
+    explicit operator bool() const { return engine != nullptr; }
+    iris::Engine* operator->() const { return engine.get(); }
+};
+// EngineConfig{validation = true, loaderThreads = 2, background = kBackground, a log callback
+// recording Error lines} plus whatever `base` sets otherwise.
+iris::EngineConfig testEngineConfig(const std::shared_ptr<LogSink>& log, iris::EngineConfig base = {});
+TestEngine createTestEngine(iris::EngineConfig base = {});
+
+// Whether the Khronos validation layer is installed (the engine enables it when it is;
+// without it validationMessageCount() proves nothing, so the suites say so).
+bool validationLayerInstalled();
+
+// "Status: message", for failure output.
+std::string describe(const iris::Result& r);
+
+// setView(view), waitForFrame(timeout), readFrame(); checks that the frame is complete and
+// shows `view` at the bound size. On failure returns the error and explains in *why.
+std::optional<iris::Frame> renderView(iris::Engine& engine, const iris::View& view, uint32_t width, uint32_t height,
+                                      std::chrono::milliseconds timeout, std::string* why);
+
+// The view whose frame (width × height at `downsample`) has its top-left corner at the
+// level-0 point (x0, y0): centre = (x0, y0) + (width, height)/2 · downsample.
+iris::View viewWithOrigin(double x0, double y0, double downsample, uint32_t width, uint32_t height);
+
+// ---- images ---------------------------------------------------------------------------
+
+iris::Image makeImage(uint32_t width, uint32_t height, std::array<uint8_t, 4> fill = {0, 0, 0, 0});
+inline uint8_t* pixel(iris::Image& img, uint32_t x, uint32_t y) {
+    return img.rgba.data() + (std::size_t(y) * img.width + x) * 4;
+}
+inline const uint8_t* pixel(const iris::Image& img, uint32_t x, uint32_t y) {
+    return img.rgba.data() + (std::size_t(y) * img.width + x) * 4;
+}
+
+bool writePng(const fs::path& path, const iris::Image& img, std::string* error = nullptr);
+
+// Per-pixel mask: 1 = compare this pixel, 0 = skip it.
+using Mask = std::vector<uint8_t>;
+
+struct DiffStats {
+    uint64_t compared = 0;   // pixels compared
+    uint64_t differing = 0;  // pixels with any compared channel different
+    int maxAbs = 0;          // largest channel difference
+    double meanAbs = 0;      // mean channel difference over compared pixels and channels
+    int p99 = 0;             // 99th / 99.5th percentile of the per-pixel largest channel difference
+    int p995 = 0;
+    int worstX = -1, worstY = -1; // where maxAbs is (first such pixel)
+    std::string summary() const;
+};
+// Compares the first `channels` channels (3: RGB) of a and b where mask says so (all when null).
+DiffStats compareImages(const iris::Image& a, const iris::Image& b, const Mask* mask = nullptr, int channels = 3);
+// |a − b| × gain per channel, opaque; pixels outside the mask are drawn dark magenta.
+iris::Image diffImage(const iris::Image& a, const iris::Image& b, const Mask* mask, int gain);
+// Writes <name>.engine.png, <name>.reference.png and <name>.diff.png into testOutDir()/failures
+// and returns a line naming them. `name` is made file-system safe.
+std::string saveFailureArtefacts(const std::string& name, const iris::Image& frame, const iris::Image& reference,
+                                 const Mask* mask);
+
+// Pixels of `img` (over mask) that are not exactly `rgb` with alpha 255.
+uint64_t countNotColour(const iris::Image& img, std::array<uint8_t, 3> rgb, const Mask* mask);
+// Pixels of `img` whose alpha is not 255.
+uint64_t countNotOpaque(const iris::Image& img);
+
+// ---- OpenSlide reference --------------------------------------------------------------
+
+// An OpenSlide handle that reads exact level pixels.
+class OpenSlideRef {
+public:
+    static std::unique_ptr<OpenSlideRef> open(const fs::path& path, std::string* error);
+    ~OpenSlideRef();
+    OpenSlideRef(const OpenSlideRef&) = delete;
+    OpenSlideRef& operator=(const OpenSlideRef&) = delete;
+
+    int levelCount() const;
+    int64_t levelWidth(int level) const;
+    int64_t levelHeight(int level) const;
+    double levelDownsample(int level) const;
+    // openslide.level[N].tile-width/-height (0 when the slide does not say).
+    int64_t tileWidth(int level) const;
+    int64_t tileHeight(int level) const;
+    std::string vendor() const;
+    std::string property(const std::string& name) const;
+    std::string lastError() const; // openslide_get_error, empty when none
+    const fs::path& path() const { return path_; }
+
+    // Level pixels [lx, lx + w) × [ly, ly + h) of `level`, in that level's own pixel
+    // coordinates, as straight-alpha RGBA; pixels outside the level are transparent black.
+    //
+    // OpenSlide 3.4.1's read_region takes level-0 (x, y) and starts reading the level at
+    // x / downsample, which is fractional unless downsample divides x: it then resamples the
+    // tiles with cairo (bilinear), so the result is not the level's pixels. This reads from
+    // the nearest level pixel k ≤ lx at which (double)round(k·ds) / ds == k exactly (k = 0
+    // always qualifies) and crops, so every pixel returned is an exact level pixel.
+    std::optional<iris::Image> readLevelRegion(int level, int64_t lx, int64_t ly, uint32_t w, uint32_t h,
+                                               std::string* error);
+    // read_region at level 0 (no alignment question there).
+    std::optional<iris::Image> readLevel0(int64_t x, int64_t y, uint32_t w, uint32_t h, std::string* error) {
+        return readLevelRegion(0, x, y, w, h, error);
+    }
+
+    // Whether OpenSlide 3.4.1 returns this level's true pixels. See
+    // shared/testdata/slides/SOURCES.md, "Warning about OpenSlide 3.4.1 on Debian 12": on
+    // generic TIFF, libtiff 4.5's TIFFRGBAImageGet adapts the raster width when the tile is
+    // larger than the level, and OpenSlide then returns scrambled colours and transparent
+    // pixels. Every level listed there as wrong is one whose width or height is smaller than
+    // its tile's and whose tiles go through TIFFRGBAImage (not RGB JPEG, which OpenSlide
+    // decodes itself); the rule below is that condition, plus the list itself by file name.
+    bool levelPixelsTrustworthy(int level, std::string* why) const;
+
+private:
+    bool jpegColourTiles(int level) const; // the level's TIFF directory holds RGB/YCbCr JPEG tiles
+    OpenSlideRef() = default;
+    _openslide* osr_ = nullptr;
+    fs::path path_;
+};
+
+// Converts OpenSlide's premultiplied ARGB (native-endian uint32) to straight-alpha RGBA.
+void argbPremultipliedToRgba(const uint32_t* src, uint8_t* dst, std::size_t n);
+
+} // namespace iristest

@@ -41,9 +41,9 @@ struct Engine::Impl {
         if (Result r = pipeline.init(); !r.ok()) return r;
         if (Result r = mips.init(); !r.ok()) return r;
         handover = std::make_unique<Handover>(atlas.slotCount());
-        render = std::make_unique<RenderThread>(shared, device, atlas, pipeline, *handover, log);
+        render = std::make_unique<RenderThread>(shared, device, atlas, pipeline, *handover, counters, log);
         if (Result r = render->init(); !r.ok()) return r;
-        buffer = std::make_unique<BufferThread>(shared, cache, device, atlas, mips, *handover, log,
+        buffer = std::make_unique<BufferThread>(shared, cache, device, atlas, mips, *handover, counters, log,
                                                 int(config.perimeterTiles));
         if (Result r = buffer->init(); !r.ok()) return r;
         shared.update([&](Snapshot& s) { s.background = config.background; });
@@ -55,6 +55,38 @@ struct Engine::Impl {
         return {};
     }
 
+    // A move whose new field shares no pixel with the old one starts a TeFOV measurement,
+    // unless every LR and HR tile of the new field is already drawable (a revisit).
+    void noteFieldMove(Snapshot& s, const View& before) {
+        if (!s.slide || s.viewport.width == 0) return;
+        const double w = s.viewport.width, h = s.viewport.height;
+        const View& a = before;
+        const View& b = s.viewport.view;
+        const double ax0 = a.centerX - w / 2 * a.downsample, ax1 = a.centerX + w / 2 * a.downsample;
+        const double ay0 = a.centerY - h / 2 * a.downsample, ay1 = a.centerY + h / 2 * a.downsample;
+        const double bx0 = b.centerX - w / 2 * b.downsample, bx1 = b.centerX + w / 2 * b.downsample;
+        const double by0 = b.centerY - h / 2 * b.downsample, by1 = b.centerY + h / 2 * b.downsample;
+        const bool overlap = ax0 < bx1 && bx0 < ax1 && ay0 < by1 && by0 < ay1;
+        if (overlap) return;
+        const LevelChoice c = chooseLevels(s.slide->info, b.downsample);
+        bool resident = true;
+        for (int li : {c.lr, c.hr}) {
+            if (li < 0 || !resident) continue;
+            const TileRange r = visibleTiles(s.slide->info.levels[size_t(li)], s.viewport, 0);
+            for (int64_t ty = r.y0; ty <= r.y1 && resident; ++ty)
+                for (int64_t tx = r.x0; tx <= r.x1 && resident; ++tx)
+                    resident = atlas.map().statusOf(TileKey::make(s.slide->generation, li, tx, ty)) ==
+                               gpu::TileMap::Status::Active;
+        }
+        if (resident) {
+            s.fieldId = 0; // a revisit: not timed (and any field still being timed is superseded)
+            return;
+        }
+        s.fieldId = ++fieldCounter;
+        s.fieldStart = std::chrono::steady_clock::now();
+        s.fieldTilesAtStart = counters.tiles.load(std::memory_order_relaxed);
+    }
+
     // Applies a view change with the downsample clamped and the numbers sanitised.
     void setViewLocked(Snapshot& s, View v) {
         if (!std::isfinite(v.centerX) || !std::isfinite(v.centerY)) return;
@@ -63,7 +95,9 @@ struct Engine::Impl {
         } else if (!(v.downsample > 0) || !std::isfinite(v.downsample)) {
             return;
         }
+        const View before = s.viewport.view;
         s.viewport.view = v;
+        noteFieldMove(s, before);
     }
 
     EngineConfig config;
@@ -74,6 +108,8 @@ struct Engine::Impl {
     gpu::TilePipeline pipeline;
     gpu::MipPipeline mips;
     std::unique_ptr<Handover> handover;
+    UploadCounters counters;
+    uint64_t fieldCounter = 0; // guarded by SharedState's update lock
     TileCache cache;
     std::unique_ptr<RenderThread> render;
     std::unique_ptr<BufferThread> buffer;
@@ -184,6 +220,7 @@ Result Engine::open(const std::string& path) {
     impl_->shared.clearError();
     impl_->shared.update([&](Snapshot& s) {
         s.slide = slide;
+        s.fieldId = 0;
         s.viewport.view = iris::fitView(slide->info, s.viewport.width, s.viewport.height);
     });
     impl_->log.info("opened " + path + " (" + slide->info.vendor + ", " + std::to_string(slide->info.width) + "x" +
@@ -192,7 +229,10 @@ Result Engine::open(const std::string& path) {
 }
 
 void Engine::close() {
-    impl_->shared.update([&](Snapshot& s) { s.slide.reset(); });
+    impl_->shared.update([&](Snapshot& s) {
+        s.slide.reset();
+        s.fieldId = 0;
+    });
 }
 
 std::optional<SlideInfo> Engine::slideInfo() const {
@@ -316,6 +356,9 @@ MemoryStats Engine::memoryStats() const {
     m.atlasActive = impl_->atlas.map().countActive();
     return m;
 }
+
+EngineMetrics Engine::metrics() const { return impl_->render->metrics(); }
+void Engine::resetMetrics() { impl_->render->resetMetrics(); }
 
 uint64_t Engine::validationMessageCount() const { return impl_->device.validationMessages(); }
 

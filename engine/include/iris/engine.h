@@ -103,6 +103,9 @@ public:
     void clearError();
     DeviceInfo device() const;
     MemoryStats memoryStats() const;
+    // Frame and field-of-view metrics; readable at any time from any thread.
+    EngineMetrics metrics() const;
+    void resetMetrics();
     // Messages the Vulkan validation layers reported (tests require zero).
     uint64_t validationMessageCount() const;
 

@@ -123,14 +123,41 @@ struct Frame {
     bool complete = false;  // every visible tile of the finest needed level was resident
 };
 
-// Per-frame figures, delivered to the frame callback.
+// Per-frame figures, delivered to the frame callback and kept in Engine::metrics().
 struct FrameStats {
     uint64_t serial = 0;
-    double intervalMs = 0;  // since the previous frame
-    double cpuMs = 0;       // render thread's time recording and submitting this frame
+    double intervalMs = 0;       // since the previous frame
+    double cpuMs = 0;            // render thread's time recording and submitting this frame
+    double gpuMs = -1;           // GPU time of the frame's commands (timestamp queries); -1 when unknown
+    uint64_t bytesBuffered = 0;  // tile bytes whose upload (base level + all mips) completed since the previous frame
+    double bufferRateGBps = 0;   // bytesBuffered / intervalMs
     uint32_t tilesDrawn = 0;
     bool complete = false;
     View view;
+};
+
+// One move to an entirely new field of view (no pixel overlapping the previous field), timed
+// the way the reference paper defines it: from the move call until every LR (resp. HR) tile
+// of the new field is drawable on the GPU, as observed by the render thread. Fields whose
+// tiles were already resident when the move was made (revisits) are not recorded.
+struct FieldStats {
+    uint64_t id = 0;
+    View view;
+    double lrTeFovMs = -1;     // -1: the field has no LR level (HR is the coarsest) or was superseded
+    double hrTeFovMs = -1;     // -1: superseded by another move before it completed
+    uint32_t lrTiles = 0;      // visible tiles of the new field
+    uint32_t hrTiles = 0;
+    uint32_t tilesBuffered = 0; // tiles uploaded between the move and HR completion, perimeter included
+    double lrTptUs = -1;       // TeFOV / tiles buffered by then
+    double hrTptUs = -1;
+};
+
+struct EngineMetrics {
+    uint64_t frames = 0;
+    uint64_t tilesBuffered = 0;    // since create()
+    uint64_t bytesBuffered = 0;
+    FrameStats lastFrame;
+    std::vector<FieldStats> fields; // completed or superseded field moves, oldest first (last 4096)
 };
 
 struct DeviceInfo {

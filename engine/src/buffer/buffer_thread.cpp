@@ -10,8 +10,10 @@ constexpr uint32_t kStagingTiles = BufferThread::kTilesPerTransaction * BufferTh
 }
 
 BufferThread::BufferThread(SharedState& shared, TileCache& cache, gpu::Device& device, gpu::TileAtlas& atlas,
-                           gpu::MipPipeline& mips, Handover& handover, const Log& log, int perimeter)
-    : shared_(shared), cache_(cache), device_(device), atlas_(atlas), mips_(mips), handover_(handover), log_(log),
+                           gpu::MipPipeline& mips, Handover& handover, UploadCounters& counters, const Log& log,
+                           int perimeter)
+    : shared_(shared), cache_(cache), device_(device), atlas_(atlas), mips_(mips), handover_(handover),
+      counters_(counters), log_(log),
       perimeter_(perimeter) {}
 
 BufferThread::~BufferThread() {
@@ -144,6 +146,8 @@ bool BufferThread::pollCompleted() {
             else atlas_.map().activate(s);
         }
         for (uint32_t s : t.staging) freeStaging_.push_back(s);
+        counters_.tiles.fetch_add(t.slots.size(), std::memory_order_relaxed);
+        counters_.bytes.fetch_add(t.slots.size() * gpu::TileAtlas::bytesPerSlot(), std::memory_order_relaxed);
         t.slots.clear();
         t.staging.clear();
         t.signalValue = 0;

@@ -30,7 +30,7 @@ namespace iris {
 class BufferThread {
 public:
     BufferThread(SharedState& shared, TileCache& cache, gpu::Device& device, gpu::TileAtlas& atlas,
-                 gpu::MipPipeline& mips, Handover& handover, const Log& log, int perimeter);
+                 gpu::MipPipeline& mips, Handover& handover, UploadCounters& counters, const Log& log, int perimeter);
     ~BufferThread();
     Result init();
     void start();
@@ -59,6 +59,7 @@ private:
     gpu::TileAtlas& atlas_;
     gpu::MipPipeline& mips_;
     Handover& handover_;
+    UploadCounters& counters_;
     const Log& log_;
     const int perimeter_;
 

@@ -9,6 +9,7 @@
 
 #include <array>
 #include <atomic>
+#include <chrono>
 #include <memory>
 #include <mutex>
 
@@ -31,6 +32,17 @@ struct Snapshot {
     bool visible = true;
     std::array<float, 3> background{0.96f, 0.96f, 0.96f};
     bool enhance = true;
+    // The newest move to an entirely new field of view (0: none being timed). Set by the API
+    // call that made the move; the render thread times the field from fieldStart.
+    uint64_t fieldId = 0;
+    std::chrono::steady_clock::time_point fieldStart{};
+    uint64_t fieldTilesAtStart = 0; // uploads completed before the move
+};
+
+// Counters the buffer thread bumps as uploads complete (relaxed: statistics only).
+struct UploadCounters {
+    std::atomic<uint64_t> tiles{0};
+    std::atomic<uint64_t> bytes{0};
 };
 
 class SharedState {

@@ -19,8 +19,9 @@ float clearUnorm(float v) {
 } // namespace
 
 RenderThread::RenderThread(SharedState& shared, gpu::Device& device, gpu::TileAtlas& atlas, gpu::TilePipeline& pipeline,
-                           Handover& handover, const Log& log)
-    : shared_(shared), device_(device), atlas_(atlas), pipeline_(pipeline), handover_(handover), log_(log) {}
+                           Handover& handover, const UploadCounters& counters, const Log& log)
+    : shared_(shared), device_(device), atlas_(atlas), pipeline_(pipeline), handover_(handover), counters_(counters),
+      log_(log) {}
 
 RenderThread::~RenderThread() {
     stop();
@@ -29,6 +30,7 @@ RenderThread::~RenderThread() {
     device_.waitIdle();
     swapchain_.reset();
     offscreen_.reset();
+    if (timestamps_) vkDestroyQueryPool(dev, timestamps_, nullptr);
     for (FrameSlot& f : frames_) {
         for (int s : f.pinned) atlas_.map().unpin(s);
         f.pinned.clear();
@@ -41,6 +43,23 @@ RenderThread::~RenderThread() {
 
 Result RenderThread::init() {
     VkDevice dev = device_.device();
+    {
+        uint32_t n = 0;
+        vkGetPhysicalDeviceQueueFamilyProperties(device_.physical(), &n, nullptr);
+        std::vector<VkQueueFamilyProperties> qf(n);
+        vkGetPhysicalDeviceQueueFamilyProperties(device_.physical(), &n, qf.data());
+        const uint32_t fam = device_.queueFamily();
+        if (fam < n && qf[fam].timestampValidBits > 0 && device_.properties().limits.timestampPeriod > 0) {
+            const VkQueryPoolCreateInfo qci{.sType = VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO,
+                                            .pNext = nullptr,
+                                            .flags = 0,
+                                            .queryType = VK_QUERY_TYPE_TIMESTAMP,
+                                            .queryCount = 2 * kFramesInFlight,
+                                            .pipelineStatistics = 0};
+            IRIS_VK_TRY(vkCreateQueryPool(dev, &qci, nullptr, &timestamps_));
+            timestampPeriodNs_ = device_.properties().limits.timestampPeriod;
+        }
+    }
     for (FrameSlot& f : frames_) {
         const VkCommandPoolCreateInfo pci{.sType = VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO,
                                           .pNext = nullptr,
@@ -225,6 +244,15 @@ void RenderThread::run() {
 
 Result RenderThread::waitSlot(FrameSlot& f) {
     IRIS_VK_TRY(vkWaitForFences(device_.device(), 1, &f.fence, VK_TRUE, UINT64_MAX));
+    if (f.timed) {
+        uint64_t t[2] = {0, 0};
+        const size_t idx = size_t(&f - frames_.data());
+        if (vkGetQueryPoolResults(device_.device(), timestamps_, uint32_t(idx * 2), 2, sizeof(t), t, sizeof(uint64_t),
+                                  VK_QUERY_RESULT_64_BIT) == VK_SUCCESS && t[1] >= t[0]) {
+            lastGpuMs_ = double(t[1] - t[0]) * timestampPeriodNs_ / 1e6;
+        }
+        f.timed = false;
+    }
     // The GPU is done with this frame: its slots may be reclaimed.
     gpu::TileMap& map = atlas_.map();
     for (int s : f.pinned) map.unpin(s);
@@ -300,6 +328,7 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
     auto* inst = static_cast<gpu::TileInstance*>(f.instances.mapped);
     uint32_t count = 0;
     bool complete = false;
+    FieldProgress progress;
     // A frame drawn into a target whose size is not the published one (a rebind or resize
     // not yet applied) shows the right view at the wrong size: it is never "complete".
     const bool sizeMatches = kind_ != TargetKind::Offscreen ||
@@ -311,11 +340,26 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
         if (order[1] == order[0]) order[1] = -1;
         if (order[2] == order[0]) order[0] = -1;
         complete = sizeMatches;
+        progress.hasLr = c.lr >= 0;
+        progress.lrComplete = sizeMatches;
+        // LR may have been dropped from the draw order (it is the base level): count it anyway.
+        if (c.lr >= 0 && order[1] < 0) {
+            const LevelInfo& level = info.levels[size_t(c.lr)];
+            const TileRange range = visibleTiles(level, vp, 0);
+            progress.lrTiles = uint32_t(range.count());
+            for (int64_t ty = range.y0; ty <= range.y1; ++ty)
+                for (int64_t tx = range.x0; tx <= range.x1; ++tx)
+                    if (atlas_.map().statusOf(TileKey::make(snap.slide->generation, c.lr, tx, ty)) != gpu::TileMap::Status::Active)
+                        progress.lrComplete = false;
+        }
         for (int li : order) {
             if (li < 0) continue;
             const LevelInfo& level = info.levels[size_t(li)];
             const TileRange range = visibleTiles(level, vp, 0);
             const bool isHr = li == c.hr;
+            const bool isLr = li == c.lr;
+            if (isHr) progress.hrTiles = uint32_t(range.count());
+            if (isLr) progress.lrTiles = uint32_t(range.count());
             const double lod = std::max(0.0, std::log2(vp.view.downsample / level.downsample));
             for (int64_t ty = range.y0; ty <= range.y1; ++ty) {
                 for (int64_t tx = range.x0; tx <= range.x1; ++tx) {
@@ -323,6 +367,7 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
                     const int layer = count < kMaxInstances ? atlas_.map().pin(key, serial) : -1;
                     if (layer < 0) {
                         if (isHr) complete = false;
+                        if (isLr) progress.lrComplete = false;
                         continue;
                     }
                     f.pinned.push_back(layer);
@@ -336,6 +381,8 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
             }
         }
     }
+    progress.hrComplete = complete;
+    trackField(snap, progress);
 
     VkCommandBuffer cmd = f.cmd;
     IRIS_VK_TRY(vkResetCommandBuffer(cmd, 0));
@@ -344,6 +391,11 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
                                       .flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT,
                                       .pInheritanceInfo = nullptr};
     IRIS_VK_TRY(vkBeginCommandBuffer(cmd, &bi));
+    const uint32_t query = uint32_t(serial % kFramesInFlight) * 2;
+    if (timestamps_) {
+        vkCmdResetQueryPool(cmd, timestamps_, query, 2);
+        vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_TOP_OF_PIPE_BIT, timestamps_, query);
+    }
     // Previous contents are discarded (UNDEFINED); the wait on the previous frame's copy
     // (offscreen) or on the acquire semaphore (swapchain) is covered by the source stages.
     const VkImageMemoryBarrier2 toColor = vk::imageBarrier(
@@ -439,7 +491,9 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
             VK_IMAGE_LAYOUT_PRESENT_SRC_KHR, vk::colorRange(0, 1, 0, 1));
         vk::pipelineBarrier(cmd, &toPresent, 1);
     }
+    if (timestamps_) vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, timestamps_, query + 1);
     IRIS_VK_TRY(vkEndCommandBuffer(cmd));
+    f.timed = timestamps_ != VK_NULL_HANDLE;
 
     IRIS_VK_TRY(vkResetFences(dev, 1, &f.fence));
     const VkCommandBufferSubmitInfo cbi{
@@ -536,14 +590,80 @@ void RenderThread::publishFrame(const Snapshot& snap, bool complete, uint32_t ti
         stats.intervalMs = lastFrameTime_.time_since_epoch().count() ? std::chrono::duration<double, std::milli>(now - lastFrameTime_).count() : 0;
         lastFrameTime_ = now;
         stats.cpuMs = cpuMs;
+        stats.gpuMs = lastGpuMs_;
+        const uint64_t bytes = counters_.bytes.load(std::memory_order_relaxed);
+        stats.bytesBuffered = bytes - lastBytes_;
+        lastBytes_ = bytes;
+        stats.bufferRateGBps = stats.intervalMs > 0 ? double(stats.bytesBuffered) / (stats.intervalMs * 1e6) : 0;
         stats.tilesDrawn = tiles;
         stats.complete = complete;
         stats.view = snap.viewport.view;
         if (complete && snap.viewSerial > completeViewSerial_) completeViewSerial_ = snap.viewSerial;
         cb = callback_;
     }
-    cv_.notify_all();
+    // Publish without ever waiting for a reader: a busy lock leaves the figures for next time.
+    if (std::unique_lock lock(metricsMutex_, std::try_to_lock); lock.owns_lock()) {
+        metrics_.frames = stats.serial;
+        metrics_.lastFrame = stats;
+        metrics_.tilesBuffered = counters_.tiles.load(std::memory_order_relaxed);
+        metrics_.bytesBuffered = counters_.bytes.load(std::memory_order_relaxed);
+        for (FieldStats& fs : unpublished_) metrics_.fields.push_back(fs);
+        unpublished_.clear();
+        constexpr size_t kKeep = 4096;
+        if (metrics_.fields.size() > kKeep)
+            metrics_.fields.erase(metrics_.fields.begin(), metrics_.fields.end() - long(kKeep));
+    }
+    cv_.notify_all(); // after the metrics, so a waiter that wakes sees this frame's figures
     if (cb) cb(stats);
+}
+
+EngineMetrics RenderThread::metrics() const {
+    std::lock_guard lock(metricsMutex_);
+    return metrics_;
+}
+
+void RenderThread::resetMetrics() {
+    std::lock_guard lock(metricsMutex_);
+    metrics_.fields.clear();
+}
+
+void RenderThread::finishField(bool superseded) {
+    if (!field_.active) return;
+    if (superseded) field_.stats.hrTeFovMs = -1;
+    unpublished_.push_back(field_.stats);
+    field_.active = false;
+}
+
+void RenderThread::trackField(const Snapshot& snap, const FieldProgress& p) {
+    if (snap.fieldId != field_.id) {
+        finishField(/*superseded=*/true);
+        field_ = FieldTrack{};
+        field_.id = snap.fieldId;
+        if (snap.fieldId != 0) {
+            field_.active = true;
+            field_.start = snap.fieldStart;
+            field_.tilesAtStart = snap.fieldTilesAtStart;
+            field_.stats.id = snap.fieldId;
+            field_.stats.view = snap.viewport.view;
+        }
+    }
+    if (!field_.active) return;
+    const auto now = Clock::now();
+    const double ms = std::chrono::duration<double, std::milli>(now - field_.start).count();
+    const uint64_t tiles = counters_.tiles.load(std::memory_order_relaxed) - field_.tilesAtStart;
+    field_.stats.lrTiles = p.lrTiles;
+    field_.stats.hrTiles = p.hrTiles;
+    if (p.hasLr && !field_.lrDone && p.lrComplete) {
+        field_.lrDone = true;
+        field_.stats.lrTeFovMs = ms;
+        field_.stats.lrTptUs = tiles ? ms * 1000.0 / double(tiles) : -1;
+    }
+    if (p.hrComplete) {
+        field_.stats.hrTeFovMs = ms;
+        field_.stats.tilesBuffered = uint32_t(tiles);
+        field_.stats.hrTptUs = tiles ? ms * 1000.0 / double(tiles) : -1;
+        finishField(/*superseded=*/false);
+    }
 }
 
 } // namespace iris

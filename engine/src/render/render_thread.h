@@ -26,7 +26,7 @@ namespace iris {
 class RenderThread {
 public:
     RenderThread(SharedState& shared, gpu::Device& device, gpu::TileAtlas& atlas, gpu::TilePipeline& pipeline,
-                 Handover& handover, const Log& log);
+                 Handover& handover, const UploadCounters& counters, const Log& log);
     ~RenderThread();
     Result init();
     void start();
@@ -41,6 +41,9 @@ public:
     Expected<Frame> lastFrame() const;
     Result waitForFrame(uint64_t viewSerial, std::chrono::milliseconds timeout);
     void setFrameCallback(std::function<void(const FrameStats&)> cb);
+    // Metrics: the render thread publishes with try_lock only (it never waits for a reader).
+    EngineMetrics metrics() const;
+    void resetMetrics();
 
 
 private:
@@ -54,6 +57,7 @@ private:
         vk::MappedBuffer instances;
         uint64_t serial = 0;
         std::vector<int> pinned; // atlas slots this frame samples, unpinned after its fence
+        bool timed = false;      // timestamps were written for this frame
     };
     enum class TargetKind { None, Offscreen, Surface };
     struct TargetRequest {
@@ -69,13 +73,35 @@ private:
     Result renderFrame(const Snapshot& snap);
     Result waitSlot(FrameSlot& f);
     void publishFrame(const Snapshot& snap, bool complete, uint32_t tiles, double cpuMs);
+    struct FieldProgress {
+        bool hasLr = false, lrComplete = false, hrComplete = false;
+        uint32_t lrTiles = 0, hrTiles = 0;
+    };
+    void trackField(const Snapshot& snap, const FieldProgress& p);
+    void finishField(bool superseded);
 
     SharedState& shared_;
     gpu::Device& device_;
     gpu::TileAtlas& atlas_;
     gpu::TilePipeline& pipeline_;
     Handover& handover_;
+    const UploadCounters& counters_;
     const Log& log_;
+    VkQueryPool timestamps_ = VK_NULL_HANDLE; // 2 per frame slot; null when the queue has no timestamps
+    double timestampPeriodNs_ = 0;
+    double lastGpuMs_ = -1;
+    uint64_t lastBytes_ = 0;
+
+    // Field-of-view timing (render thread only), published into metrics_.
+    struct FieldTrack {
+        bool active = false, lrDone = false;
+        uint64_t id = 0, tilesAtStart = 0;
+        std::chrono::steady_clock::time_point start{};
+        FieldStats stats;
+    } field_;
+    std::vector<FieldStats> unpublished_;
+    mutable std::mutex metricsMutex_;
+    EngineMetrics metrics_;
 
     std::array<FrameSlot, kFramesInFlight> frames_{};
     uint64_t serial_ = 0;

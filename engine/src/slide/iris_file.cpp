@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <unordered_set>
 
 #include <fcntl.h>
 #include <png.h>
@@ -80,6 +81,10 @@ constexpr uint16_t kGroupSizeEntry = 6;
 
 // The engine addresses at most 2^21 tiles a side (view_model.h), 2^29 pixels.
 constexpr uint32_t kMaxTilesPerSide = 1u << 21;
+// Bounds on what a file can make the reader hold in memory (real slides have a handful of
+// associated images and at most thousands of attributes).
+constexpr uint32_t kMaxImages = 1024;
+constexpr uint32_t kMaxAttributes = 1u << 20;
 
 // ---- little-endian loads (callers check bounds first) ---------------------------------
 
@@ -384,6 +389,10 @@ Result parseAttributes(const Parser& p, uint64_t off, Layout& out) {
                                &byteCount);
         !r.ok())
         return r;
+    if (sizes.count > kMaxAttributes) {
+        return p.unsupported("ATTRIBUTE_SIZES lists " + num(sizes.count) + " attributes; at most " +
+                             num(kMaxAttributes) + " are supported");
+    }
     uint64_t sum = 0; // ≤ 2^32 entries · (2^16 + 2^32): no overflow
     for (uint32_t i = 0; i < sizes.count; ++i) {
         const uint64_t e = sizes.entries + uint64_t(i) * sizes.stride;
@@ -410,6 +419,11 @@ Result parseAttributes(const Parser& p, uint64_t off, Layout& out) {
 Result parseImages(const Parser& p, uint64_t off, Layout& out) {
     Parser::Array a;
     if (Result r = p.array(off, kArrayHeader, kImageEntry, IMAGES, "METADATA.IMAGES_OFFSET", &a); !r.ok()) return r;
+    if (a.count > kMaxImages) {
+        return p.unsupported("IMAGES lists " + num(a.count) + " associated images; at most " + num(kMaxImages) +
+                             " are supported");
+    }
+    std::unordered_set<std::string> names;
     for (uint32_t i = 0; i < a.count; ++i) {
         const uint64_t e = a.entries + uint64_t(i) * a.stride;
         const uint64_t bo = p.u64(e);
@@ -431,13 +445,9 @@ Result parseImages(const Parser& p, uint64_t off, Layout& out) {
         img.format = p.u8(e + 17);
         img.orientation = halfToFloat(p.u16(e + 18));
         if (img.name.empty()) img.name = "image-" + num(i);
-        // Names are how the host asks for an image: keep them unique.
+        // Names are how the host asks for an image: keep them unique ("label", "label-2", …).
         const std::string base = img.name;
-        for (int k = 2; std::any_of(out.images.begin(), out.images.end(),
-                                    [&](const AssociatedImage& o) { return o.name == img.name; });
-             ++k) {
-            img.name = base + "-" + num(uint64_t(k));
-        }
+        for (uint64_t k = 2; !names.insert(img.name).second; ++k) img.name = base + "-" + num(k);
         out.images.push_back(std::move(img));
     }
     return {};

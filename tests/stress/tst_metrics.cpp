@@ -1,0 +1,64 @@
+// The metric definitions on a scripted sequence: a move to an entirely new field produces
+// exactly one TeFOV sample with the right tile counts; a revisit and an overlapping move
+// produce none; frame figures are filled in.
+#include <QtTest>
+
+#include "iris/engine.h"
+
+class TestMetrics : public QObject {
+    Q_OBJECT
+private slots:
+    void scriptedMoves();
+};
+
+void TestMetrics::scriptedMoves() {
+    iris::EngineConfig cfg;
+    cfg.validation = true;
+    cfg.loaderThreads = 2;
+    cfg.perimeterTiles = 0; // the buffered set is then exactly the visible tiles
+    cfg.vramBudgetBytes = 64ull << 20;
+    auto created = iris::Engine::create(cfg);
+    QVERIFY2(created.ok(), created.ok() ? "" : created.error().message().c_str());
+    iris::Engine& e = **created;
+    QVERIFY(e.bindOffscreen(512, 512).ok());
+    QVERIFY(e.open("synthetic:100000x100000").ok());
+    // Field A: level-0 [20480, 20992)², tile-aligned at downsample 1 → HR (level 0) tiles
+    // 80..81 on each axis (4), LR (level 1) one tile (40,40).
+    const iris::View a{20480 + 256, 20480 + 256, 1};
+    e.setView(a);
+    QVERIFY(e.waitForFrame(std::chrono::seconds(60)).ok());
+    e.resetMetrics();
+
+    // Field B: far away and aligned the same way: exactly one new field.
+    const iris::View b{61440 + 256, 40960 + 256, 1};
+    e.setView(b);
+    QVERIFY(e.waitForFrame(std::chrono::seconds(60)).ok());
+    QTRY_COMPARE_WITH_TIMEOUT(e.metrics().fields.size(), size_t(1), 5000);
+    const iris::FieldStats f = e.metrics().fields[0];
+    QCOMPARE(f.hrTiles, 4u);
+    QCOMPARE(f.lrTiles, 1u);
+    QCOMPARE(f.tilesBuffered, 5u); // 4 HR + 1 LR; the base level was resident already
+    QVERIFY(f.hrTeFovMs > 0);
+    QVERIFY(f.lrTeFovMs > 0 && f.lrTeFovMs <= f.hrTeFovMs);
+    QVERIFY(std::abs(f.hrTptUs - f.hrTeFovMs * 1000.0 / 5) < 1e-6);
+    QCOMPARE(f.view.centerX, b.centerX);
+
+    // Back to A: its tiles are still resident (a revisit): no new sample.
+    e.setView(a);
+    QVERIFY(e.waitForFrame(std::chrono::seconds(60)).ok());
+    // An overlapping move (half a field): no new sample either.
+    e.translate(200, 0);
+    QVERIFY(e.waitForFrame(std::chrono::seconds(60)).ok());
+    QTest::qWait(200);
+    QCOMPARE(e.metrics().fields.size(), size_t(1));
+
+    const iris::EngineMetrics m = e.metrics();
+    QVERIFY(m.frames > 0);
+    QVERIFY(m.tilesBuffered >= 5);
+    QVERIFY(m.lastFrame.cpuMs > 0);
+    QVERIFY(m.lastFrame.gpuMs >= 0); // lavapipe and NVIDIA both have timestamps
+    QCOMPARE(e.validationMessageCount(), 0u);
+}
+
+QTEST_GUILESS_MAIN(TestMetrics)
+#include "tst_metrics.moc"

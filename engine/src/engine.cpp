@@ -140,7 +140,7 @@ Result checkSize(uint32_t w, uint32_t h, uint32_t maxDim) {
 }
 } // namespace
 
-Result Engine::bindOffscreen(uint32_t width, uint32_t height) {
+Result Engine::bindOffscreen(uint32_t width, uint32_t height, bool readback) {
     if (Result r = checkSize(width, height, impl_->device.properties().limits.maxImageDimension2D); !r.ok()) return r;
     {
         std::lock_guard lock(impl_->openMutex);
@@ -152,7 +152,7 @@ Result Engine::bindOffscreen(uint32_t width, uint32_t height) {
         s.viewport.width = width;
         s.viewport.height = height;
     });
-    impl_->render->requestOffscreen(width, height);
+    impl_->render->requestOffscreen(width, height, readback);
     return {};
 }
 
@@ -202,7 +202,7 @@ void Engine::setVisible(bool visible) {
 
 Result Engine::open(const std::string& path) {
     // The disk work (header parse) runs without holding any engine lock.
-    Expected<std::unique_ptr<SlideSource>> src = openSlideSource(path);
+    Expected<std::unique_ptr<SlideSource>> src = openSlideSource(path, int(impl_->config.source));
     std::lock_guard lock(impl_->openMutex);
     if (!src) {
         close();

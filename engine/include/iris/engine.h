@@ -17,7 +17,12 @@
 
 namespace iris {
 
+// Which reader opens a slide file. Auto: the format table's order (fast paths first,
+// OpenSlide last). OpenSlide: always OpenSlide. Iris: only .iris files.
+enum class SourcePreference { Auto, OpenSlide, Iris };
+
 struct EngineConfig {
+    SourcePreference source = SourcePreference::Auto;
     uint64_t ramBudgetBytes = 1ull << 30;   // decoded tiles kept in RAM
     uint64_t vramBudgetBytes = 512ull << 20; // tile atlas size (slots of 256×256 RGBA8 with mips)
     uint32_t loaderThreads = 0;              // 0: one per hardware thread
@@ -42,8 +47,10 @@ public:
     Engine& operator=(const Engine&) = delete;
 
     // --- render target -------------------------------------------------------------
-    // Render into an offscreen RGBA8 image that readFrame() returns.
-    Result bindOffscreen(uint32_t width, uint32_t height);
+    // Render into an offscreen RGBA8 image that readFrame() returns. With readback off the
+    // frames are not copied to the host (readFrame() then has nothing), so frames pipeline
+    // like a swapchain's: for benchmarks.
+    Result bindOffscreen(uint32_t width, uint32_t height, bool readback = true);
     // Present into a surface (the engine makes the swapchain and presents from its render
     // thread). `instance` must be the one given in EngineConfig::instance, since the device
     // was created on it. width/height are in device pixels.

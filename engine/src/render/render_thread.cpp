@@ -95,10 +95,10 @@ void RenderThread::stop() {
     cv_.notify_all();
 }
 
-void RenderThread::requestOffscreen(uint32_t width, uint32_t height) {
+void RenderThread::requestOffscreen(uint32_t width, uint32_t height, bool readback) {
     {
         std::lock_guard lock(mutex_);
-        request_ = TargetRequest{true, TargetKind::Offscreen, VK_NULL_HANDLE, width, height, false};
+        request_ = TargetRequest{true, TargetKind::Offscreen, VK_NULL_HANDLE, width, height, false, readback};
         haveFrame_ = false;
     }
     shared_.bump();
@@ -168,6 +168,7 @@ void RenderThread::applyTargetRequest() {
         req = request_;
         request_.pending = false;
     }
+    if (!req.resizeOnly && req.kind == TargetKind::Offscreen) readback_ = req.readback;
     if (req.resizeOnly) {
         reqWidth_ = req.width;
         reqHeight_ = req.height;
@@ -446,7 +447,7 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
     }
     vkCmdEndRendering(cmd);
 
-    if (kind_ == TargetKind::Offscreen) {
+    if (kind_ == TargetKind::Offscreen && readback_) {
         const VkImageMemoryBarrier2 toCopy = vk::imageBarrier(
             image, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
             VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_READ_BIT, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
@@ -484,7 +485,7 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
                                    .imageMemoryBarrierCount = 0,
                                    .pImageMemoryBarriers = nullptr};
         vkCmdPipelineBarrier2(cmd, &dep);
-    } else {
+    } else if (kind_ == TargetKind::Surface) {
         const VkImageMemoryBarrier2 toPresent = vk::imageBarrier(
             image, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
             VK_PIPELINE_STAGE_2_NONE, VK_ACCESS_2_NONE, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
@@ -562,6 +563,10 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
         return {};
     }
 
+    if (!readback_) {
+        publishFrame(snap, complete, count, std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+        return {};
+    }
     // Offscreen: the frame is read back right away (that is what an offscreen target is for).
     if (Result r = waitSlot(f); !r.ok()) return r;
     vk::invalidate(dev, offscreen_->readback());

@@ -33,7 +33,7 @@ public:
     void stop(); // shared.stopping must be set first
 
     // Target requests from API threads; applied by the render thread on its next pass.
-    void requestOffscreen(uint32_t width, uint32_t height);
+    void requestOffscreen(uint32_t width, uint32_t height, bool readback = true);
     void requestSurface(VkSurfaceKHR surface, uint32_t width, uint32_t height);
     void requestResize(uint32_t width, uint32_t height);
     void unbindSurface(); // waits until the swapchain is gone
@@ -66,6 +66,7 @@ private:
         VkSurfaceKHR surface = VK_NULL_HANDLE;
         uint32_t width = 0, height = 0;
         bool resizeOnly = false;
+        bool readback = true;
     };
 
     void run();
@@ -112,6 +113,7 @@ private:
     std::unique_ptr<gpu::Swapchain> swapchain_;
     VkSurfaceKHR surface_ = VK_NULL_HANDLE;
     bool swapchainDirty_ = false;
+    bool readback_ = true;
     uint32_t reqWidth_ = 0, reqHeight_ = 0;
 
     // Guarded by mutex_: requests in, frames and completion out.

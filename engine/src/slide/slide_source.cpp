@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "slide/iris_file.h"
 #include "slide/openslide_source.h"
 #include "slide/synthetic_source.h"
 
@@ -46,12 +47,13 @@ struct SlideFormat {
 };
 
 const SlideFormat kFormats[] = {
+    {"iris", &IrisFileSource::detect, &IrisFileSource::open},
     {"openslide", &OpenSlideSource::detect, &OpenSlideSource::open},
 };
 
 } // namespace
 
-Expected<std::unique_ptr<SlideSource>> openSlideSource(const std::string& path) {
+Expected<std::unique_ptr<SlideSource>> openSlideSource(const std::string& path, int preference) {
     if (path.empty()) return Result(Status::InvalidArgument, "No slide path given");
     if (SyntheticSource::detect(path)) return SyntheticSource::open(path); // not a file
     std::error_code ec;
@@ -75,8 +77,15 @@ Expected<std::unique_ptr<SlideSource>> openSlideSource(const std::string& path) 
     if (fs::file_size(p, ec) == 0) {
         return Result(Status::UnsupportedFormat, "Cannot open '" + path + "': the file is empty");
     }
+    // preference: 0 auto, 1 OpenSlide only, 2 .iris only (EngineConfig::SourcePreference).
     for (const SlideFormat& f : kFormats) {
+        const std::string name = f.name;
+        if (preference == 1 && name != "openslide") continue;
+        if (preference == 2 && name != "iris") continue;
         if (f.detect(path)) return f.open(path);
+    }
+    if (preference == 2) {
+        return Result(Status::UnsupportedFormat, "Cannot open '" + path + "' as .iris: it is not an Iris File Extension file");
     }
     return Result(Status::UnsupportedFormat,
                   "Cannot open '" + path + "': not a slide format Iris View can read");

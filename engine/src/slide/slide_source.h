@@ -31,7 +31,8 @@ public:
 
 // Opens `path` with the first format that recognises it, after checking that the path is
 // an existing, readable regular file. Errors name the file and the reason.
-Expected<std::unique_ptr<SlideSource>> openSlideSource(const std::string& path);
+// `preference` restricts the table to one reader (EngineConfig::source).
+Expected<std::unique_ptr<SlideSource>> openSlideSource(const std::string& path, int preference = 0);
 
 // Fills the LevelInfo tile grid fields (tilesX/Y) from width/height.
 void fillTileGrid(LevelInfo& level);

@@ -1,0 +1,27 @@
+// Baselines measured in the same run as the engine, over the same fields:
+//  - a naive viewer: openslide_read_region of the whole field at the field's level, one thread;
+//  - the same split into horizontal strips over all cores;
+//  - the decode floor: the field's tiles decoded from their compressed bytes in parallel with
+//    libjpeg-turbo (no GPU, no OpenSlide): the practical lower bound on this machine.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+struct BenchField {
+    double x0, y0;       // level-0 top-left of the field
+    int level;           // the level a viewer would read (the engine's HR level)
+    double levelDs;
+    int64_t w, h;        // field size in that level's pixels
+};
+
+struct BaselineResult {
+    std::vector<double> ms; // one per field
+    std::string note;       // why it is missing, when it is
+};
+
+BaselineResult openslideBaseline(const std::string& slide, const std::vector<BenchField>& fields, unsigned threads);
+// Needs a TIFF whose level directories are JPEG-tiled (Aperio SVS, generic TIFF such as the
+// sample slide); otherwise returns no figures and a note.
+BaselineResult decodeFloorBaseline(const std::string& slide, const std::vector<BenchField>& fields, unsigned threads);

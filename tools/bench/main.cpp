@@ -1,0 +1,387 @@
+// iris-bench: drives the headless engine through moves to entirely new fields of view and
+// reports the paper's measures (TeFOV for the LR and HR layers, time per tile, buffer rate,
+// frame time) beside baselines measured in the same run on the same fields.
+//
+//   iris-bench SLIDE [--size WxH] [--moves N] [--magnifications LIST] [--source auto|openslide|iris]
+//              [--json FILE] [--plots DIR] [--seed N] [--validation]
+//
+// Without --size it runs 2774×1750 (the paper's window) and 1920×1080.
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+#include <random>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <unistd.h>
+#include <vector>
+
+#include "baselines.h"
+#include "iris/engine.h"
+#include "stats.h"
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+struct Options {
+    std::string slide;
+    std::vector<std::pair<uint32_t, uint32_t>> sizes;
+    int moves = 30;
+    std::vector<double> mags;
+    std::string source = "auto";
+    std::string json, plots;
+    uint64_t seed = 1;
+    bool validation = false;
+};
+
+int usage(const char* msg) {
+    if (msg) std::fprintf(stderr, "iris-bench: %s\n", msg);
+    std::fprintf(stderr,
+                 "usage: iris-bench SLIDE [--size WxH] [--moves N] [--magnifications LIST] [--source auto|openslide|iris]\n"
+                 "                  [--json FILE] [--plots DIR] [--seed N] [--validation]\n");
+    return 2;
+}
+
+struct TracePoint {
+    double tMs, intervalMs, gpuMs, rateGBps;
+};
+
+struct SizeResult {
+    uint32_t w = 0, h = 0;
+    std::string device;
+    std::vector<double> lrTefov, hrTefov, lrTpt, hrTpt, rate, frameMs;
+    std::vector<std::string> condition; // per field: magnification label
+    std::vector<double> condHr, condTpt;
+    BaselineResult osr, osrMt, floor;
+    std::vector<TracePoint> trace;
+    int movesDone = 0, movesWanted = 0, timeouts = 0;
+    std::string notes;
+};
+
+bool progressTty() { return isatty(2); }
+
+SizeResult runSize(const Options& o, uint32_t W, uint32_t H) {
+    SizeResult res;
+    res.w = W;
+    res.h = H;
+    iris::EngineConfig cfg;
+    cfg.validation = o.validation;
+    cfg.perimeterTiles = 1;
+    cfg.source = o.source == "openslide" ? iris::SourcePreference::OpenSlide
+                 : o.source == "iris"    ? iris::SourcePreference::Iris
+                                         : iris::SourcePreference::Auto;
+    cfg.log = [](iris::LogLevel l, std::string_view m) {
+        if (l >= iris::LogLevel::Warning) std::fprintf(stderr, "iris-bench: %.*s\n", int(m.size()), m.data());
+    };
+    auto created = iris::Engine::create(cfg);
+    if (!created) {
+        res.notes = created.error().message();
+        return res;
+    }
+    iris::Engine& e = **created;
+    res.device = e.device().name;
+    if (auto r = e.bindOffscreen(W, H, /*readback=*/false); !r) {
+        res.notes = r.message();
+        return res;
+    }
+    if (auto r = e.open(o.slide); !r) {
+        res.notes = r.message();
+        return res;
+    }
+    const iris::SlideInfo info = *e.slideInfo();
+    std::mutex traceMutex;
+    const auto start = Clock::now();
+    e.setFrameCallback([&](const iris::FrameStats& s) {
+        std::lock_guard lock(traceMutex);
+        res.trace.push_back({std::chrono::duration<double, std::milli>(Clock::now() - start).count(), s.intervalMs, s.gpuMs,
+                             s.bufferRateGBps});
+    });
+    // Magnification → downsample: from the objective power, else from mpp (10 µm/px ≈ 1×),
+    // else the list is read as downsamples.
+    const double objective = info.objectivePower > 0 ? info.objectivePower : info.mppX > 0 ? 10.0 / info.mppX : 0;
+    std::mt19937_64 rng(o.seed);
+    std::vector<BenchField> fields;
+    for (double mag : o.mags) {
+        const double ds = objective > 0 ? objective / mag : mag;
+        const std::string label = objective > 0 ? std::to_string(int(std::lround(mag))) + "x" : "ds " + jnum(mag);
+        const double fw = W * ds, fh = H * ds;
+        const int64_t cols = int64_t(double(info.width) / fw), rows = int64_t(double(info.height) / fh);
+        if (cols < 1 || rows < 1) {
+            res.notes += "at " + label + " the slide is smaller than one field; skipped. ";
+            continue;
+        }
+        // A serpentine walk over whole fields, starting at a random row: never revisits a field.
+        const int64_t total = cols * rows;
+        const int64_t startIdx = int64_t(rng() % uint64_t(total));
+        const int64_t steps = std::min<int64_t>(o.moves + 1, total);
+        res.movesWanted += o.moves;
+        if (steps - 1 < o.moves)
+            res.notes += "at " + label + " only " + std::to_string(steps - 1) + " non-overlapping moves fit on the slide. ";
+        std::vector<iris::View> walk;
+        for (int64_t k = 0; k < steps; ++k) {
+            const int64_t idx = (startIdx + k) % total;
+            const int64_t r = idx / cols, c = (r % 2 == 0) ? idx % cols : cols - 1 - idx % cols;
+            walk.push_back({(double(c) + 0.5) * fw, (double(r) + 0.5) * fh, ds});
+        }
+        e.setView(walk[0]);
+        (void)e.waitForFrame(std::chrono::seconds(60));
+        for (size_t k = 1; k < walk.size(); ++k) {
+            const size_t before = e.metrics().fields.size();
+            e.setView(walk[k]);
+            const auto t0 = Clock::now();
+            bool done = false;
+            while (Clock::now() - t0 < std::chrono::seconds(60)) {
+                const iris::EngineMetrics m = e.metrics();
+                if (m.fields.size() > before && m.fields.back().hrTeFovMs >= 0) {
+                    const iris::FieldStats& f = m.fields.back();
+                    res.hrTefov.push_back(f.hrTeFovMs);
+                    if (f.lrTeFovMs >= 0) res.lrTefov.push_back(f.lrTeFovMs);
+                    if (f.hrTptUs >= 0) res.hrTpt.push_back(f.hrTptUs);
+                    if (f.lrTptUs >= 0) res.lrTpt.push_back(f.lrTptUs);
+                    res.condition.push_back(label);
+                    res.condHr.push_back(f.hrTeFovMs);
+                    res.condTpt.push_back(f.hrTptUs);
+                    done = true;
+                    break;
+                }
+                std::this_thread::sleep_for(std::chrono::microseconds(200));
+            }
+            if (!done) ++res.timeouts;
+            ++res.movesDone;
+            // The field the engine just drew, for the baselines.
+            const iris::View& v = walk[k];
+            int level = 0;
+            for (size_t l = 0; l < info.levels.size(); ++l)
+                if (info.levels[l].downsample <= ds * (1 + 1e-9)) level = int(l);
+            const double lds = info.levels[size_t(level)].downsample;
+            fields.push_back({v.centerX - W / 2.0 * ds, v.centerY - H / 2.0 * ds, level, lds,
+                              int64_t(std::ceil(W * ds / lds)), int64_t(std::ceil(H * ds / lds))});
+            if (progressTty())
+                std::fprintf(stderr, "\riris-bench: %ux%u %s: move %zu/%zu   ", W, H, label.c_str(), k, walk.size() - 1);
+        }
+    }
+    if (progressTty()) std::fprintf(stderr, "\n");
+    e.setFrameCallback({});
+    {
+        std::lock_guard lock(traceMutex);
+        for (const TracePoint& t : res.trace) {
+            if (t.intervalMs > 0) res.frameMs.push_back(t.intervalMs);
+            if (t.rateGBps > 0) res.rate.push_back(t.rateGBps);
+        }
+    }
+    if (e.validationMessageCount() > 0)
+        res.notes += std::to_string(e.validationMessageCount()) + " Vulkan validation messages. ";
+    created.value().reset(); // free the engine's threads before the CPU baselines
+    const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+    std::fprintf(stderr, "iris-bench: %ux%u: baselines over %zu fields…\n", W, H, fields.size());
+    res.osr = openslideBaseline(o.slide, fields, 1);
+    res.osrMt = openslideBaseline(o.slide, fields, cores);
+    res.floor = decodeFloorBaseline(o.slide, fields, cores);
+    return res;
+}
+
+std::string resultJson(const Options& o, const SizeResult& r) {
+    const Quartiles hr = quartiles(r.hrTefov), osr = quartiles(r.osr.ms), flo = quartiles(r.floor.ms);
+    const Quartiles fm = quartiles(r.frameMs);
+    std::vector<double> fps;
+    for (double ms : r.frameMs) fps.push_back(1000.0 / ms);
+    std::ostringstream j;
+    j << "{\n  \"device\": " << jstr(r.device) << ",\n  \"size\": " << jstr(std::to_string(r.w) + "x" + std::to_string(r.h))
+      << ",\n  \"source\": " << jstr(o.source) << ",\n  \"lr_tefov_ms\": " << jquart(quartiles(r.lrTefov))
+      << ",\n  \"hr_tefov_ms\": " << jquart(hr) << ",\n  \"lr_tpt_us\": " << jquart(quartiles(r.lrTpt))
+      << ",\n  \"hr_tpt_us\": " << jquart(quartiles(r.hrTpt)) << ",\n  \"buffer_rate_gbps\": " << jquart(quartiles(r.rate))
+      << ",\n  \"frame_ms\": " << jquart(fm) << ",\n  \"fps\": " << jquart(quartiles(fps))
+      << ",\n  \"baselines\": {\n    \"openslide_fov_ms\": " << jquart(osr)
+      << ",\n    \"openslide_mt_fov_ms\": " << jquart(quartiles(r.osrMt.ms))
+      << ",\n    \"decode_floor_fov_ms\": " << jquart(flo) << ",\n    \"notes\": "
+      << jstr(r.osr.note + (r.floor.note.empty() ? "" : " decode floor: " + r.floor.note)) << "\n  },\n  \"ratios\": {"
+      << "\n    \"hr_tefov_vs_openslide\": " << jnum(hr.median / osr.median)
+      << ",\n    \"hr_tefov_vs_decode_floor\": " << jnum(hr.median / flo.median) << "\n  },\n  \"moves\": " << r.movesDone
+      << ",\n  \"timeouts\": " << r.timeouts << ",\n  \"notes\": " << jstr(r.notes) << "\n}";
+    return j.str();
+}
+
+void printTable(const SizeResult& r) {
+    const auto row = [](const char* name, const std::vector<double>& v, const char* unit) {
+        const Quartiles q = quartiles(v);
+        std::printf("  %-28s %10.3f %10.3f %10.3f  %-4s n=%zu\n", name, q.p25, q.median, q.p75, unit, q.n);
+    };
+    std::printf("\n%ux%u on %s — %d moves (%d timed out)\n", r.w, r.h, r.device.c_str(), r.movesDone, r.timeouts);
+    std::printf("  %-28s %10s %10s %10s\n", "", "p25", "median", "p75");
+    row("LR TeFOV", r.lrTefov, "ms");
+    row("HR TeFOV", r.hrTefov, "ms");
+    row("LR time per tile", r.lrTpt, "us");
+    row("HR time per tile", r.hrTpt, "us");
+    row("buffer rate", r.rate, "GB/s");
+    row("frame interval", r.frameMs, "ms");
+    row("baseline: OpenSlide 1 thread", r.osr.ms, "ms");
+    row("baseline: OpenSlide all cores", r.osrMt.ms, "ms");
+    row("baseline: decode floor", r.floor.ms, "ms");
+    const double hr = quartiles(r.hrTefov).median;
+    std::printf("  HR TeFOV vs OpenSlide: %.3f×   vs decode floor: %.3f×\n", hr / quartiles(r.osr.ms).median,
+                hr / quartiles(r.floor.ms).median);
+    if (!r.floor.note.empty()) std::printf("  decode floor: %s\n", r.floor.note.c_str());
+    if (!r.notes.empty()) std::printf("  notes: %s\n", r.notes.c_str());
+}
+
+bool writePlots(const std::string& dir, const std::vector<SizeResult>& results, std::string& err) {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    if (ec) {
+        err = "cannot create " + dir + ": " + ec.message();
+        return false;
+    }
+    std::ofstream fields(dir + "/fields.dat"), trace(dir + "/trace.dat");
+    fields << "# condition hr_tefov_ms hr_tpt_us\n";
+    int ci = 0;
+    std::vector<std::string> labels;
+    for (const SizeResult& r : results) {
+        std::string prev;
+        for (size_t i = 0; i < r.condition.size(); ++i) {
+            const std::string label = std::to_string(r.w) + "x" + std::to_string(r.h) + " " + r.condition[i];
+            if (label != prev) {
+                labels.push_back(label);
+                prev = label;
+                ++ci;
+            }
+            fields << ci << " " << r.condHr[i] << " " << r.condTpt[i] << "\n";
+        }
+    }
+    const SizeResult& first = results.front();
+    trace << "# t_ms fps buffer_rate_gbps gpu_ms\n";
+    for (const TracePoint& t : first.trace)
+        trace << t.tMs << " " << (t.intervalMs > 0 ? 1000.0 / t.intervalMs : 0) << " " << t.rateGBps << " "
+              << (t.gpuMs >= 0 ? t.gpuMs : 0) << "\n";
+    fields.close();
+    trace.close();
+    std::ofstream gp(dir + "/plots.gp");
+    std::string xt;
+    for (size_t i = 0; i < labels.size(); ++i) xt += (i ? ", " : "") + jstr(labels[i]) + " " + std::to_string(i + 1);
+    gp << "set terminal pngcairo size 1200,700 font 'DejaVu Sans,11'\nset grid\nset logscale y\n"
+       << "set style fill solid 0.4 border -1\nset style boxplot outliers pointtype 7\nset style data boxplot\n"
+       << "set xtics (" << xt << ") rotate by -20\nunset key\n"
+       << "set output '" << dir << "/tefov.png'\nset title 'HR TeFOV per field (ms, log scale)'\nset ylabel 'ms'\n"
+       << "plot '" << dir << "/fields.dat' using 1:2:(0.5):1\n"
+       << "set output '" << dir << "/tpt.png'\nset title 'HR time per tile (µs, log scale)'\nset ylabel 'µs'\n"
+       << "plot '" << dir << "/fields.dat' using 1:3:(0.5):1\n"
+       << "unset logscale y\nset xtics auto norotate\nset style data lines\nset output '" << dir << "/trace.png'\n"
+       << "set multiplot layout 3,1 title 'Time trace, " << first.w << "x" << first.h << "'\nset xlabel 't (ms)'\n"
+       << "set ylabel 'FPS'\nplot '" << dir << "/trace.dat' using 1:2 with lines\n"
+       << "set ylabel 'GB/s'\nplot '" << dir << "/trace.dat' using 1:3 with lines\n"
+       << "set ylabel 'GPU ms'\nplot '" << dir << "/trace.dat' using 1:4 with lines\nunset multiplot\n";
+    gp.close();
+    const std::string cmd = "gnuplot '" + dir + "/plots.gp' 2>&1";
+    if (std::system(cmd.c_str()) != 0) {
+        err = "gnuplot failed or is not installed (apt-get install gnuplot-nox); data left in " + dir;
+        return false;
+    }
+    return true;
+}
+
+std::vector<double> parseList(const char* s) {
+    std::vector<double> v;
+    std::stringstream ss(s);
+    std::string item;
+    while (std::getline(ss, item, ',')) {
+        char* end = nullptr;
+        const double d = std::strtod(item.c_str(), &end);
+        if (end == item.c_str() || *end || !(d > 0)) return {};
+        v.push_back(d);
+    }
+    return v;
+}
+
+} // namespace
+
+int main(int argc, char** argv) {
+    Options o;
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        auto next = [&]() -> const char* { return i + 1 < argc ? argv[++i] : nullptr; };
+        if (a == "--size") {
+            const char* v = next();
+            unsigned w = 0, h = 0;
+            if (!v || std::sscanf(v, "%ux%u", &w, &h) != 2 || w < 64 || h < 64 || w > 16384 || h > 16384)
+                return usage("--size needs WxH between 64 and 16384");
+            o.sizes.emplace_back(w, h);
+        } else if (a == "--moves") {
+            const char* v = next();
+            if (!v || (o.moves = std::atoi(v)) < 1) return usage("--moves needs a positive number");
+        } else if (a == "--magnifications") {
+            const char* v = next();
+            if (!v || (o.mags = parseList(v)).empty()) return usage("--magnifications needs a list such as 40,20,10,5");
+        } else if (a == "--source") {
+            const char* v = next();
+            if (!v || (std::strcmp(v, "auto") && std::strcmp(v, "openslide") && std::strcmp(v, "iris")))
+                return usage("--source is auto, openslide or iris");
+            o.source = v;
+        } else if (a == "--json") {
+            const char* v = next();
+            if (!v) return usage("--json needs a file");
+            o.json = v;
+        } else if (a == "--plots") {
+            const char* v = next();
+            if (!v) return usage("--plots needs a folder");
+            o.plots = v;
+        } else if (a == "--seed") {
+            const char* v = next();
+            if (!v) return usage("--seed needs a number");
+            o.seed = std::strtoull(v, nullptr, 10);
+        } else if (a == "--validation") {
+            o.validation = true;
+        } else if (a == "--help" || a == "-h") {
+            usage(nullptr);
+            return 0;
+        } else if (!a.empty() && a[0] == '-') {
+            return usage(("unknown option " + a).c_str());
+        } else if (o.slide.empty()) {
+            o.slide = a;
+        } else {
+            return usage("one slide at a time");
+        }
+    }
+    if (o.slide.empty()) return usage("no slide given");
+    if (o.sizes.empty()) o.sizes = {{2774, 1750}, {1920, 1080}};
+    if (o.mags.empty()) o.mags = {40, 20, 10, 5};
+
+    std::vector<SizeResult> results;
+    for (auto [w, h] : o.sizes) {
+        results.push_back(runSize(o, w, h));
+        if (results.back().device.empty() || results.back().movesDone == 0) {
+            std::fprintf(stderr, "iris-bench: %s\n", results.back().notes.empty() ? "no move could be run" : results.back().notes.c_str());
+            return 1;
+        }
+        printTable(results.back());
+    }
+    if (!o.json.empty()) {
+        std::ofstream f(o.json);
+        f << resultJson(o, results[0]);
+        if (results.size() > 1) {
+            // The primary size's object, plus the same object for every other size.
+            f.seekp(-2, std::ios::cur);
+            f << ",\n  \"other_sizes\": [";
+            for (size_t i = 1; i < results.size(); ++i) f << (i > 1 ? ", " : "") << resultJson(o, results[i]);
+            f << "]\n}";
+        }
+        f << "\n";
+        if (!f) {
+            std::fprintf(stderr, "iris-bench: cannot write %s\n", o.json.c_str());
+            return 1;
+        }
+    }
+    if (!o.plots.empty()) {
+        std::string err;
+        if (!writePlots(o.plots, results, err)) {
+            std::fprintf(stderr, "iris-bench: %s\n", err.c_str());
+            return 1;
+        }
+    }
+    return 0;
+}

@@ -9,7 +9,7 @@ PACKAGES=(
   libvulkan-dev vulkan-tools mesa-vulkan-drivers vulkan-validationlayers glslang-tools
   libopenslide-dev openslide-tools libturbojpeg0-dev libtiff-dev libpng-dev
   libfreetype-dev libfontconfig-dev fonts-dejavu-core
-  xvfb xauth
+  xvfb xauth gnuplot-nox
 )
 
 missing=()

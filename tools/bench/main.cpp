@@ -271,7 +271,7 @@ bool writePlots(const std::string& dir, const std::vector<SizeResult>& results, 
        << "plot '" << dir << "/fields.dat' using 1:2:(0.5):1\n"
        << "set output '" << dir << "/tpt.png'\nset title 'HR time per tile (µs, log scale)'\nset ylabel 'µs'\n"
        << "plot '" << dir << "/fields.dat' using 1:3:(0.5):1\n"
-       << "unset logscale y\nset xtics auto norotate\nset style data lines\nset output '" << dir << "/trace.png'\n"
+       << "unset logscale y\nunset title\nset xtics auto norotate\nset style data lines\nset output '" << dir << "/trace.png'\n"
        << "set multiplot layout 3,1 title 'Time trace, " << first.w << "x" << first.h << "'\nset xlabel 't (ms)'\n"
        << "set ylabel 'FPS'\nplot '" << dir << "/trace.dat' using 1:2 with lines\n"
        << "set ylabel 'GB/s'\nplot '" << dir << "/trace.dat' using 1:3 with lines\n"

@@ -8,6 +8,7 @@
 #include "slide/iris_file.h"
 #include "slide/openslide_source.h"
 #include "slide/synthetic_source.h"
+#include "slide/tiff_source.h"
 
 namespace iris {
 
@@ -44,11 +45,15 @@ struct SlideFormat {
     const char* name;
     bool (*detect)(const std::string& path);
     Expected<std::unique_ptr<SlideSource>> (*open)(const std::string& path);
+    bool fallThrough; // UnsupportedFormat from open() means "not mine": try the next format
 };
 
 const SlideFormat kFormats[] = {
-    {"iris", &IrisFileSource::detect, &IrisFileSource::open},
-    {"openslide", &OpenSlideSource::detect, &OpenSlideSource::open},
+    {"iris", &IrisFileSource::detect, &IrisFileSource::open, false},
+    // Aperio SVS and generic tiled TIFF decoded from the file's own tiles: exact pixels on
+    // every level (OpenSlide resamples levels with non-integer downsamples) and faster.
+    {"tiff", &TiffTileSource::detect, &TiffTileSource::tryOpen, true},
+    {"openslide", &OpenSlideSource::detect, &OpenSlideSource::open, false},
 };
 
 } // namespace
@@ -82,7 +87,10 @@ Expected<std::unique_ptr<SlideSource>> openSlideSource(const std::string& path, 
         const std::string name = f.name;
         if (preference == 1 && name != "openslide") continue;
         if (preference == 2 && name != "iris") continue;
-        if (f.detect(path)) return f.open(path);
+        if (!f.detect(path)) continue;
+        auto r = f.open(path);
+        if (!r.ok() && f.fallThrough && r.error().status() == Status::UnsupportedFormat) continue;
+        return r;
     }
     if (preference == 2) {
         return Result(Status::UnsupportedFormat, "Cannot open '" + path + "' as .iris: it is not an Iris File Extension file");

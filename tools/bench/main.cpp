@@ -240,18 +240,11 @@ bool writePlots(const std::string& dir, const std::vector<SizeResult>& results, 
     }
     std::ofstream fields(dir + "/fields.dat"), trace(dir + "/trace.dat");
     fields << "# condition hr_tefov_ms hr_tpt_us\n";
-    int ci = 0;
-    std::vector<std::string> labels;
+
     for (const SizeResult& r : results) {
-        std::string prev;
         for (size_t i = 0; i < r.condition.size(); ++i) {
             const std::string label = std::to_string(r.w) + "x" + std::to_string(r.h) + " " + r.condition[i];
-            if (label != prev) {
-                labels.push_back(label);
-                prev = label;
-                ++ci;
-            }
-            fields << ci << " " << r.condHr[i] << " " << r.condTpt[i] << "\n";
+            fields << jstr(label) << " " << r.condHr[i] << " " << r.condTpt[i] << "\n";
         }
     }
     const SizeResult& first = results.front();
@@ -262,15 +255,13 @@ bool writePlots(const std::string& dir, const std::vector<SizeResult>& results, 
     fields.close();
     trace.close();
     std::ofstream gp(dir + "/plots.gp");
-    std::string xt;
-    for (size_t i = 0; i < labels.size(); ++i) xt += (i ? ", " : "") + jstr(labels[i]) + " " + std::to_string(i + 1);
     gp << "set terminal pngcairo size 1200,700 font 'DejaVu Sans,11'\nset grid\nset logscale y\n"
        << "set style fill solid 0.4 border -1\nset style boxplot outliers pointtype 7\nset style data boxplot\n"
-       << "set xtics (" << xt << ") rotate by -20\nunset key\n"
+       << "set xtics rotate by -20\nunset key\n"
        << "set output '" << dir << "/tefov.png'\nset title 'HR TeFOV per field (ms, log scale)'\nset ylabel 'ms'\n"
-       << "plot '" << dir << "/fields.dat' using 1:2:(0.5):1\n"
+       << "plot '" << dir << "/fields.dat' using (1):2:(0.5):1\n"
        << "set output '" << dir << "/tpt.png'\nset title 'HR time per tile (µs, log scale)'\nset ylabel 'µs'\n"
-       << "plot '" << dir << "/fields.dat' using 1:3:(0.5):1\n"
+       << "plot '" << dir << "/fields.dat' using (1):3:(0.5):1\n"
        << "unset logscale y\nunset title\nset xtics auto norotate\nset style data lines\nset output '" << dir << "/trace.png'\n"
        << "set multiplot layout 3,1 title 'Time trace, " << first.w << "x" << first.h << "'\nset xlabel 't (ms)'\n"
        << "set ylabel 'FPS'\nplot '" << dir << "/trace.dat' using 1:2 with lines\n"

@@ -28,7 +28,7 @@ struct EngineConfig {
     uint32_t loaderThreads = 0;              // 0: one per hardware thread
     uint32_t perimeterTiles = 1;             // tiles buffered beyond the visible field on each side
     bool validation = false;                 // enable VK_LAYER_KHRONOS_validation when installed
-    std::array<float, 3> background{0.96f, 0.96f, 0.96f}; // colour outside the slide (linear RGB 0..1)
+    std::array<float, 3> background{0.96f, 0.96f, 0.96f}; // colour outside the slide: RGB 0..1, written as bytes (round(v·255))
     // Optional: a VkInstance created by the host (for example QVulkanInstance::vkInstance()).
     // The engine then creates its device on it, so that a VkSurfaceKHR of that instance
     // can be bound later. The host keeps it alive until the Engine is destroyed.

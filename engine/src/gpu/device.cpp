@@ -56,7 +56,10 @@ VKAPI_ATTR VkBool32 VKAPI_CALL Device::debugCallback(VkDebugUtilsMessageSeverity
     // VK_IMAGE_LAYOUT_GENERAL on purpose (uploads into one layer never need a layout change
     // that a frame sampling other layers could trip over), and the layer flags exactly that.
     if (types == VK_DEBUG_UTILS_MESSAGE_TYPE_PERFORMANCE_BIT_EXT) {
-        self->log_.debug(std::string("Vulkan performance advice: ") + (data && data->pMessage ? data->pMessage : "?"));
+        // Logged once: it repeats for every upload.
+        if (!self->performanceAdviceLogged_.exchange(true, std::memory_order_relaxed))
+            self->log_.debug(std::string("Vulkan performance advice (shown once): ") +
+                             (data && data->pMessage ? data->pMessage : "?"));
         return VK_FALSE;
     }
     if (severity >= VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT) {

@@ -77,6 +77,7 @@ private:
     bool hasSwapchain_ = false;
     std::string driver_;
     std::atomic<uint64_t> validationMessages_{0}; // a counter only: relaxed is enough
+    std::atomic<bool> performanceAdviceLogged_{false};
 };
 
 } // namespace iris::gpu

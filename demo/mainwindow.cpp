@@ -1,0 +1,297 @@
+#include "mainwindow.h"
+
+#include <QtCore/QDir>
+#include <QtCore/QFileInfo>
+#include <QtCore/QMimeData>
+#include <QtCore/QSettings>
+#include <QtGui/QAction>
+#include <QtGui/QCloseEvent>
+#include <QtGui/QDragEnterEvent>
+#include <QtWidgets/QApplication>
+#include <QtWidgets/QFileDialog>
+#include <QtWidgets/QMenuBar>
+#include <QtWidgets/QMessageBox>
+#include <QtWidgets/QProgressBar>
+#include <QtWidgets/QStatusBar>
+
+#include <iris/IrisSlideView.h>
+
+#include "associatedimagesdock.h"
+#include "recentfiles.h"
+#include "sampleslide.h"
+#include "slideformats.h"
+#include "slidepropertiesdock.h"
+#include "viewstatus.h"
+
+namespace {
+constexpr int kMessageMs = 8000;
+const double kPresets[] = {5, 10, 20, 40};
+} // namespace
+
+MainWindow::MainWindow(QWidget *parent)
+    : QMainWindow(parent)
+    , m_view(new IrisSlideView)
+    , m_properties(new SlidePropertiesDock(this))
+    , m_images(new AssociatedImagesDock(this))
+    , m_status(nullptr)
+    , m_sample(new SampleSlide(this))
+    , m_busy(new QProgressBar)
+{
+    setWindowTitle(tr("Iris View"));
+    setAcceptDrops(true);
+    m_view->setObjectName(QStringLiteral("slideView"));
+    setCentralWidget(m_view);
+    addDockWidget(Qt::RightDockWidgetArea, m_properties);
+    addDockWidget(Qt::RightDockWidgetArea, m_images);
+
+    m_busy->setRange(0, 0); // busy: iris-sample reports no progress through a pipe
+    m_busy->setMaximumWidth(120);
+    m_busy->hide();
+    statusBar()->addWidget(m_busy);
+    m_status = new ViewStatus(m_view, statusBar());
+
+    createActions();
+    createMenus();
+
+    connect(m_view, &IrisSlideView::slideOpened, this, &MainWindow::onSlideOpened);
+    connect(m_view, &IrisSlideView::slideClosed, this, &MainWindow::onSlideClosed);
+    connect(m_view, &IrisSlideView::slideError, this, &MainWindow::onSlideError);
+    connect(m_view, &IrisSlideView::viewChanged, this, &MainWindow::updateActions);
+
+    connect(m_sample, &SampleSlide::generating, this, [this](const QString &message) {
+        statusBar()->showMessage(message);
+        m_busy->setVisible(m_sample->isGenerating());
+    });
+    connect(m_sample, &SampleSlide::ready, this, [this](const QString &path) {
+        m_busy->hide();
+        m_sampleAction->setEnabled(true);
+        openSlide(path, m_openingSample);
+    });
+    connect(m_sample, &SampleSlide::failed, this, [this](const QString &message) {
+        m_busy->hide();
+        m_sampleAction->setEnabled(true);
+        statusBar()->showMessage(message, kMessageMs);
+        if (m_openingSample)
+            QMessageBox::warning(this, tr("Sample slide"), message);
+    });
+
+    QSettings settings;
+    restoreGeometry(settings.value(QStringLiteral("window/geometry")).toByteArray());
+    restoreState(settings.value(QStringLiteral("window/state")).toByteArray());
+    m_enhanceAction->setChecked(settings.value(QStringLiteral("view/enhance"), true).toBool());
+    if (!settings.contains(QStringLiteral("window/geometry")))
+        resize(1280, 800);
+    updateActions();
+}
+
+MainWindow::~MainWindow() = default;
+
+void MainWindow::createActions()
+{
+    m_openAction = new QAction(tr("&Open…"), this);
+    m_openAction->setShortcut(QKeySequence::Open);
+    connect(m_openAction, &QAction::triggered, this, &MainWindow::showOpenDialog);
+
+    m_sampleAction = new QAction(tr("Open &Sample Slide"), this);
+    connect(m_sampleAction, &QAction::triggered, this, [this] {
+        m_openingSample = true;
+        openSample();
+    });
+
+    m_closeAction = new QAction(tr("&Close"), this);
+    m_closeAction->setShortcut(QKeySequence::Close);
+    connect(m_closeAction, &QAction::triggered, m_view, &IrisSlideView::closeSlide);
+
+    m_quitAction = new QAction(tr("&Quit"), this);
+    m_quitAction->setShortcut(QKeySequence::Quit);
+    m_quitAction->setMenuRole(QAction::QuitRole);
+    connect(m_quitAction, &QAction::triggered, this, &QWidget::close);
+
+    // The view itself answers 0, +, −, 1–4 and the arrows while it has focus; the menu
+    // carries Ctrl chords so that both work from anywhere without clashing.
+    m_fitAction = new QAction(tr("&Fit to Window"), this);
+    m_fitAction->setShortcut(Qt::CTRL | Qt::Key_0);
+    connect(m_fitAction, &QAction::triggered, m_view, &IrisSlideView::fitToWindow);
+
+    m_zoomInAction = new QAction(tr("Zoom &In"), this);
+    m_zoomInAction->setShortcut(QKeySequence::ZoomIn);
+    connect(m_zoomInAction, &QAction::triggered, m_view, [this] { m_view->zoomBy(2); });
+
+    m_zoomOutAction = new QAction(tr("Zoom &Out"), this);
+    m_zoomOutAction->setShortcut(QKeySequence::ZoomOut);
+    connect(m_zoomOutAction, &QAction::triggered, m_view, [this] { m_view->zoomBy(0.5); });
+
+    for (int i = 0; i < 4; ++i) {
+        auto *action = new QAction(tr("%1×").arg(kPresets[i]), this);
+        action->setShortcut(QKeyCombination(Qt::CTRL, Qt::Key(Qt::Key_1 + i)));
+        const double magnification = kPresets[i];
+        connect(action, &QAction::triggered, m_view, [this, magnification] { m_view->setMagnification(magnification); });
+        m_presetActions << action;
+    }
+
+    m_enhanceAction = new QAction(tr("&Enhance Detail"), this);
+    m_enhanceAction->setCheckable(true);
+    m_enhanceAction->setShortcut(Qt::CTRL | Qt::Key_E);
+    m_enhanceAction->setStatusTip(tr("Sharpen reduced levels (reduction enhancement)"));
+    connect(m_enhanceAction, &QAction::toggled, m_view, &IrisSlideView::setEnhance);
+    connect(m_view, &IrisSlideView::enhanceChanged, m_enhanceAction, &QAction::setChecked);
+}
+
+void MainWindow::createMenus()
+{
+    QMenu *file = menuBar()->addMenu(tr("&File"));
+    file->addAction(m_openAction);
+    QMenu *recent = file->addMenu(tr("Open &Recent"));
+    m_recent = new RecentFiles(recent, this);
+    connect(m_recent, &RecentFiles::openRequested, this, [this](const QString &path) { openSlide(path, true); });
+    file->addAction(m_sampleAction);
+    file->addSeparator();
+    file->addAction(m_closeAction);
+    file->addSeparator();
+    file->addAction(m_quitAction);
+
+    QMenu *view = menuBar()->addMenu(tr("&View"));
+    view->addAction(m_fitAction);
+    view->addAction(m_zoomInAction);
+    view->addAction(m_zoomOutAction);
+    QMenu *presets = view->addMenu(tr("&Magnification"));
+    presets->addActions(m_presetActions);
+    view->addSeparator();
+    view->addAction(m_enhanceAction);
+    view->addSeparator();
+    view->addAction(m_properties->toggleViewAction());
+    view->addAction(m_images->toggleViewAction());
+
+    QMenu *help = menuBar()->addMenu(tr("&Help"));
+    help->addAction(tr("&About Iris View"), this, [this] {
+        const QString device = m_view->deviceName();
+        QMessageBox::about(this, tr("About Iris View"),
+                           tr("<h3>Iris View %1</h3><p>Whole-slide image viewer with a Vulkan engine.</p>"
+                              "<p>Renderer: %2</p><p>Drag to pan, wheel or pinch to zoom, double-click to "
+                              "zoom in, arrow keys to move one field, 0 to fit, 1–4 for 5×–40×.</p>")
+                               .arg(QStringLiteral(IRIS_VIEW_VERSION),
+                                    device.isEmpty() ? m_view->rendererError().toHtmlEscaped() : device.toHtmlEscaped()));
+    });
+    help->addAction(tr("About &Qt"), qApp, &QApplication::aboutQt);
+}
+
+bool MainWindow::openSlide(const QString &path, bool userInitiated)
+{
+    statusBar()->showMessage(tr("Opening %1…").arg(QDir::toNativeSeparators(path)));
+    m_userInitiated = userInitiated;
+    const bool opened = m_view->openSlide(path);
+    m_userInitiated = false;
+    m_openingSample = false;
+    if (opened) {
+        statusBar()->showMessage(tr("Opened %1").arg(QDir::toNativeSeparators(path)), kMessageMs);
+        if (path != SampleSlide::path())
+            m_recent->add(path);
+    } else if (userInitiated) {
+        m_recent->remove(path);
+    }
+    return opened;
+}
+
+void MainWindow::openSample()
+{
+    m_sampleAction->setEnabled(false);
+    m_sample->ensure();
+}
+
+void MainWindow::showOpenDialog()
+{
+    QSettings settings;
+    const QString dir = settings.value(QStringLiteral("lastFolder"), QDir::homePath()).toString();
+    const QString path = QFileDialog::getOpenFileName(this, tr("Open Slide"), dir,
+                                                      SlideFormats::fileDialogFilters().join(QStringLiteral(";;")));
+    if (path.isEmpty())
+        return;
+    settings.setValue(QStringLiteral("lastFolder"), QFileInfo(path).absolutePath());
+    openSlide(path, true);
+}
+
+void MainWindow::onSlideOpened(const IrisSlideInfo &info)
+{
+    setWindowTitle(tr("%1 — Iris View").arg(QFileInfo(info.path).fileName()));
+    m_properties->showSlide(info);
+    m_images->clear();
+    for (const QString &name : info.associatedImages)
+        m_images->addImage(name, m_view->associatedImage(name));
+    updateActions();
+}
+
+void MainWindow::onSlideClosed()
+{
+    setWindowTitle(tr("Iris View"));
+    m_properties->clear();
+    m_images->clear();
+    updateActions();
+}
+
+void MainWindow::onSlideError(const QString &message)
+{
+    statusBar()->showMessage(message, kMessageMs);
+    if (m_userInitiated)
+        QMessageBox::warning(this, tr("Cannot open the slide"), message);
+}
+
+void MainWindow::updateActions()
+{
+    const bool has = m_view->hasSlide();
+    const bool magnifications = has && m_view->objectivePower() > 0;
+    m_closeAction->setEnabled(has);
+    m_fitAction->setEnabled(has);
+    m_zoomInAction->setEnabled(has);
+    m_zoomOutAction->setEnabled(has);
+    for (QAction *action : std::as_const(m_presetActions))
+        action->setEnabled(magnifications);
+}
+
+QString MainWindow::droppedSlide(const QMimeData *mime)
+{
+    if (!mime || !mime->hasUrls())
+        return {};
+    // A slide by its extension first; otherwise any file, and the engine judges it.
+    QString anyFile;
+    for (const QUrl &url : mime->urls()) {
+        const QString path = url.toLocalFile();
+        if (!url.isLocalFile() || !QFileInfo(path).isFile())
+            continue;
+        if (SlideFormats::looksLikeSlide(path))
+            return path;
+        if (anyFile.isEmpty())
+            anyFile = path;
+    }
+    return anyFile;
+}
+
+void MainWindow::dragEnterEvent(QDragEnterEvent *event)
+{
+    if (!droppedSlide(event->mimeData()).isEmpty())
+        event->acceptProposedAction();
+}
+
+void MainWindow::dragMoveEvent(QDragMoveEvent *event)
+{
+    if (!droppedSlide(event->mimeData()).isEmpty())
+        event->acceptProposedAction();
+}
+
+void MainWindow::dropEvent(QDropEvent *event)
+{
+    const QString path = droppedSlide(event->mimeData());
+    if (path.isEmpty())
+        return;
+    event->acceptProposedAction();
+    // Leave the drag-and-drop machinery before a possible message box.
+    QMetaObject::invokeMethod(this, [this, path] { openSlide(path, true); }, Qt::QueuedConnection);
+}
+
+void MainWindow::closeEvent(QCloseEvent *event)
+{
+    QSettings settings;
+    settings.setValue(QStringLiteral("window/geometry"), saveGeometry());
+    settings.setValue(QStringLiteral("window/state"), saveState());
+    settings.setValue(QStringLiteral("view/enhance"), m_view->enhance());
+    QMainWindow::closeEvent(event);
+}

@@ -1,0 +1,70 @@
+// Iris View demo — the viewer's main window: IrisSlideView in the middle, slide properties
+// and associated images in docks, live figures in the status bar.
+#pragma once
+
+#include <QtCore/QList>
+#include <QtWidgets/QMainWindow>
+
+#include <iris/IrisSlideInfo.h>
+
+QT_BEGIN_NAMESPACE
+class QAction;
+class QMimeData;
+class QProgressBar;
+QT_END_NAMESPACE
+class AssociatedImagesDock;
+class IrisSlideView;
+class RecentFiles;
+class SampleSlide;
+class SlidePropertiesDock;
+class ViewStatus;
+
+class MainWindow : public QMainWindow {
+    Q_OBJECT
+public:
+    explicit MainWindow(QWidget *parent = nullptr);
+    ~MainWindow() override;
+
+    IrisSlideView *view() const { return m_view; }
+
+public Q_SLOTS:
+    // userInitiated: errors also appear in a message box (not only the status bar).
+    bool openSlide(const QString &path, bool userInitiated = true);
+    void openSample();
+    void showOpenDialog();
+
+protected:
+    void dragEnterEvent(QDragEnterEvent *event) override;
+    void dragMoveEvent(QDragMoveEvent *event) override;
+    void dropEvent(QDropEvent *event) override;
+    void closeEvent(QCloseEvent *event) override;
+
+private:
+    void createActions();
+    void createMenus();
+    void onSlideOpened(const IrisSlideInfo &info);
+    void onSlideClosed();
+    void onSlideError(const QString &message);
+    void updateActions();
+    static QString droppedSlide(const QMimeData *mime);
+
+    IrisSlideView *m_view;
+    SlidePropertiesDock *m_properties;
+    AssociatedImagesDock *m_images;
+    ViewStatus *m_status;
+    SampleSlide *m_sample;
+    RecentFiles *m_recent = nullptr;
+    QProgressBar *m_busy;
+    bool m_userInitiated = false;
+    bool m_openingSample = false;
+
+    QAction *m_openAction = nullptr;
+    QAction *m_sampleAction = nullptr;
+    QAction *m_closeAction = nullptr;
+    QAction *m_quitAction = nullptr;
+    QAction *m_fitAction = nullptr;
+    QAction *m_zoomInAction = nullptr;
+    QAction *m_zoomOutAction = nullptr;
+    QAction *m_enhanceAction = nullptr;
+    QList<QAction *> m_presetActions;
+};

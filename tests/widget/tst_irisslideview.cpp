@@ -1,0 +1,742 @@
+// tst_irisslideview: IrisSlideView on a real X display (Xvfb in CI) with lavapipe and the
+// Vulkan validation layers on (IRIS_VALIDATION=1). Every test ends by checking that the
+// layers reported nothing.
+//
+// Input is synthesised on the widget's Vulkan surface window (QTest mouse and key events go
+// through QGuiApplication like real ones; wheel and gesture events are sent to the window),
+// so each test also covers the forwarding from the window to the widget. Expected views are
+// computed from the engine's contract: translate(dx, dy) moves centre by −(dx, dy) ×
+// downsample, zoom keeps the anchor's level-0 point fixed.
+//
+// The suite runs twice: as is, and with QT_SCALE_FACTOR=2 (ctest entry widget.view.scale2),
+// where every logical distance becomes two device pixels.
+//
+// Presented and headless frames are saved under $IRIS_TEST_OUT/failures when they differ
+// (always, with IRIS_TEST_SAVE_FRAMES=1).
+
+#include <cmath>
+#include <memory>
+
+#include <QtCore/QDeadlineTimer>
+#include <QtCore/QDir>
+#include <QtCore/QFileInfo>
+#include <QtGui/QScreen>
+#include <QtGui/QWindow>
+#include <QtTest/QSignalSpy>
+#include <QtTest/QTest>
+#include <QtWidgets/QApplication>
+#include <QtWidgets/QHBoxLayout>
+#include <QtWidgets/QLabel>
+#include <QtWidgets/QVBoxLayout>
+
+#include <iris/IrisSlideView.h>
+
+#include "enginehost_p.h"
+#include "navigator_p.h"
+#include "widget_test_support.h"
+
+using namespace iriswidgettest;
+
+namespace {
+
+constexpr QSize kViewSize(480, 360);
+// Presented vs headless frame: at most this mean absolute difference per channel (0…255) …
+constexpr double kMaxMeanDifference = 1.0;
+// … and at most this fraction of pixels with a channel off by more than kPixelThreshold.
+constexpr double kMaxFractionOver = 0.002;
+constexpr int kPixelThreshold = 16;
+
+bool near(double a, double b, double tolerance)
+{
+    return std::abs(a - b) <= tolerance;
+}
+
+double length(QPointF p)
+{
+    return std::hypot(p.x(), p.y());
+}
+
+QString pointText(QPointF p)
+{
+    return QStringLiteral("(%1, %2)").arg(p.x(), 0, 'f', 4).arg(p.y(), 0, 'f', 4);
+}
+
+// A top-level window holding one view that fills it.
+struct ViewWindow {
+    std::unique_ptr<QWidget> window = std::make_unique<QWidget>();
+    IrisSlideView *view = new IrisSlideView;
+    std::unique_ptr<FrameWatcher> frames = std::make_unique<FrameWatcher>(view);
+
+    explicit ViewWindow(QSize size = kViewSize)
+    {
+        auto *layout = new QVBoxLayout(window.get());
+        layout->setContentsMargins(0, 0, 0, 0);
+        layout->addWidget(view);
+        window->resize(size);
+    }
+    ~ViewWindow()
+    {
+        frames.reset(); // before the view it watches
+    }
+    QWindow *surface() const { return view->surfaceWindow(); }
+    double dpr() const { return view->surfaceWindow()->devicePixelRatio(); }
+};
+
+} // namespace
+
+class TstIrisSlideView : public QObject {
+    Q_OBJECT
+
+private Q_SLOTS:
+    void initTestCase();
+    void init();
+    void cleanup();
+    void cleanupTestCase();
+
+    void showsSlide();
+    void reportsDevicePixels();
+    void dragPansWithThePointer();
+    void releasedDragGlidesAndStops();
+    void wheelKeepsPointUnderCursor();
+    void trackpadAndPinchZoomAboutTheFingers();
+    void doubleClickZoomsIn();
+    void arrowKeysMoveOneField();
+    void plusMinusAndFitKeys();
+    void fitShowsWholeSlide();
+    void magnificationPresets();
+    void resizeKeepsCentreAndMagnification();
+    void hiddenViewRendersNothing();
+    void reparentingRebindsTheSurface();
+    void openErrorsLeaveTheViewUsable();
+    void propertiesAndSignals();
+    void twoViewsOnTwoSlides();
+    void closingWhileTilesLoad();
+
+private:
+    // Shows m_w with the sample slide and waits for a complete frame.
+    void showSample();
+    void checkPresentedMatchesHeadless(IrisSlideView *view, const QString &slide, const QString &name);
+    void finishView(ViewWindow &w);
+
+    QString m_sample;
+    int m_baselineEngines = 0;
+    std::unique_ptr<ViewWindow> m_w;
+};
+
+void TstIrisSlideView::initTestCase()
+{
+    QCOMPARE(QGuiApplication::platformName(), QStringLiteral("xcb"));
+    QCOMPARE(qEnvironmentVariable("IRIS_VALIDATION"), QStringLiteral("1"));
+    m_sample = sampleSlide();
+    QVERIFY2(QFileInfo::exists(m_sample), qPrintable(QStringLiteral("no sample slide at '%1' "
+                                                                     "(the sample_slide fixture makes it)")
+                                                         .arg(m_sample)));
+    m_baselineEngines = IrisWidget::EngineHost::liveEngineCount();
+    QCOMPARE(m_baselineEngines, 0);
+}
+
+void TstIrisSlideView::init()
+{
+    m_w = std::make_unique<ViewWindow>();
+}
+
+void TstIrisSlideView::cleanup()
+{
+    if (m_w)
+        finishView(*m_w);
+    m_w.reset();
+    QCOMPARE(IrisWidget::EngineHost::liveEngineCount(), m_baselineEngines);
+}
+
+void TstIrisSlideView::cleanupTestCase()
+{
+    QCOMPARE(IrisWidget::EngineHost::liveEngineCount(), 0);
+}
+
+void TstIrisSlideView::finishView(ViewWindow &w)
+{
+    QVERIFY2(w.view->validationMessageCount() == 0,
+             qPrintable(QStringLiteral("%1 Vulkan validation messages (see the log above)")
+                            .arg(w.view->validationMessageCount())));
+}
+
+void TstIrisSlideView::showSample()
+{
+    m_w->window->show();
+    QVERIFY(QTest::qWaitForWindowExposed(m_w->window.get()));
+    QVERIFY(m_w->view->isRendererAvailable());
+    QVERIFY2(m_w->view->openSlide(m_sample), qPrintable(m_sample));
+    QTRY_VERIFY(m_w->view->surfaceWindow()->isExposed());
+    QVERIFY(m_w->frames->waitForCompleteFrame());
+}
+
+void TstIrisSlideView::checkPresentedMatchesHeadless(IrisSlideView *view, const QString &slide, const QString &name)
+{
+    const QSize target = view->targetSize();
+    QString error;
+    const QImage headless = renderHeadless(slide, target, view->centre(), view->downsample(),
+                                           view->backgroundColor(), &error);
+    QVERIFY2(!headless.isNull(), qPrintable(error));
+
+    // The complete frame was submitted; its presentation reaches the X server a moment later.
+    ImageDifference difference;
+    QImage presented;
+    const auto matches = [&] {
+        presented = grabPresented(view);
+        difference = compareImages(presented, headless, kPixelThreshold);
+        return presented.size() == target && difference.meanAbs <= kMaxMeanDifference
+            && difference.fractionOver <= kMaxFractionOver;
+    };
+    QTRY_VERIFY_WITH_TIMEOUT(matches(), 5000);
+    qInfo("%s: presented %dx%d vs headless: %s", qPrintable(name), target.width(), target.height(),
+          qPrintable(difference.describe()));
+    if (QTest::currentTestFailed() || qEnvironmentVariableIsSet("IRIS_TEST_SAVE_FRAMES")) {
+        saveArtefact(presented, name + QStringLiteral("-presented"));
+        saveArtefact(headless, name + QStringLiteral("-headless"));
+    }
+}
+
+// --- rendering -----------------------------------------------------------------------------
+
+void TstIrisSlideView::showsSlide()
+{
+    showSample();
+    // Somewhere inside the slide, not at the fitted view, so tiles of a finer level show.
+    m_w->view->setCentre(QPointF(2400, 1700));
+    m_w->view->setDownsample(3.0);
+    QVERIFY(m_w->frames->waitForCompleteFrame());
+    checkPresentedMatchesHeadless(m_w->view, m_sample, QStringLiteral("showsSlide"));
+    QVERIFY(m_w->frames->last()->tilesDrawn > 0);
+}
+
+void TstIrisSlideView::reportsDevicePixels()
+{
+    showSample();
+    const double expected = qEnvironmentVariableIsSet("QT_SCALE_FACTOR")
+        ? qEnvironmentVariable("QT_SCALE_FACTOR").toDouble() : m_w->window->screen()->devicePixelRatio();
+    QCOMPARE(m_w->dpr(), expected);
+    QCOMPARE(m_w->view->targetSize(), m_w->view->size() * expected);
+    QCOMPARE(grabPresented(m_w->view).size(), m_w->view->targetSize());
+}
+
+// --- pointer -------------------------------------------------------------------------------
+
+void TstIrisSlideView::dragPansWithThePointer()
+{
+    showSample();
+    IrisSlideView *view = m_w->view;
+    view->setDownsample(2.0);
+    const QPointF c0 = view->centre();
+    const double ds = view->downsample();
+    const double dpr = m_w->dpr();
+    const QPoint p0(100, 100);
+    const QPoint p1(260, 190);
+    const QPointF grabbed = view->mapToSlide(p0);
+
+    QTest::mousePress(m_w->surface(), Qt::LeftButton, {}, p0);
+    for (int i = 1; i <= 8; ++i)
+        QTest::mouseMove(m_w->surface(), p0 + (p1 - p0) * i / 8, 16);
+    // Held still before letting go: no glide.
+    QTest::mouseRelease(m_w->surface(), Qt::LeftButton, {}, p1, 400);
+
+    const QPointF expected = c0 - QPointF(p1 - p0) * dpr * ds;
+    QVERIFY2(length(view->centre() - expected) < 1e-6,
+             qPrintable(pointText(view->centre()) + QStringLiteral(" != ") + pointText(expected)));
+    // The grabbed image point is under the pointer again.
+    QVERIFY(length(view->mapFromSlide(grabbed) - QPointF(p1)) * dpr < 0.01);
+    QTest::qWait(150);
+    QVERIFY(length(view->centre() - expected) < 1e-6);
+    QVERIFY(m_w->frames->waitForCompleteFrame());
+}
+
+void TstIrisSlideView::releasedDragGlidesAndStops()
+{
+    showSample();
+    IrisSlideView *view = m_w->view;
+    view->setDownsample(2.0);
+    const QPointF c0 = view->centre();
+    const double ds = view->downsample();
+    const double dpr = m_w->dpr();
+    // 20 logical px every 16 ms: 1250 px/s, released while moving.
+    QPoint p(100, 180);
+    QTest::mousePress(m_w->surface(), Qt::LeftButton, {}, p);
+    for (int i = 0; i < 8; ++i) {
+        p += QPoint(20, 0);
+        QTest::mouseMove(m_w->surface(), p, 16);
+    }
+    QTest::mouseRelease(m_w->surface(), Qt::LeftButton, {}, p, 1);
+    const double dragged = (c0.x() - view->centre().x()) / (dpr * ds);
+    QVERIFY2(near(dragged, 160, 1e-6) || dragged > 160, qPrintable(QString::number(dragged)));
+
+    // It glides on in the same direction, slows down and stops.
+    QTRY_VERIFY((c0.x() - view->centre().x()) / (dpr * ds) > 170);
+    QPointF previous = view->centre();
+    QDeadlineTimer deadline(5000);
+    for (;;) {
+        QTest::qWait(120);
+        if (view->centre() == previous)
+            break;
+        previous = view->centre();
+        QVERIFY2(!deadline.hasExpired(), "the glide did not stop within 5 s");
+    }
+    const double glide = (c0.x() - view->centre().x()) / (dpr * ds) - 160;
+    const double theoretical = 1250 * IrisWidget::KineticPanner::kTimeConstantS; // ∫ v e^(−t/τ) dt
+    QVERIFY2(glide > 0.6 * theoretical && glide < 1.05 * theoretical,
+             qPrintable(QStringLiteral("glided %1 px, expected about %2").arg(glide).arg(theoretical)));
+    QCOMPARE(view->centre().y(), c0.y());
+
+    // With kinetic panning off, the same gesture stops where the pointer let go.
+    view->setKineticPanning(false);
+    const QPointF c1 = view->centre();
+    p = QPoint(100, 180);
+    QTest::mousePress(m_w->surface(), Qt::LeftButton, {}, p);
+    for (int i = 0; i < 8; ++i) {
+        p += QPoint(20, 0);
+        QTest::mouseMove(m_w->surface(), p, 16);
+    }
+    QTest::mouseRelease(m_w->surface(), Qt::LeftButton, {}, p, 1);
+    QTest::qWait(150);
+    QVERIFY(near((c1.x() - view->centre().x()) / (dpr * ds), 160, 1e-6));
+}
+
+void TstIrisSlideView::wheelKeepsPointUnderCursor()
+{
+    showSample();
+    IrisSlideView *view = m_w->view;
+    const double dpr = m_w->dpr();
+    const double ds0 = view->downsample();
+    const QPointF p(130, 95);
+    const QPointF under = view->mapToSlide(p);
+    QSignalSpy viewChanges(view, &IrisSlideView::viewChanged);
+
+    QWheelEvent wheel(p, m_w->surface()->mapToGlobal(p), QPoint(), QPoint(0, 120), Qt::NoButton,
+                      Qt::NoModifier, Qt::NoScrollPhase, false);
+    QCoreApplication::sendEvent(m_w->surface(), &wheel);
+    const double expected = ds0 / IrisWidget::ViewNavigator::kWheelNotchFactor;
+    QTRY_VERIFY(near(view->downsample(), expected, 1e-9 * expected));
+    // Smooth: the zoom arrived in steps, not one jump.
+    QVERIFY2(viewChanges.count() >= 2, qPrintable(QString::number(viewChanges.count())));
+    const double offset = length(view->mapFromSlide(under) - p) * dpr;
+    QVERIFY2(offset <= 1.0, qPrintable(QStringLiteral("the point moved %1 device px").arg(offset)));
+
+    // Two notches out in quick succession add up, about the same point.
+    QWheelEvent out(p, m_w->surface()->mapToGlobal(p), QPoint(), QPoint(0, -240), Qt::NoButton,
+                    Qt::NoModifier, Qt::NoScrollPhase, false);
+    QCoreApplication::sendEvent(m_w->surface(), &out);
+    const double back = expected * std::pow(IrisWidget::ViewNavigator::kWheelNotchFactor, 2);
+    QTRY_VERIFY(near(view->downsample(), back, 1e-9 * back));
+    QVERIFY(length(view->mapFromSlide(under) - p) * dpr <= 1.0);
+    QVERIFY(m_w->frames->waitForCompleteFrame());
+}
+
+void TstIrisSlideView::trackpadAndPinchZoomAboutTheFingers()
+{
+    showSample();
+    IrisSlideView *view = m_w->view;
+    const double dpr = m_w->dpr();
+    const QPointF p(300, 120);
+    const QPointF under = view->mapToSlide(p);
+
+    // Trackpad: pixel deltas zoom at once (2× per kPixelsPerDoubling pixels).
+    double ds = view->downsample();
+    QWheelEvent pixels(p, m_w->surface()->mapToGlobal(p), QPoint(0, 150), QPoint(0, 150), Qt::NoButton,
+                       Qt::NoModifier, Qt::ScrollUpdate, false);
+    QCoreApplication::sendEvent(m_w->surface(), &pixels);
+    const double afterPixels = ds / std::exp2(150 / IrisWidget::ViewNavigator::kPixelsPerDoubling);
+    QVERIFY(near(view->downsample(), afterPixels, 1e-9 * afterPixels));
+    QVERIFY(length(view->mapFromSlide(under) - p) * dpr <= 1.0);
+
+    // Pinch: value() is the scale change of this step.
+    ds = view->downsample();
+    QNativeGestureEvent pinch(Qt::ZoomNativeGesture, QPointingDevice::primaryPointingDevice(), 2, p, p,
+                              m_w->surface()->mapToGlobal(p), 0.25, QPointF());
+    QCoreApplication::sendEvent(m_w->surface(), &pinch);
+    QVERIFY(near(view->downsample(), ds / 1.25, 1e-9 * ds));
+    QVERIFY(length(view->mapFromSlide(under) - p) * dpr <= 1.0);
+}
+
+void TstIrisSlideView::doubleClickZoomsIn()
+{
+    showSample();
+    IrisSlideView *view = m_w->view;
+    const double dpr = m_w->dpr();
+    const double ds0 = view->downsample();
+    const QPoint p(200, 150);
+    const QPointF under = view->mapToSlide(p);
+    QTest::mouseDClick(m_w->surface(), Qt::LeftButton, {}, p);
+    QTRY_VERIFY(near(view->downsample(), ds0 / 2, 1e-9 * ds0));
+    QVERIFY(length(view->mapFromSlide(under) - QPointF(p)) * dpr <= 1.0);
+    QTest::mouseDClick(m_w->surface(), Qt::LeftButton, Qt::ShiftModifier, p);
+    QTRY_VERIFY(near(view->downsample(), ds0, 1e-9 * ds0));
+}
+
+// --- keys ----------------------------------------------------------------------------------
+
+void TstIrisSlideView::arrowKeysMoveOneField()
+{
+    showSample();
+    IrisSlideView *view = m_w->view;
+    view->setDownsample(1.5);
+    const QPointF c0 = view->centre();
+    const double ds = view->downsample();
+    const QSize field = view->targetSize();
+
+    // A click on the surface gives the view the keyboard, despite the window container: the
+    // platform then delivers keys to the focus window, which is the view's surface (Qt 6.4's
+    // QWindowContainer leaves QApplication::focusWidget() empty while an embedded window has
+    // focus) or, when a widget has focus, the top-level window.
+    QWidget elsewhere;
+    m_w->window->layout()->addWidget(&elsewhere);
+    elsewhere.setFocusPolicy(Qt::StrongFocus);
+    m_w->window->activateWindow();
+    QVERIFY(QTest::qWaitForWindowActive(m_w->window.get()));
+    elsewhere.setFocus();
+    QTRY_VERIFY(elsewhere.hasFocus());
+    QTest::mouseClick(m_w->surface(), Qt::LeftButton, {}, QPoint(20, 20));
+    QTRY_VERIFY(!elsewhere.hasFocus());
+    QTRY_VERIFY(QGuiApplication::focusWindow() == m_w->surface() || view->hasFocus());
+    QCOMPARE(view->centre(), c0); // a click without a drag does not move the view
+    QTest::keyClick(QGuiApplication::focusWindow(), Qt::Key_Right);
+    QCOMPARE(view->centre(), c0 + QPointF(field.width() * ds, 0)); // one whole field: no overlap
+    m_w->window->layout()->removeWidget(&elsewhere);
+    elsewhere.setParent(nullptr);
+    QTRY_COMPARE(view->targetSize(), field);
+
+    // Keys sent to the surface window directly …
+    QTest::keyClick(m_w->surface(), Qt::Key_Down);
+    QCOMPARE(view->centre(), c0 + QPointF(field.width() * ds, field.height() * ds));
+    QVERIFY(m_w->frames->waitForCompleteFrame());
+    // … and on the widget (focus on the view itself) do the same.
+    m_w->view->setFocus();
+    QTest::keyClick(view, Qt::Key_Left);
+    QCOMPARE(view->centre(), c0 + QPointF(0, field.height() * ds));
+    QTest::keyClick(view, Qt::Key_Up);
+    QCOMPARE(view->centre(), c0);
+}
+
+void TstIrisSlideView::plusMinusAndFitKeys()
+{
+    showSample();
+    IrisSlideView *view = m_w->view;
+    const double fitted = view->downsample();
+    const QPointF centre = view->centre();
+    QTest::keyClick(m_w->surface(), Qt::Key_Plus);
+    QTRY_VERIFY(near(view->downsample(), fitted / 2, 1e-9 * fitted));
+    QVERIFY(length(view->centre() - centre) < 1e-6 * fitted);
+    QTest::keyClick(m_w->surface(), Qt::Key_Plus);
+    QTRY_VERIFY(near(view->downsample(), fitted / 4, 1e-9 * fitted));
+    QTest::keyClick(m_w->surface(), Qt::Key_Minus);
+    QTRY_VERIFY(near(view->downsample(), fitted / 2, 1e-9 * fitted));
+    view->panBy(QPointF(40, 25));
+    QTest::keyClick(m_w->surface(), Qt::Key_0);
+    QCOMPARE(view->downsample(), fitted);
+    QCOMPARE(view->centre(), centre);
+    view->zoomBy(3);
+    view->panBy(QPointF(-70, 10));
+    QTest::keyClick(m_w->surface(), Qt::Key_Home);
+    QCOMPARE(view->downsample(), fitted);
+    QCOMPARE(view->centre(), centre);
+}
+
+void TstIrisSlideView::fitShowsWholeSlide()
+{
+    m_w->view->setBackgroundColor(QColor(40, 90, 160));
+    showSample();
+    IrisSlideView *view = m_w->view;
+    view->zoomBy(6);
+    view->panBy(QPointF(120, -60));
+    view->fitToWindow();
+    QVERIFY(m_w->frames->waitForCompleteFrame());
+
+    const IrisSlideInfo info = view->slideInfo();
+    const QPointF topLeft = view->mapFromSlide(QPointF(0, 0));
+    const QPointF bottomRight = view->mapFromSlide(QPointF(double(info.width), double(info.height)));
+    const QSizeF size = view->size();
+    QVERIFY2(topLeft.x() >= -0.5 && topLeft.y() >= -0.5, qPrintable(pointText(topLeft)));
+    QVERIFY2(bottomRight.x() <= size.width() + 0.5 && bottomRight.y() <= size.height() + 0.5,
+             qPrintable(pointText(bottomRight)));
+    // Whole and as large as fits: it touches both sides of one dimension.
+    const QSizeF shown(bottomRight.x() - topLeft.x(), bottomRight.y() - topLeft.y());
+    QVERIFY(shown.width() >= size.width() - 1 || shown.height() >= size.height() - 1);
+
+    // 6000 × 4000 in 480 × 360: bands above and below the slide show the background.
+    const QImage presented = grabPresented(view);
+    QCOMPARE(presented.size(), view->targetSize());
+    const QColor band = presented.pixelColor(presented.width() / 2, 1);
+    QVERIFY2(std::abs(band.red() - 40) <= 2 && std::abs(band.green() - 90) <= 2 && std::abs(band.blue() - 160) <= 2,
+             qPrintable(band.name()));
+    checkPresentedMatchesHeadless(view, m_sample, QStringLiteral("fitShowsWholeSlide"));
+}
+
+void TstIrisSlideView::magnificationPresets()
+{
+    showSample();
+    IrisSlideView *view = m_w->view;
+    if (view->objectivePower() <= 0) {
+        // The slide states neither objective nor resolution: presets do nothing.
+        const double ds = view->downsample();
+        QCOMPARE(view->magnification(), 0.0);
+        QTest::keyClick(m_w->surface(), Qt::Key_3);
+        QCOMPARE(view->downsample(), ds);
+    }
+
+    const QString svs = testDataSlide(QStringLiteral("aperio/CMU-1-Small-Region.svs"));
+    if (svs.isEmpty())
+        QSKIP("needs the shared test data (aperio/CMU-1-Small-Region.svs states 20× and 0.499 µm/px)");
+    QVERIFY(view->openSlide(svs));
+    QVERIFY(view->objectivePower() > 0);
+    const double presets[] = {5, 10, 20, 40};
+    for (int i = 0; i < 4; ++i) {
+        QTest::keyClick(m_w->surface(), Qt::Key(Qt::Key_1 + i));
+        QVERIFY2(near(view->magnification(), presets[i], 1e-9 * presets[i]),
+                 qPrintable(QString::number(view->magnification())));
+        QCOMPARE(view->downsample(), view->objectivePower() * view->slideInfo().levels.first().downsample / presets[i]);
+    }
+    view->setMagnification(2.5);
+    QVERIFY(near(view->magnification(), 2.5, 1e-9));
+    QVERIFY(m_w->frames->waitForCompleteFrame());
+}
+
+// --- window life ---------------------------------------------------------------------------
+
+void TstIrisSlideView::resizeKeepsCentreAndMagnification()
+{
+    showSample();
+    IrisSlideView *view = m_w->view;
+    view->setCentre(QPointF(3100, 1900));
+    view->setDownsample(2.5);
+    const QPointF centre = view->centre();
+    const double ds = view->downsample();
+    const double magnification = view->magnification();
+
+    for (const QSize size : {QSize(640, 300), QSize(300, 420), kViewSize}) {
+        m_w->window->resize(size);
+        const QSize target = size * m_w->dpr();
+        QTRY_COMPARE(view->targetSize(), target);
+        QCOMPARE(view->centre(), centre);
+        QCOMPARE(view->downsample(), ds);
+        QCOMPARE(view->magnification(), magnification);
+        QVERIFY(m_w->frames->waitForCompleteFrame());
+        QTRY_COMPARE(grabPresented(view).size(), target);
+    }
+    checkPresentedMatchesHeadless(view, m_sample, QStringLiteral("resize"));
+}
+
+void TstIrisSlideView::hiddenViewRendersNothing()
+{
+    showSample();
+    IrisSlideView *view = m_w->view;
+    m_w->window->hide();
+    QTRY_VERIFY(!m_w->surface()->isExposed());
+    QTest::qWait(100);
+    const int before = m_w->frames->frames();
+    view->panBy(QPointF(50, 0));
+    view->zoomBy(1.5);
+    QTest::qWait(400);
+    QCOMPARE(m_w->frames->frames(), before);
+
+    m_w->window->show();
+    QVERIFY(QTest::qWaitForWindowExposed(m_w->window.get()));
+    QVERIFY(m_w->frames->waitForCompleteFrame());
+    QVERIFY(m_w->frames->frames() > before);
+    checkPresentedMatchesHeadless(view, m_sample, QStringLiteral("hideShow"));
+}
+
+void TstIrisSlideView::reparentingRebindsTheSurface()
+{
+    showSample();
+    IrisSlideView *view = m_w->view;
+    view->setDownsample(4);
+    const QPointF centre = view->centre();
+    // Into another top-level window: Qt may destroy and recreate the native surface; the
+    // view releases the swapchain first and binds the new surface when it is exposed.
+    QWidget other;
+    auto *layout = new QHBoxLayout(&other);
+    layout->setContentsMargins(0, 0, 0, 0);
+    other.resize(kViewSize);
+    layout->addWidget(view);
+    other.show();
+    QVERIFY(QTest::qWaitForWindowExposed(&other));
+    QTRY_VERIFY(view->surfaceWindow()->isExposed());
+    QCOMPARE(view->centre(), centre);
+    QVERIFY(m_w->frames->waitForCompleteFrame());
+    checkPresentedMatchesHeadless(view, m_sample, QStringLiteral("reparented"));
+    // And back, so that the fixture owns it again.
+    m_w->window->layout()->addWidget(view);
+    QVERIFY(m_w->frames->waitForCompleteFrame());
+    finishView(*m_w);
+}
+
+// --- API -----------------------------------------------------------------------------------
+
+void TstIrisSlideView::openErrorsLeaveTheViewUsable()
+{
+    showSample();
+    IrisSlideView *view = m_w->view;
+    QSignalSpy errors(view, &IrisSlideView::slideError);
+    QSignalSpy closed(view, &IrisSlideView::slideClosed);
+
+    QVERIFY(!view->openSlide(QStringLiteral("/nonexistent/iris/missing.svs")));
+    QCOMPARE(errors.count(), 1);
+    QVERIFY(!errors.first().first().toString().isEmpty());
+    QCOMPARE(closed.count(), 1);
+    QVERIFY(!view->hasSlide());
+    QVERIFY(view->slidePath().isEmpty());
+    QCOMPARE(view->magnification(), 0.0);
+    // Input without a slide is harmless.
+    QTest::keyClick(m_w->surface(), Qt::Key_Right);
+    QTest::mouseDClick(m_w->surface(), Qt::LeftButton, {}, QPoint(50, 50));
+
+    const QString bad = testDataSlide(QStringLiteral("bad"));
+    if (!bad.isEmpty()) {
+        for (const QFileInfo &file : QDir(bad).entryInfoList(QDir::Files)) {
+            errors.clear();
+            const bool opened = view->openSlide(file.absoluteFilePath());
+            QVERIFY2(opened || errors.count() == 1, qPrintable(file.fileName()));
+            QTest::qWait(50); // let any tiles of a half-readable file try to load
+        }
+    }
+
+    errors.clear();
+    QVERIFY(view->openSlide(m_sample));
+    QVERIFY(m_w->frames->waitForCompleteFrame());
+    QCOMPARE(errors.count(), 0);
+}
+
+void TstIrisSlideView::propertiesAndSignals()
+{
+    IrisSlideView *view = m_w->view;
+    QSignalSpy opened(view, &IrisSlideView::slideOpened);
+    QSignalSpy pathChanged(view, &IrisSlideView::slidePathChanged);
+    QSignalSpy viewChanged(view, &IrisSlideView::viewChanged);
+    QSignalSpy presented(view, &IrisSlideView::framePresented);
+    showSample();
+
+    QCOMPARE(opened.count(), 1);
+    const auto info = opened.first().first().value<IrisSlideInfo>();
+    QCOMPARE(info.path, m_sample);
+    QCOMPARE(info.vendor, QStringLiteral("generic-tiff"));
+    QCOMPARE(info.width, qint64(6000));
+    QCOMPARE(info.height, qint64(4000));
+    QVERIFY(info.levels.size() >= 2);
+    QCOMPARE(info.levels.first().downsample, 1.0);
+    QVERIFY(!info.properties.isEmpty());
+    QCOMPARE(view->slideInfo().width, info.width);
+    QCOMPARE(pathChanged.count(), 1);
+    QCOMPARE(view->slidePath(), m_sample);
+    QVERIFY(viewChanged.count() >= 1);
+
+    QVERIFY(presented.count() >= 1);
+    const auto metrics = presented.last().first().value<IrisFrameMetrics>();
+    QVERIFY(metrics.serial > 0);
+    QVERIFY(metrics.cpuMs >= 0);
+    QVERIFY(metrics.tilesDrawn > 0);
+
+    // Through the meta-object, as Designer and QML see them.
+    viewChanged.clear();
+    QVERIFY(view->setProperty("centre", QPointF(1000, 1200)));
+    QCOMPARE(view->property("centre").toPointF(), QPointF(1000, 1200));
+    QCOMPARE(viewChanged.count(), 1);
+    QVERIFY(view->setProperty("downsample", 2.0));
+    QCOMPARE(view->property("downsample").toDouble(), 2.0);
+    QSignalSpy enhance(view, &IrisSlideView::enhanceChanged);
+    QVERIFY(view->setProperty("enhance", false));
+    QCOMPARE(enhance.count(), 1);
+    QVERIFY(!view->enhance());
+    QSignalSpy background(view, &IrisSlideView::backgroundColorChanged);
+    QVERIFY(view->setProperty("backgroundColor", QColor(Qt::black)));
+    QCOMPARE(background.count(), 1);
+
+    // Budgets take effect with the next engine, made when the next slide opens.
+    QVERIFY(view->setProperty("ramBudgetMB", 256));
+    QVERIFY(view->setProperty("vramBudgetMB", 128));
+    QCOMPARE(view->ramBudgetMB(), 256);
+    QCOMPARE(view->vramBudgetMB(), 128);
+    QVERIFY(view->openSlide(m_sample));
+    QCOMPARE(IrisWidget::EngineHost::liveEngineCount(), m_baselineEngines + 1);
+    QVERIFY(m_w->frames->waitForCompleteFrame());
+    QVERIFY(!view->enhance());
+    QCOMPARE(view->backgroundColor(), QColor(Qt::black));
+
+    QSignalSpy closed(view, &IrisSlideView::slideClosed);
+    pathChanged.clear();
+    view->setProperty("slidePath", QString());
+    QCOMPARE(closed.count(), 1);
+    QCOMPARE(pathChanged.count(), 1);
+    QVERIFY(!view->hasSlide());
+    QVERIFY(view->setProperty("slidePath", m_sample));
+    QVERIFY(view->hasSlide());
+}
+
+void TstIrisSlideView::twoViewsOnTwoSlides()
+{
+    const QString second = secondSampleSlide();
+    QVERIFY2(QFileInfo::exists(second), qPrintable(second));
+    QWidget window;
+    auto *layout = new QHBoxLayout(&window);
+    layout->setContentsMargins(0, 0, 0, 0);
+    layout->setSpacing(0);
+    auto *a = new IrisSlideView;
+    auto *b = new IrisSlideView;
+    layout->addWidget(a);
+    layout->addWidget(b);
+    window.resize(640, 280);
+    FrameWatcher framesA(a);
+    FrameWatcher framesB(b);
+    window.show();
+    QVERIFY(QTest::qWaitForWindowExposed(&window));
+    QVERIFY(a->openSlide(m_sample));
+    QVERIFY(b->openSlide(second));
+    QCOMPARE(IrisWidget::EngineHost::liveEngineCount(), m_baselineEngines + 2);
+    QVERIFY(framesA.waitForCompleteFrame());
+    QVERIFY(framesB.waitForCompleteFrame());
+    QCOMPARE(b->slideInfo().width, qint64(3000));
+
+    const QPointF centreB = b->centre();
+    const double downsampleB = b->downsample();
+    a->zoomBy(2);
+    a->panBy(QPointF(30, 20));
+    QCOMPARE(b->centre(), centreB);
+    QCOMPARE(b->downsample(), downsampleB);
+    QVERIFY(framesA.waitForCompleteFrame());
+    checkPresentedMatchesHeadless(a, m_sample, QStringLiteral("twoViews-a"));
+    checkPresentedMatchesHeadless(b, second, QStringLiteral("twoViews-b"));
+    QCOMPARE(a->validationMessageCount(), quint64(0));
+    QCOMPARE(b->validationMessageCount(), quint64(0));
+}
+
+void TstIrisSlideView::closingWhileTilesLoad()
+{
+    m_w.reset();
+    // Deleted at various moments after opening, zoomed far in (many tiles to load) and mid-zoom.
+    for (const int delayMs : {0, 1, 5, 20, 60, 150}) {
+        auto w = std::make_unique<ViewWindow>();
+        w->window->show();
+        QVERIFY(QTest::qWaitForWindowExposed(w->window.get()));
+        QVERIFY(w->view->openSlide(m_sample));
+        w->view->setDownsample(0.5);
+        w->view->panBy(QPointF(-300, -200));
+        const QPointF p(240, 180);
+        QWheelEvent wheel(p, w->surface()->mapToGlobal(p), QPoint(), QPoint(0, 360), Qt::NoButton,
+                          Qt::NoModifier, Qt::NoScrollPhase, false);
+        QCoreApplication::sendEvent(w->surface(), &wheel);
+        if (delayMs > 0)
+            QTest::qWait(delayMs);
+        QCOMPARE(w->view->validationMessageCount(), quint64(0));
+        w.reset();
+        QCOMPARE(IrisWidget::EngineHost::liveEngineCount(), m_baselineEngines);
+    }
+    // The view's own widget deleted directly while its window stays.
+    ViewWindow w;
+    w.window->show();
+    QVERIFY(QTest::qWaitForWindowExposed(w.window.get()));
+    QVERIFY(w.view->openSlide(m_sample));
+    w.view->setDownsample(0.75);
+    w.frames.reset();
+    delete w.view;
+    QCOMPARE(IrisWidget::EngineHost::liveEngineCount(), m_baselineEngines);
+    QTest::qWait(50); // no queued frame reaches the deleted view
+}
+
+IRIS_WIDGET_TEST_MAIN(TstIrisSlideView)
+#include "tst_irisslideview.moc"

@@ -1,0 +1,136 @@
+// Iris View widget — IrisSlideView, a whole-slide image view to drop into any Qt form.
+//
+// The view hosts a Vulkan surface (a QWindow inside a window container) into which the
+// Iris engine renders and presents from its own render thread; the GUI thread only
+// publishes view changes and never waits for tiles. Coordinates:
+//   * widget positions and panBy() deltas are in logical (device-independent) pixels;
+//   * centre() and mapToSlide() are in level-0 pixels of the slide;
+//   * downsample() is level-0 pixels per *device* pixel, and magnification() is the
+//     objective magnification at which one slide pixel would meet one device pixel
+//     (objectivePower × level-0 downsample / downsample).
+#pragma once
+
+#include <QtCore/QPointF>
+#include <QtCore/QScopedPointer>
+#include <QtCore/QString>
+#include <QtGui/QColor>
+#include <QtGui/QImage>
+#include <QtWidgets/QWidget>
+
+#include "iris/IrisFrameMetrics.h"
+#include "iris/IrisSlideInfo.h"
+#include "iris/IrisWidgetGlobal.h"
+
+QT_BEGIN_NAMESPACE
+class QWindow;
+QT_END_NAMESPACE
+
+class IrisSlideViewPrivate;
+
+class IRIS_WIDGET_EXPORT IrisSlideView : public QWidget {
+    Q_OBJECT
+    Q_PROPERTY(QString slidePath READ slidePath WRITE setSlidePath RESET closeSlide NOTIFY slidePathChanged)
+    Q_PROPERTY(double magnification READ magnification WRITE setMagnification NOTIFY viewChanged STORED false)
+    Q_PROPERTY(QPointF centre READ centre WRITE setCentre NOTIFY viewChanged STORED false)
+    Q_PROPERTY(double downsample READ downsample WRITE setDownsample NOTIFY viewChanged STORED false)
+    Q_PROPERTY(QColor backgroundColor READ backgroundColor WRITE setBackgroundColor NOTIFY backgroundColorChanged)
+    Q_PROPERTY(bool enhance READ enhance WRITE setEnhance NOTIFY enhanceChanged)
+    Q_PROPERTY(bool kineticPanning READ kineticPanning WRITE setKineticPanning)
+    Q_PROPERTY(int ramBudgetMB READ ramBudgetMB WRITE setRamBudgetMB)
+    Q_PROPERTY(int vramBudgetMB READ vramBudgetMB WRITE setVramBudgetMB)
+    Q_PROPERTY(double objectivePower READ objectivePower NOTIFY slidePathChanged STORED false)
+
+public:
+    explicit IrisSlideView(QWidget *parent = nullptr);
+    ~IrisSlideView() override;
+
+    // --- slide ---------------------------------------------------------------------
+    QString slidePath() const;        // empty when no slide is open
+    bool hasSlide() const;
+    IrisSlideInfo slideInfo() const;  // invalid when no slide is open
+    // The stated objective power, or one estimated from mpp (10 µm / mpp); 0 when the
+    // slide says neither, in which case magnification() is 0 and presets are disabled.
+    double objectivePower() const;
+    // An associated image ("label", "macro", "thumbnail", …) of the open slide; a null
+    // QImage when there is none (the reason is logged). Reads the file on the calling thread.
+    QImage associatedImage(const QString &name) const;
+
+    // --- view ----------------------------------------------------------------------
+    double magnification() const;
+    QPointF centre() const;
+    double downsample() const;
+    // Level-0 slide position under a widget position (logical pixels), and back.
+    QPointF mapToSlide(const QPointF &widgetPos) const;
+    QPointF mapFromSlide(const QPointF &slidePos) const;
+    // The render target's size in device pixels (the widget's size × devicePixelRatio).
+    QSize targetSize() const;
+
+    // --- appearance and resources ----------------------------------------------------
+    QColor backgroundColor() const;
+    void setBackgroundColor(const QColor &color);
+    bool enhance() const;
+    void setEnhance(bool on);
+    bool kineticPanning() const;
+    void setKineticPanning(bool on);
+    // RAM and VRAM budgets in MiB; they take effect when the engine is next created
+    // (the first slide opened or shown after a change).
+    int ramBudgetMB() const;
+    void setRamBudgetMB(int mb);
+    int vramBudgetMB() const;
+    void setVramBudgetMB(int mb);
+
+    // --- state ---------------------------------------------------------------------
+    // False when Vulkan could not be started; the widget then shows why in its place.
+    bool isRendererAvailable() const;
+    QString rendererError() const;
+    QString deviceName() const;
+    // Messages the Vulkan validation layers reported (IRIS_VALIDATION=1 enables them).
+    quint64 validationMessageCount() const;
+    // The Vulkan surface window inside the widget's window container (for screenshots and
+    // event synthesis); null when Vulkan is unavailable.
+    QWindow *surfaceWindow() const;
+
+    QSize sizeHint() const override;
+    QSize minimumSizeHint() const override;
+
+public Q_SLOTS:
+    // Opens a slide (the file's header is read now, tiles later on engine threads) and fits
+    // it into the view. Returns false and emits slideError() when it cannot be opened.
+    bool openSlide(const QString &path);
+    void setSlidePath(const QString &path);
+    void closeSlide();
+    void fitToWindow();
+    void setMagnification(double magnification);
+    void setCentre(const QPointF &slidePos);
+    void setDownsample(double downsample);
+    // Moves the image by delta logical pixels, as a drag of that length would.
+    void panBy(const QPointF &delta);
+    // Multiplies the magnification by factor (>1 zooms in) about the view's centre.
+    void zoomBy(double factor);
+
+Q_SIGNALS:
+    void slideOpened(const IrisSlideInfo &info);
+    void slideClosed();
+    void slideError(const QString &message);
+    void slidePathChanged(const QString &path);
+    void viewChanged();
+    void framePresented(const IrisFrameMetrics &metrics);
+    // The pointer moved over the view; slidePos is in level-0 pixels.
+    void cursorMoved(const QPointF &slidePos);
+    void backgroundColorChanged(const QColor &color);
+    void enhanceChanged(bool on);
+
+protected:
+    bool event(QEvent *event) override;
+    void mousePressEvent(QMouseEvent *event) override;
+    void mouseMoveEvent(QMouseEvent *event) override;
+    void mouseReleaseEvent(QMouseEvent *event) override;
+    void mouseDoubleClickEvent(QMouseEvent *event) override;
+    void wheelEvent(QWheelEvent *event) override;
+    void keyPressEvent(QKeyEvent *event) override;
+
+private:
+    Q_DECLARE_PRIVATE(IrisSlideView)
+    Q_DISABLE_COPY_MOVE(IrisSlideView)
+    QScopedPointer<IrisSlideViewPrivate> d_ptr;
+};

@@ -1,0 +1,152 @@
+#include "enginehost_p.h"
+
+#include <atomic>
+#include <mutex>
+
+#include <QtGui/QColor>
+#include <QtGui/QVulkanInstance>
+#include <QtGui/QWindow>
+
+#include "logging_p.h"
+
+namespace IrisWidget {
+
+namespace {
+
+constexpr int kMaxPendingFrames = 4;
+std::atomic<int> g_liveEngines{0};
+
+QString fromStd(const std::string &s)
+{
+    return QString::fromUtf8(s.data(), qsizetype(s.size()));
+}
+
+} // namespace
+
+std::array<float, 3> toEngineRgb(const QColor &color)
+{
+    const QColor rgb = color.toRgb();
+    return {rgb.redF(), rgb.greenF(), rgb.blueF()};
+}
+
+// Shared by the host (GUI thread) and the engine's frame callback (render thread).
+struct EngineHost::Relay {
+    std::mutex mutex;
+    EngineHost *host = nullptr; // guarded by mutex; null once the host is going away
+    // Frames posted but not yet delivered. Only bounds the queue, orders nothing else, so
+    // relaxed: the render thread's fetch_add pairs with the GUI thread's fetch_sub.
+    std::atomic<int> pending{0};
+};
+
+EngineHost::EngineHost(QObject *parent)
+    : QObject(parent)
+    , m_relay(std::make_shared<Relay>())
+{
+    m_relay->host = this;
+}
+
+EngineHost::~EngineHost()
+{
+    {
+        std::lock_guard lock(m_relay->mutex);
+        m_relay->host = nullptr;
+    }
+    destroy();
+}
+
+bool EngineHost::create(QVulkanInstance *vulkan, const EngineSettings &settings, QString *error)
+{
+    destroy();
+    iris::EngineConfig config;
+    config.ramBudgetBytes = settings.ramBudgetBytes;
+    config.vramBudgetBytes = settings.vramBudgetBytes;
+    config.validation = settings.validation;
+    config.background = settings.background;
+    config.instance = vulkan->vkInstance();
+    config.log = &logEngineMessage;
+
+    auto created = iris::Engine::create(config);
+    if (!created) {
+        *error = fromStd(created.error().message());
+        qCWarning(lcIrisWidget).noquote() << "cannot create the engine:" << *error;
+        return false;
+    }
+    m_engine = std::move(created).value();
+    m_vulkan = vulkan;
+    m_settings = settings;
+    m_engine->setEnhance(settings.enhance);
+    g_liveEngines.fetch_add(1, std::memory_order_relaxed); // a counter for tests; orders nothing
+
+    std::weak_ptr<Relay> weakRelay = m_relay;
+    m_engine->setFrameCallback([weakRelay](const iris::FrameStats &stats) {
+        const std::shared_ptr<Relay> relay = weakRelay.lock();
+        if (!relay)
+            return;
+        std::lock_guard lock(relay->mutex);
+        if (!relay->host)
+            return;
+        if (relay->pending.fetch_add(1, std::memory_order_relaxed) >= kMaxPendingFrames) {
+            relay->pending.fetch_sub(1, std::memory_order_relaxed);
+            return;
+        }
+        EngineHost *host = relay->host;
+        // The queued call belongs to host: if host is deleted first, Qt discards it.
+        QMetaObject::invokeMethod(host, [host, relay, stats] {
+            relay->pending.fetch_sub(1, std::memory_order_relaxed);
+            Q_EMIT host->frameRendered(stats);
+        }, Qt::QueuedConnection);
+    });
+
+    const iris::DeviceInfo device = m_engine->device();
+    qCInfo(lcIrisWidget).noquote() << "engine ready on" << fromStd(device.name) << "with"
+                                   << device.atlasSlots << "tile slots";
+    return true;
+}
+
+void EngineHost::destroy()
+{
+    if (!m_engine)
+        return;
+    unbindSurface();
+    m_engine->setFrameCallback({});
+    m_engine.reset(); // joins the engine's threads: no callback runs after this
+    m_vulkan = nullptr;
+    g_liveEngines.fetch_sub(1, std::memory_order_relaxed);
+}
+
+bool EngineHost::bindSurface(QWindow *window, QSize deviceSize, QString *error)
+{
+    if (!m_engine || m_bound)
+        return m_bound;
+    const VkSurfaceKHR surface = QVulkanInstance::surfaceForWindow(window);
+    if (surface == VK_NULL_HANDLE) {
+        *error = QStringLiteral("The window has no Vulkan surface.");
+        return false;
+    }
+    const iris::Result bound = m_engine->bindSurface(m_vulkan->vkInstance(), surface,
+                                                     uint32_t(deviceSize.width()), uint32_t(deviceSize.height()));
+    if (!bound) {
+        *error = fromStd(bound.message());
+        qCWarning(lcIrisWidget).noquote() << "cannot bind the surface:" << *error;
+        return false;
+    }
+    qCDebug(lcIrisWidget) << "surface bound at" << deviceSize << "device pixels";
+    m_bound = true;
+    return true;
+}
+
+void EngineHost::unbindSurface()
+{
+    if (!m_engine || !m_bound)
+        return;
+    m_engine->unbindSurface();
+    m_bound = false;
+    qCDebug(lcIrisWidget) << "surface released";
+}
+
+int EngineHost::liveEngineCount()
+{
+    return g_liveEngines.load(std::memory_order_relaxed);
+}
+
+} // namespace IrisWidget

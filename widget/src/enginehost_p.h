@@ -1,0 +1,78 @@
+// Iris View widget — not API. Owns one iris::Engine for a widget and carries its
+// render-thread callbacks over to the GUI thread.
+//
+// Lifecycle (GUI thread): create() → bindSurface() … unbindSurface() → destroy(). The
+// engine's frame callback runs on the engine's render thread; it only posts a queued call
+// to this object, through a relay that the destructor disconnects under a lock, so nothing
+// reaches a destroyed host. Posting is bounded: when the GUI thread falls more than a few
+// frames behind, the extra frames' figures are dropped rather than queued.
+#pragma once
+
+#include <array>
+#include <memory>
+
+#include <QtCore/QObject>
+#include <QtCore/QSize>
+#include <QtCore/QString>
+
+#include <iris/engine.h>
+
+#include "autotest_p.h"
+
+QT_BEGIN_NAMESPACE
+class QColor;
+class QVulkanInstance;
+class QWindow;
+QT_END_NAMESPACE
+
+namespace IrisWidget {
+
+struct EngineSettings {
+    quint64 ramBudgetBytes = 1ull << 30;
+    quint64 vramBudgetBytes = 512ull << 20;
+    bool validation = false;
+    std::array<float, 3> background{0.96f, 0.96f, 0.96f};
+    bool enhance = true;
+};
+
+// A QColor as the engine's background components. The engine's targets are UNORM (bytes
+// in, bytes out, no sRGB encode on write), so QColor's display-encoded components are
+// passed through as they are.
+std::array<float, 3> toEngineRgb(const QColor &color);
+
+class IRIS_WIDGET_AUTOTEST_EXPORT EngineHost : public QObject {
+    Q_OBJECT
+public:
+    explicit EngineHost(QObject *parent = nullptr);
+    ~EngineHost() override;
+
+    // Creates the engine on vulkan's VkInstance. On failure returns false and sets *error.
+    bool create(QVulkanInstance *vulkan, const EngineSettings &settings, QString *error);
+    // Releases the swapchain if bound, then destroys the engine (joining its threads).
+    void destroy();
+    iris::Engine *engine() const { return m_engine.get(); }
+    const EngineSettings &settings() const { return m_settings; }
+
+    // Makes the engine present into window's surface at deviceSize.
+    bool bindSurface(QWindow *window, QSize deviceSize, QString *error);
+    // Waits until the render thread has released the swapchain; the surface may die next.
+    void unbindSurface();
+    bool isBound() const { return m_bound; }
+
+    // Engines alive in this process (tests check that closing widgets frees them).
+    static int liveEngineCount();
+
+Q_SIGNALS:
+    // A frame was rendered and presented (delivered on the GUI thread).
+    void frameRendered(const iris::FrameStats &stats);
+
+private:
+    struct Relay;
+    std::shared_ptr<Relay> m_relay;
+    QVulkanInstance *m_vulkan = nullptr;
+    std::unique_ptr<iris::Engine> m_engine;
+    EngineSettings m_settings;
+    bool m_bound = false;
+};
+
+} // namespace IrisWidget

@@ -1,0 +1,426 @@
+#include "iris/IrisSlideView.h"
+
+#include <cstring>
+
+#include <QtGui/QKeyEvent>
+#include <QtGui/QMouseEvent>
+#include <QtGui/QWheelEvent>
+
+#include "irisslideview_p.h"
+#include "logging_p.h"
+#include "magnification_p.h"
+
+using namespace IrisWidget;
+
+namespace {
+constexpr quint64 kMiB = 1024 * 1024;
+}
+
+IrisSlideView::IrisSlideView(QWidget *parent)
+    : QWidget(parent)
+    , d_ptr(new IrisSlideViewPrivate(this))
+{
+    Q_D(IrisSlideView);
+    d->init();
+}
+
+IrisSlideView::~IrisSlideView()
+{
+    Q_D(IrisSlideView);
+    d->teardown();
+}
+
+// --- slide -----------------------------------------------------------------------------
+
+QString IrisSlideView::slidePath() const
+{
+    Q_D(const IrisSlideView);
+    return d->path;
+}
+
+bool IrisSlideView::hasSlide() const
+{
+    Q_D(const IrisSlideView);
+    return d->slide.has_value();
+}
+
+IrisSlideInfo IrisSlideView::slideInfo() const
+{
+    Q_D(const IrisSlideView);
+    return d->info;
+}
+
+double IrisSlideView::objectivePower() const
+{
+    Q_D(const IrisSlideView);
+    return d->slide ? effectiveObjective(*d->slide) : 0;
+}
+
+QImage IrisSlideView::associatedImage(const QString &name) const
+{
+    Q_D(const IrisSlideView);
+    if (!d->engine() || !d->slide)
+        return {};
+    auto image = d->engine()->readAssociatedImage(name.toStdString());
+    if (!image) {
+        qCWarning(lcIrisWidget).noquote() << "cannot read the associated image" << name << ":"
+                                          << QString::fromStdString(image.error().message());
+        return {};
+    }
+    const iris::Image &rgba = *image;
+    QImage out(int(rgba.width), int(rgba.height), QImage::Format_RGBA8888);
+    if (out.isNull() || rgba.rgba.size() < size_t(rgba.width) * rgba.height * 4)
+        return {};
+    for (int y = 0; y < out.height(); ++y)
+        memcpy(out.scanLine(y), rgba.rgba.data() + size_t(y) * rgba.width * 4, size_t(rgba.width) * 4);
+    return out;
+}
+
+bool IrisSlideView::openSlide(const QString &path)
+{
+    Q_D(IrisSlideView);
+    return d->open(path);
+}
+
+void IrisSlideView::setSlidePath(const QString &path)
+{
+    Q_D(IrisSlideView);
+    if (path != d->path)
+        d->open(path);
+}
+
+void IrisSlideView::closeSlide()
+{
+    Q_D(IrisSlideView);
+    d->navigator.stopMotion();
+    if (!d->slide)
+        return;
+    if (d->engine())
+        d->engine()->close();
+    d->forgetSlide();
+    Q_EMIT slidePathChanged(QString());
+    Q_EMIT slideClosed();
+    d->notifyViewChanged();
+}
+
+// --- view ------------------------------------------------------------------------------
+
+double IrisSlideView::magnification() const
+{
+    Q_D(const IrisSlideView);
+    if (!d->engine() || !d->slide)
+        return 0;
+    return magnificationFor(*d->slide, d->engine()->view().downsample);
+}
+
+void IrisSlideView::setMagnification(double magnification)
+{
+    Q_D(IrisSlideView);
+    if (!d->engine() || !d->slide)
+        return;
+    const double downsample = downsampleFor(*d->slide, magnification);
+    if (downsample <= 0) {
+        qCInfo(lcIrisWidget) << "magnification" << magnification
+                             << "is not available: the slide states neither objective power nor mpp";
+        return;
+    }
+    d->navigator.stopMotion();
+    iris::View view = d->engine()->view();
+    view.downsample = downsample;
+    d->setView(view);
+}
+
+QPointF IrisSlideView::centre() const
+{
+    Q_D(const IrisSlideView);
+    if (!d->engine() || !d->slide)
+        return {};
+    const iris::View view = d->engine()->view();
+    return {view.centerX, view.centerY};
+}
+
+void IrisSlideView::setCentre(const QPointF &slidePos)
+{
+    Q_D(IrisSlideView);
+    if (!d->engine() || !d->slide)
+        return;
+    d->navigator.stopMotion();
+    iris::View view = d->engine()->view();
+    view.centerX = slidePos.x();
+    view.centerY = slidePos.y();
+    d->setView(view);
+}
+
+double IrisSlideView::downsample() const
+{
+    Q_D(const IrisSlideView);
+    if (!d->engine() || !d->slide)
+        return 0;
+    return d->engine()->view().downsample;
+}
+
+void IrisSlideView::setDownsample(double downsample)
+{
+    Q_D(IrisSlideView);
+    if (!d->engine() || !d->slide)
+        return;
+    d->navigator.stopMotion();
+    iris::View view = d->engine()->view();
+    view.downsample = downsample;
+    d->setView(view);
+}
+
+QPointF IrisSlideView::mapToSlide(const QPointF &widgetPos) const
+{
+    Q_D(const IrisSlideView);
+    if (!d->engine() || !d->slide)
+        return {};
+    const iris::View view = d->engine()->view();
+    const auto [width, height] = d->engine()->targetSize();
+    const QPointF t = d->toTarget(widgetPos);
+    return {view.centerX + (t.x() - width / 2.0) * view.downsample,
+            view.centerY + (t.y() - height / 2.0) * view.downsample};
+}
+
+QPointF IrisSlideView::mapFromSlide(const QPointF &slidePos) const
+{
+    Q_D(const IrisSlideView);
+    if (!d->engine() || !d->slide)
+        return {};
+    const iris::View view = d->engine()->view();
+    const auto [width, height] = d->engine()->targetSize();
+    const QPointF t((slidePos.x() - view.centerX) / view.downsample + width / 2.0,
+                    (slidePos.y() - view.centerY) / view.downsample + height / 2.0);
+    return d->fromTarget(t);
+}
+
+QSize IrisSlideView::targetSize() const
+{
+    Q_D(const IrisSlideView);
+    if (d->engine()) {
+        const auto [width, height] = d->engine()->targetSize();
+        if (width > 0 && height > 0)
+            return QSize(int(width), int(height));
+    }
+    return d->window ? d->window->targetSize() : size() * devicePixelRatioF();
+}
+
+void IrisSlideView::fitToWindow()
+{
+    Q_D(IrisSlideView);
+    d->navigator.stopMotion();
+    if (!d->engine() || !d->slide)
+        return;
+    if (!d->host.isBound()) {
+        d->fitPending = true;
+        return;
+    }
+    d->engine()->setView(d->engine()->fitView());
+    d->notifyViewChanged();
+}
+
+void IrisSlideView::panBy(const QPointF &delta)
+{
+    Q_D(IrisSlideView);
+    d->navigator.stopMotion();
+    d->pan(delta);
+}
+
+void IrisSlideView::zoomBy(double factor)
+{
+    Q_D(IrisSlideView);
+    d->navigator.stopMotion();
+    d->zoom(factor, d->viewportCentre());
+}
+
+// --- appearance and resources ----------------------------------------------------------
+
+QColor IrisSlideView::backgroundColor() const
+{
+    Q_D(const IrisSlideView);
+    return d->background;
+}
+
+void IrisSlideView::setBackgroundColor(const QColor &color)
+{
+    Q_D(IrisSlideView);
+    if (!color.isValid() || color == d->background)
+        return;
+    d->background = color;
+    d->settings.background = toEngineRgb(color);
+    if (d->engine()) {
+        const auto &[r, g, b] = d->settings.background;
+        d->engine()->setBackground(r, g, b);
+    }
+    Q_EMIT backgroundColorChanged(color);
+}
+
+bool IrisSlideView::enhance() const
+{
+    Q_D(const IrisSlideView);
+    return d->settings.enhance;
+}
+
+void IrisSlideView::setEnhance(bool on)
+{
+    Q_D(IrisSlideView);
+    if (on == d->settings.enhance)
+        return;
+    d->settings.enhance = on;
+    if (d->engine())
+        d->engine()->setEnhance(on);
+    Q_EMIT enhanceChanged(on);
+}
+
+bool IrisSlideView::kineticPanning() const
+{
+    Q_D(const IrisSlideView);
+    return d->navigator.kineticEnabled();
+}
+
+void IrisSlideView::setKineticPanning(bool on)
+{
+    Q_D(IrisSlideView);
+    d->navigator.setKineticEnabled(on);
+}
+
+int IrisSlideView::ramBudgetMB() const
+{
+    Q_D(const IrisSlideView);
+    return int(d->settings.ramBudgetBytes / kMiB);
+}
+
+void IrisSlideView::setRamBudgetMB(int mb)
+{
+    Q_D(IrisSlideView);
+    if (mb > 0)
+        d->settings.ramBudgetBytes = quint64(mb) * kMiB;
+}
+
+int IrisSlideView::vramBudgetMB() const
+{
+    Q_D(const IrisSlideView);
+    return int(d->settings.vramBudgetBytes / kMiB);
+}
+
+void IrisSlideView::setVramBudgetMB(int mb)
+{
+    Q_D(IrisSlideView);
+    if (mb > 0)
+        d->settings.vramBudgetBytes = quint64(mb) * kMiB;
+}
+
+// --- state -----------------------------------------------------------------------------
+
+bool IrisSlideView::isRendererAvailable() const
+{
+    Q_D(const IrisSlideView);
+    return d->vulkan && d->rendererError.isEmpty();
+}
+
+QString IrisSlideView::rendererError() const
+{
+    Q_D(const IrisSlideView);
+    return d->rendererError;
+}
+
+QString IrisSlideView::deviceName() const
+{
+    Q_D(const IrisSlideView);
+    return d->engine() ? QString::fromStdString(d->engine()->device().name) : QString();
+}
+
+quint64 IrisSlideView::validationMessageCount() const
+{
+    Q_D(const IrisSlideView);
+    return d->engine() ? d->engine()->validationMessageCount() : 0;
+}
+
+QWindow *IrisSlideView::surfaceWindow() const
+{
+    Q_D(const IrisSlideView);
+    return d->window;
+}
+
+QSize IrisSlideView::sizeHint() const
+{
+    return {640, 480};
+}
+
+QSize IrisSlideView::minimumSizeHint() const
+{
+    return {64, 64};
+}
+
+// --- input -----------------------------------------------------------------------------
+// Input that reaches the embedded surface window is forwarded here (eventforwarding.cpp),
+// so these handlers see every event, whether it arrived at the widget or at the window.
+
+bool IrisSlideView::event(QEvent *event)
+{
+    Q_D(IrisSlideView);
+    if (event->type() == QEvent::NativeGesture) {
+        const bool used = d->navigator.nativeGesture(static_cast<QNativeGestureEvent *>(event));
+        event->setAccepted(used);
+        if (used)
+            return true;
+    }
+    return QWidget::event(event);
+}
+
+void IrisSlideView::mousePressEvent(QMouseEvent *event)
+{
+    Q_D(IrisSlideView);
+    if (d->navigator.mousePress(event))
+        event->accept();
+    else
+        QWidget::mousePressEvent(event);
+}
+
+void IrisSlideView::mouseMoveEvent(QMouseEvent *event)
+{
+    Q_D(IrisSlideView);
+    const bool used = d->navigator.mouseMove(event);
+    if (d->slide)
+        Q_EMIT cursorMoved(mapToSlide(event->position()));
+    if (used)
+        event->accept();
+    else
+        QWidget::mouseMoveEvent(event);
+}
+
+void IrisSlideView::mouseReleaseEvent(QMouseEvent *event)
+{
+    Q_D(IrisSlideView);
+    if (d->navigator.mouseRelease(event))
+        event->accept();
+    else
+        QWidget::mouseReleaseEvent(event);
+}
+
+void IrisSlideView::mouseDoubleClickEvent(QMouseEvent *event)
+{
+    Q_D(IrisSlideView);
+    if (d->navigator.mouseDoubleClick(event))
+        event->accept();
+    else
+        QWidget::mouseDoubleClickEvent(event);
+}
+
+void IrisSlideView::wheelEvent(QWheelEvent *event)
+{
+    Q_D(IrisSlideView);
+    if (d->navigator.wheel(event))
+        event->accept();
+    else
+        QWidget::wheelEvent(event);
+}
+
+void IrisSlideView::keyPressEvent(QKeyEvent *event)
+{
+    Q_D(IrisSlideView);
+    if (d->navigator.keyPress(event))
+        event->accept();
+    else
+        QWidget::keyPressEvent(event);
+}

@@ -1,0 +1,91 @@
+// Iris View widget — not API. IrisSlideView's private implementation.
+//
+// Ownership and order: the shared QVulkanInstance outlives the engine, which outlives the
+// surface window's VkSurfaceKHR binding. ~IrisSlideView therefore (1) stops motion, (2)
+// destroys the engine (which first releases the swapchain), (3) deletes the window
+// container (the window and its VkSurfaceKHR), and only then lets this object — and with
+// it the instance reference — go. When the platform destroys the surface on its own
+// (re-parenting), SurfaceAboutToBeDestroyed unbinds first and the next expose rebinds.
+#pragma once
+
+#include <memory>
+#include <optional>
+
+#include <QtGui/QColor>
+
+#include <iris/engine.h>
+
+#include "enginehost_p.h"
+#include "fpsmeter_p.h"
+#include "iris/IrisSlideView.h"
+#include "navigator_p.h"
+#include "surfacewindow_p.h"
+
+QT_BEGIN_NAMESPACE
+class QLabel;
+class QStackedLayout;
+class QVulkanInstance;
+QT_END_NAMESPACE
+
+class IrisSlideViewPrivate final : public IrisWidget::NavigationTarget {
+    Q_DECLARE_PUBLIC(IrisSlideView)
+public:
+    explicit IrisSlideViewPrivate(IrisSlideView *q);
+    ~IrisSlideViewPrivate() override;
+
+    void init();
+    void teardown();
+
+    // --- engine and surface ----------------------------------------------------------
+    iris::Engine *engine() const { return host.engine(); }
+    bool ensureEngine();
+    bool recreateEngine();
+    void bindIfReady();
+    void onExposedChanged(bool exposed);
+    void onTargetSizeChanged(QSize deviceSize);
+    void onSurfaceAboutToBeDestroyed();
+    void onFrameRendered(const iris::FrameStats &stats);
+    void checkEngineError();
+    void recoverFromDeviceLoss();
+    void showMessage(const QString &text);
+
+    // --- slide and view --------------------------------------------------------------
+    bool open(const QString &path);
+    void forgetSlide();
+    void setView(iris::View view);
+    void notifyViewChanged();
+    double devicePixelRatio() const;
+    QPointF toTarget(QPointF widgetPos) const;   // logical widget → device target pixels
+    QPointF fromTarget(QPointF targetPos) const; // and back
+    double clampDownsample(double downsample) const;
+
+    // --- NavigationTarget ------------------------------------------------------------
+    bool canNavigate() const override;
+    void pan(QPointF logicalDelta) override;
+    void panFields(int fieldsX, int fieldsY) override;
+    void zoom(double factor, QPointF logicalAnchor) override;
+    QPointF viewportCentre() const override;
+    void fit() override;
+    void showMagnificationPreset(int index) override;
+
+    IrisSlideView *q_ptr;
+    std::shared_ptr<QVulkanInstance> vulkan;
+    QString rendererError;                   // why there is no renderer; empty while fine
+    QStackedLayout *stack = nullptr;
+    QWidget *container = nullptr;            // owns window
+    IrisWidget::SurfaceWindow *window = nullptr;
+    QLabel *message = nullptr;
+    IrisWidget::EngineHost host;
+    IrisWidget::ViewNavigator navigator;
+    IrisWidget::EngineSettings settings;     // for the next engine
+    IrisWidget::FpsMeter fps;
+    QColor background;
+
+    std::optional<iris::SlideInfo> slide;
+    IrisSlideInfo info;
+    QString path;
+    bool fitPending = false;                 // opened before a target was bound
+    bool recovering = false;
+    double boundDevicePixelRatio = 0;        // at the last bind or resize
+    std::optional<iris::View> notifiedView;  // last view viewChanged() announced
+};

@@ -1,0 +1,31 @@
+// Iris View widget — not API. Objective magnification ↔ downsample, and zoom limits.
+#pragma once
+
+#include <array>
+
+#include <iris/types.h>
+
+namespace IrisWidget {
+
+// The magnifications keys 1–4 (and the demo's View menu) jump to.
+inline constexpr std::array<double, 4> kMagnificationPresets{5.0, 10.0, 20.0, 40.0};
+
+// The stated objective power, else 10 µm / mpp (0.25 µm per pixel → 40×), else 0.
+double effectiveObjective(double objectivePower, double mppX, double mppY);
+double effectiveObjective(const iris::SlideInfo &info);
+
+// objective × level-0 downsample / downsample; 0 when the objective is unknown.
+double magnificationFor(const iris::SlideInfo &info, double downsample);
+// The downsample that shows the slide at magnification; 0 when that is impossible.
+double downsampleFor(const iris::SlideInfo &info, double magnification);
+
+// How far in and out the view may zoom: from 8 device pixels per level-0 pixel up to a
+// quarter of the fitted size (never less than fitDownsample itself).
+struct ZoomLimits {
+    double minDownsample = 0.125;
+    double maxDownsample = 1;
+    double clamp(double downsample) const;
+};
+ZoomLimits zoomLimitsFor(const iris::SlideInfo &info, double fitDownsample);
+
+} // namespace IrisWidget

@@ -1,0 +1,102 @@
+#include "surfacewindow_p.h"
+
+#include <QtGui/QPlatformSurfaceEvent>
+#include <QtGui/QScreen>
+
+#include "logging_p.h"
+
+namespace IrisWidget {
+
+SurfaceWindow::SurfaceWindow()
+{
+    setSurfaceType(QSurface::VulkanSurface);
+    setCursor(Qt::OpenHandCursor);
+    // A moved window (another screen) may change the device-pixel ratio.
+    connect(this, &QWindow::screenChanged, this, [this](QScreen *screen) {
+        if (screen) {
+            connect(screen, &QScreen::logicalDotsPerInchChanged, this, &SurfaceWindow::checkTargetSize,
+                    Qt::UniqueConnection);
+        }
+        checkTargetSize();
+    });
+    if (QScreen *s = screen()) {
+        connect(s, &QScreen::logicalDotsPerInchChanged, this, &SurfaceWindow::checkTargetSize,
+                Qt::UniqueConnection);
+    }
+}
+
+SurfaceWindow::~SurfaceWindow() = default;
+
+QSize SurfaceWindow::targetSize() const
+{
+    return size() * devicePixelRatio();
+}
+
+bool SurfaceWindow::event(QEvent *event)
+{
+    switch (event->type()) {
+    case QEvent::MouseButtonPress:
+    case QEvent::MouseButtonRelease:
+    case QEvent::MouseButtonDblClick:
+    case QEvent::MouseMove:
+    case QEvent::Wheel:
+    case QEvent::KeyPress:
+    case QEvent::KeyRelease:
+    case QEvent::NativeGesture:
+    case QEvent::ContextMenu:
+    case QEvent::DragEnter:
+    case QEvent::DragMove:
+    case QEvent::DragLeave:
+    case QEvent::Drop:
+        if (inputHandler && inputHandler(event))
+            return true;
+        break;
+    case QEvent::PlatformSurface:
+        if (static_cast<QPlatformSurfaceEvent *>(event)->surfaceEventType()
+            == QPlatformSurfaceEvent::SurfaceAboutToBeDestroyed) {
+            qCDebug(lcIrisWidget) << "surface about to be destroyed";
+            if (m_exposed) {
+                m_exposed = false;
+                Q_EMIT exposedChanged(false);
+            }
+            Q_EMIT surfaceAboutToBeDestroyed();
+            m_lastTargetSize = {};
+        }
+        break;
+    case QEvent::ScreenChangeInternal:
+        checkTargetSize();
+        break;
+    default:
+        break;
+    }
+    return QWindow::event(event);
+}
+
+void SurfaceWindow::exposeEvent(QExposeEvent *)
+{
+    // An expose may also follow a change of devicePixelRatio (Qt sends one then).
+    const bool exposed = isExposed();
+    if (exposed)
+        checkTargetSize();
+    if (exposed != m_exposed) {
+        m_exposed = exposed;
+        qCDebug(lcIrisWidget) << "surface" << (exposed ? "exposed" : "hidden") << targetSize();
+        Q_EMIT exposedChanged(exposed);
+    }
+}
+
+void SurfaceWindow::resizeEvent(QResizeEvent *)
+{
+    checkTargetSize();
+}
+
+void SurfaceWindow::checkTargetSize()
+{
+    const QSize size = targetSize();
+    if (size == m_lastTargetSize || size.isEmpty())
+        return;
+    m_lastTargetSize = size;
+    Q_EMIT targetSizeChanged(size);
+}
+
+} // namespace IrisWidget

@@ -33,8 +33,7 @@ inline std::string jnum(double v) {
 }
 
 inline std::string jquart(const Quartiles& q) {
-    return "{\"p25\": " + jnum(q.p25) + ", \"median\": " + jnum(q.median) + ", \"p75\": " + jnum(q.p75) +
-           ", \"n\": " + std::to_string(q.n) + "}";
+    return "{\"p25\": " + jnum(q.p25) + ", \"median\": " + jnum(q.median) + ", \"p75\": " + jnum(q.p75) + "}";
 }
 
 inline std::string jstr(const std::string& s) {

@@ -328,7 +328,24 @@ void Engine::setBackground(float r, float g, float b) {
 }
 
 void Engine::setEnhance(bool on) {
-    impl_->shared.update([&](Snapshot& s) { s.enhance = on; });
+    // Tiles in the atlas keep the mips they were made with: a change gives the open slide a new
+    // generation (same source), so that every tile is buffered again with the new kernel. The
+    // RAM cache is keyed by generation too, so this re-decodes the visible tiles.
+    std::lock_guard lock(impl_->openMutex); // open() cannot replace the slide meanwhile
+    const Snapshot cur = impl_->shared.snapshot();
+    if (cur.enhance == on) return;
+    std::shared_ptr<OpenSlide> slide;
+    if (cur.slide) {
+        slide = std::make_shared<OpenSlide>(*cur.slide);
+        impl_->generation = (impl_->generation + 1) & 0xFFFF;
+        if (impl_->generation == 0) impl_->generation = 1;
+        slide->generation = impl_->generation;
+        impl_->cache.dropOtherGenerations(slide->generation);
+    }
+    impl_->shared.update([&](Snapshot& s) {
+        s.enhance = on;
+        if (slide && s.slide) s.slide = slide;
+    });
 }
 
 bool Engine::enhance() const { return impl_->shared.snapshot().enhance; }

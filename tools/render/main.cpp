@@ -103,10 +103,6 @@ int main(int argc, char** argv) {
     }
     iris::Engine& e = **engine;
     e.setEnhance(enhance);
-    if (enhance) {
-        std::fprintf(stderr, "iris-render: note: mip levels use the plain box filter; reduction-enhancement is "
-                             "not built yet, so --enhance on and off render alike\n");
-    }
     if (iris::Result r = e.bindOffscreen(uint32_t(w), uint32_t(h)); !r.ok()) {
         std::fprintf(stderr, "iris-render: %s\n", r.message().c_str());
         return 1;

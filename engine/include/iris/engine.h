@@ -99,8 +99,9 @@ public:
 
     // --- settings ------------------------------------------------------------------
     void setBackground(float r, float g, float b);
-    // Reduction-enhancement of mip levels (sharpening). Stored now; the mip pipeline is
-    // a plain box filter until the enhancement pipeline lands, see docs/ARCHITECTURE.md.
+    // Reduction-enhancement of mip levels (on by default): every mip level is the area
+    // average of the 1× tile plus a normalised difference-of-Gaussians sharpening term
+    // (docs/ENHANCEMENT.md); off gives the exact area average. A change re-buffers the tiles.
     void setEnhance(bool on);
     bool enhance() const;
 

@@ -186,6 +186,7 @@ bool BufferThread::submitNew(const Snapshot& snap) {
     // A reclaim that backed off may have made a frame skip that tile: draw again.
     if (map.takeReclaimAborted()) shared_.bump();
     if (tx.slots.empty()) return false;
+    tx.enhance = snap.enhance;
     if (Result r = record(tx); !r.ok()) {
         shared_.setError(r);
         log_.error(r.message());
@@ -349,7 +350,7 @@ Result BufferThread::record(Transaction& t) {
                                          VK_IMAGE_LAYOUT_GENERAL, base(s)));
         vk::pipelineBarrier(cmd, b.data(), n);
     }
-    mips_.record(cmd, t.slots.data(), n);
+    mips_.record(cmd, t.slots.data(), n, t.enhance);
     b.clear();
     for (int s : t.slots) {
         if (C != G) {

@@ -44,6 +44,7 @@ private:
         VkCommandBuffer copyCmd = VK_NULL_HANDLE; // transfer queue (only when its family differs)
         VkCommandBuffer cmd = VK_NULL_HANDLE;     // compute queue
         uint64_t signalValue = 0; // 0: idle
+        bool enhance = true;      // Snapshot::enhance of the view this transaction was made for
         std::vector<int> slots;
         std::vector<uint32_t> staging;
     };

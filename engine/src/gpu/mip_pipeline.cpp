@@ -1,9 +1,20 @@
 #include "gpu/mip_pipeline.h"
 
+#include "gpu/mip_kernel.h"
 #include "gpu/vk_util.h"
 #include <iris_shaders/mip_reduce_comp.h>
 
 namespace iris::gpu {
+
+namespace {
+// The shader's push constant block (std430 layout).
+struct MipPush {
+    uint32_t layers[MipPipeline::kMaxTiles];
+    uint32_t enhance;
+    float lambda;
+};
+static_assert(sizeof(MipPush) == 40);
+} // namespace
 
 MipPipeline::~MipPipeline() {
     VkDevice dev = device_.device();
@@ -32,7 +43,7 @@ Result MipPipeline::init() {
     const VkDescriptorSetLayoutCreateInfo dslci{
         .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO, .pNext = nullptr, .flags = 0, .bindingCount = 2, .pBindings = bindings};
     IRIS_VK_TRY(vkCreateDescriptorSetLayout(dev, &dslci, nullptr, &setLayout_));
-    const VkPushConstantRange push{.stageFlags = VK_SHADER_STAGE_COMPUTE_BIT, .offset = 0, .size = sizeof(uint32_t) * kMaxTiles};
+    const VkPushConstantRange push{.stageFlags = VK_SHADER_STAGE_COMPUTE_BIT, .offset = 0, .size = sizeof(MipPush)};
     const VkPipelineLayoutCreateInfo plci{.sType = VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO,
                                           .pNext = nullptr,
                                           .flags = 0,
@@ -78,12 +89,14 @@ Result MipPipeline::init() {
     return {};
 }
 
-void MipPipeline::record(VkCommandBuffer cmd, const int* layers, uint32_t count) const {
-    uint32_t push[kMaxTiles] = {};
-    for (uint32_t i = 0; i < count && i < kMaxTiles; ++i) push[i] = uint32_t(layers[i]);
+void MipPipeline::record(VkCommandBuffer cmd, const int* layers, uint32_t count, bool enhance) const {
+    MipPush push{};
+    for (uint32_t i = 0; i < count && i < kMaxTiles; ++i) push.layers[i] = uint32_t(layers[i]);
+    push.enhance = enhance ? 1u : 0u;
+    push.lambda = mipkernel::kLambda;
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_);
     vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 1, &set_, 0, nullptr);
-    vkCmdPushConstants(cmd, layout_, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push), push);
+    vkCmdPushConstants(cmd, layout_, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push), &push);
     vkCmdDispatch(cmd, count, 1, 1);
 }
 

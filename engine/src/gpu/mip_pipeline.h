@@ -1,5 +1,6 @@
 // The mip compute pipeline (shaders/mip_reduce.comp): all mip levels of up to 8 tiles in one
-// dispatch, one workgroup per tile, each level the exact area average of the base level.
+// dispatch, one workgroup per tile, each level computed from the base level only: the exact
+// area average, or with enhance the sharpened kernel of gpu/mip_kernel.h (docs/ENHANCEMENT.md).
 #pragma once
 
 #include "gpu/device.h"
@@ -13,8 +14,9 @@ public:
     MipPipeline(Device& device, TileAtlas& atlas) : device_(device), atlas_(atlas) {}
     ~MipPipeline();
     Result init();
-    // Records the dispatch for `count` atlas layers (count ≤ kMaxTiles).
-    void record(VkCommandBuffer cmd, const int* layers, uint32_t count) const;
+    // Records the dispatch for `count` atlas layers (count ≤ kMaxTiles); enhance selects the
+    // sharpened kernel, else the exact area average.
+    void record(VkCommandBuffer cmd, const int* layers, uint32_t count, bool enhance) const;
 
 private:
     Device& device_;

@@ -1,0 +1,34 @@
+// The mip reduction kernel (shaders/mip_reduce.comp) as constants shared with the host, and
+// a CPU reference of exactly the same arithmetic (mip_kernel.cpp) for the tests.
+// The kernel is documented in docs/ENHANCEMENT.md.
+//
+// Level k (r = 2^k, n = 256 / r texels per side), per channel, from the 1× base tile only:
+//   S_k[p]  integer sum of the r×r base block of output texel p        (exact)
+//   A_k[p]  = S_k[p] / (r²·255)                                        (area average)
+//   G_k[p]  = Σ_{i,j∈{-1,0,1}} b_i b_j A_k[clamp(p + (i, j))] / 16, b = (1, 2, 1)
+//             (binomial blur of A_k on the level's own grid; indices clamped to the tile)
+//   E_k[p]  = clamp(A_k[p] + λ·(A_k[p] − G_k[p]), 0, 1)                 (enhance on)
+//   E_k[p]  = A_k[p]                                                   (enhance off)
+// A − G is computed as an exact integer (16·S − Σ b_i b_j S) before the single float step.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace iris::gpu::mipkernel {
+
+inline constexpr int kTile = 256;
+inline constexpr int kLevels = 8;       // mip levels 1..8 (128×128 … 1×1)
+inline constexpr float kLambda = 0.5f;  // sharpening gain λ (push constant of the shader)
+inline constexpr int kBinomial[3] = {1, 2, 1};
+// Largest overshoot of a step edge of height h, from the kernel's negative lobe: λ/4 · h.
+inline constexpr float kOvershootBound = kLambda / 4.0f;
+
+// Level `level` (1..8) of one 256×256 RGBA8 tile (row-major, 4 bytes a texel): (256>>level)²
+// RGBA values in [0, 1], before the 8-bit store.
+std::vector<float> reduceLevel(const uint8_t* tile, int level, bool enhance, float lambda = kLambda);
+// The same, quantised as the GPU's UNORM8 store does (round to nearest).
+std::vector<uint8_t> reduceLevel8(const uint8_t* tile, int level, bool enhance, float lambda = kLambda);
+
+} // namespace iris::gpu::mipkernel

@@ -61,6 +61,7 @@ struct SizeResult {
     BaselineResult osr, osrMt, floor;
     std::vector<TracePoint> trace;
     int movesDone = 0, movesWanted = 0, timeouts = 0;
+    double mipUsPerTile = NAN; // GPU time of the mip dispatch per tile (timestamps)
     std::string notes;
 };
 
@@ -107,6 +108,7 @@ SizeResult runSize(const Options& o, uint32_t W, uint32_t H) {
     const double objective = info.objectivePower > 0 ? info.objectivePower : info.mppX > 0 ? 10.0 / info.mppX : 0;
     std::mt19937_64 rng(o.seed);
     std::vector<BenchField> fields;
+    const iris::EngineMetrics m0 = e.metrics();
     for (double mag : o.mags) {
         const double ds = objective > 0 ? objective / mag : mag;
         const std::string label = objective > 0 ? std::to_string(int(std::lround(mag))) + "x" : "ds " + jnum(mag);
@@ -168,6 +170,9 @@ SizeResult runSize(const Options& o, uint32_t W, uint32_t H) {
     }
     if (progressTty()) std::fprintf(stderr, "\n");
     e.setFrameCallback({});
+    const iris::EngineMetrics m1 = e.metrics();
+    if (m1.mipTiles > m0.mipTiles)
+        res.mipUsPerTile = (m1.mipGpuMs - m0.mipGpuMs) * 1000.0 / double(m1.mipTiles - m0.mipTiles);
     {
         std::lock_guard lock(traceMutex);
         for (const TracePoint& t : res.trace) {
@@ -203,6 +208,8 @@ std::string resultJson(const Options& o, const SizeResult& r) {
       << jstr(r.osr.note + (r.floor.note.empty() ? "" : " decode floor: " + r.floor.note)) << "\n  },\n  \"ratios\": {"
       << "\n    \"hr_tefov_vs_openslide\": " << jnum(hr.median / osr.median)
       << ",\n    \"hr_tefov_vs_decode_floor\": " << jnum(hr.median / flo.median) << "\n  },\n  \"moves\": " << r.movesDone
+      << ",\n  \"mip_us_per_tile\": " << jnum(r.mipUsPerTile)
+      << ",\n  \"mip_share_of_hr_tpt\": " << jnum(r.mipUsPerTile / quartiles(r.hrTpt).median)
       << ",\n  \"timeouts\": " << r.timeouts << ",\n  \"notes\": " << jstr(r.notes) << "\n}";
     return j.str();
 }
@@ -226,6 +233,8 @@ void printTable(const SizeResult& r) {
     const double hr = quartiles(r.hrTefov).median;
     std::printf("  HR TeFOV vs OpenSlide: %.3f×   vs decode floor: %.3f×\n", hr / quartiles(r.osr.ms).median,
                 hr / quartiles(r.floor.ms).median);
+    std::printf("  mip pass (GPU timestamps): %.2f us per tile = %.1f%% of the HR time per tile\n", r.mipUsPerTile,
+                100.0 * r.mipUsPerTile / quartiles(r.hrTpt).median);
     if (!r.floor.note.empty()) std::printf("  decode floor: %s\n", r.floor.note.c_str());
     if (!r.notes.empty()) std::printf("  notes: %s\n", r.notes.c_str());
 }

@@ -156,6 +156,8 @@ struct EngineMetrics {
     uint64_t frames = 0;
     uint64_t tilesBuffered = 0;    // since create()
     uint64_t bytesBuffered = 0;
+    double mipGpuMs = 0;           // GPU time of the mip (reduction-enhancement) dispatches, summed
+    uint64_t mipTiles = 0;         // tiles those dispatches covered (0: no timestamps on the compute queue)
     FrameStats lastFrame;
     std::vector<FieldStats> fields; // completed or superseded field moves, oldest first (last 4096)
 };

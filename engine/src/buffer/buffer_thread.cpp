@@ -24,6 +24,7 @@ BufferThread::~BufferThread() {
     if (copyPool_) vkDestroyCommandPool(dev, copyPool_, nullptr);
     if (timeline_) vkDestroySemaphore(dev, timeline_, nullptr);
     if (copyTimeline_) vkDestroySemaphore(dev, copyTimeline_, nullptr);
+    if (mipTimestamps_) vkDestroyQueryPool(dev, mipTimestamps_, nullptr);
     vk::destroyMappedBuffer(dev, staging_);
 }
 
@@ -56,6 +57,23 @@ Result BufferThread::init() {
     if (separateCopy_) {
         if (Result r = makePool(transferFamily_, copyPool_); !r.ok()) return r;
         if (Result r = makeTimeline(copyTimeline_); !r.ok()) return r;
+    }
+    {
+        uint32_t qn = 0;
+        vkGetPhysicalDeviceQueueFamilyProperties(device_.physical(), &qn, nullptr);
+        std::vector<VkQueueFamilyProperties> qf(qn);
+        vkGetPhysicalDeviceQueueFamilyProperties(device_.physical(), &qn, qf.data());
+        if (computeFamily_ < qn && qf[computeFamily_].timestampValidBits > 0 &&
+            device_.properties().limits.timestampPeriod > 0) {
+            const VkQueryPoolCreateInfo qci{.sType = VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO,
+                                            .pNext = nullptr,
+                                            .flags = 0,
+                                            .queryType = VK_QUERY_TYPE_TIMESTAMP,
+                                            .queryCount = 2 * kMaxTransactions,
+                                            .pipelineStatistics = 0};
+            IRIS_VK_TRY(vkCreateQueryPool(dev, &qci, nullptr, &mipTimestamps_));
+            timestampPeriodNs_ = device_.properties().limits.timestampPeriod;
+        }
     }
     handover_.needed = computeFamily_ != graphicsFamily_;
     handover_.srcFamily = computeFamily_;
@@ -138,6 +156,19 @@ bool BufferThread::pollCompleted() {
     bool any = false;
     for (Transaction& t : txns_) {
         if (!t.signalValue || t.signalValue > done) continue;
+        // Counted before the tiles become drawable, so that a field the render thread sees
+        // complete has all its uploads counted (TPT).
+        if (mipTimestamps_) {
+            uint64_t ts[2] = {0, 0};
+            const uint32_t q = uint32_t(&t - txns_.data()) * 2;
+            if (vkGetQueryPoolResults(device_.device(), mipTimestamps_, q, 2, sizeof(ts), ts, sizeof(uint64_t),
+                                      VK_QUERY_RESULT_64_BIT) == VK_SUCCESS && ts[1] >= ts[0]) {
+                counters_.mipNs.fetch_add(uint64_t(double(ts[1] - ts[0]) * timestampPeriodNs_), std::memory_order_relaxed);
+                counters_.mipTiles.fetch_add(t.slots.size(), std::memory_order_relaxed);
+            }
+        }
+        counters_.tiles.fetch_add(t.slots.size(), std::memory_order_relaxed);
+        counters_.bytes.fetch_add(t.slots.size() * gpu::TileAtlas::bytesPerSlot(), std::memory_order_relaxed);
         // Single family: the compute submission made the tiles visible to fragment reads, so
         // they can be drawn now. Separate families: the render thread must first record the
         // acquire half of the compute → graphics ownership transfer; it activates them then.
@@ -146,8 +177,6 @@ bool BufferThread::pollCompleted() {
             else atlas_.map().activate(s);
         }
         for (uint32_t s : t.staging) freeStaging_.push_back(s);
-        counters_.tiles.fetch_add(t.slots.size(), std::memory_order_relaxed);
-        counters_.bytes.fetch_add(t.slots.size() * gpu::TileAtlas::bytesPerSlot(), std::memory_order_relaxed);
         t.slots.clear();
         t.staging.clear();
         t.signalValue = 0;
@@ -350,7 +379,14 @@ Result BufferThread::record(Transaction& t) {
                                          VK_IMAGE_LAYOUT_GENERAL, base(s)));
         vk::pipelineBarrier(cmd, b.data(), n);
     }
+    const uint32_t q = uint32_t(&t - txns_.data()) * 2;
+    if (mipTimestamps_) {
+        vkCmdResetQueryPool(cmd, mipTimestamps_, q, 2);
+        // Both stamps bracket only the dispatch: the first waits for the copy above to finish.
+        vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, mipTimestamps_, q);
+    }
     mips_.record(cmd, t.slots.data(), n, t.enhance);
+    if (mipTimestamps_) vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, mipTimestamps_, q + 1);
     b.clear();
     for (int s : t.slots) {
         if (C != G) {

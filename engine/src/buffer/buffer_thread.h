@@ -68,6 +68,8 @@ private:
     VkCommandPool copyPool_ = VK_NULL_HANDLE;     // transfer family, when separate
     VkSemaphore timeline_ = VK_NULL_HANDLE;       // upload timeline: signalled by the compute stage
     VkSemaphore copyTimeline_ = VK_NULL_HANDLE;   // transfer → compute, when separate
+    VkQueryPool mipTimestamps_ = VK_NULL_HANDLE;  // 2 per transaction, around the mip dispatch
+    double timestampPeriodNs_ = 0;
     bool separateCopy_ = false;
     uint32_t transferFamily_ = 0, computeFamily_ = 0, graphicsFamily_ = 0;
     uint64_t nextValue_ = 0;

@@ -612,6 +612,8 @@ void RenderThread::publishFrame(const Snapshot& snap, bool complete, uint32_t ti
         metrics_.lastFrame = stats;
         metrics_.tilesBuffered = counters_.tiles.load(std::memory_order_relaxed);
         metrics_.bytesBuffered = counters_.bytes.load(std::memory_order_relaxed);
+        metrics_.mipGpuMs = double(counters_.mipNs.load(std::memory_order_relaxed)) / 1e6;
+        metrics_.mipTiles = counters_.mipTiles.load(std::memory_order_relaxed);
         for (FieldStats& fs : unpublished_) metrics_.fields.push_back(fs);
         unpublished_.clear();
         constexpr size_t kKeep = 4096;

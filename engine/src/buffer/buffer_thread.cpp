@@ -58,23 +58,10 @@ Result BufferThread::init() {
         if (Result r = makePool(transferFamily_, copyPool_); !r.ok()) return r;
         if (Result r = makeTimeline(copyTimeline_); !r.ok()) return r;
     }
-    {
-        uint32_t qn = 0;
-        vkGetPhysicalDeviceQueueFamilyProperties(device_.physical(), &qn, nullptr);
-        std::vector<VkQueueFamilyProperties> qf(qn);
-        vkGetPhysicalDeviceQueueFamilyProperties(device_.physical(), &qn, qf.data());
-        if (computeFamily_ < qn && qf[computeFamily_].timestampValidBits > 0 &&
-            device_.properties().limits.timestampPeriod > 0) {
-            const VkQueryPoolCreateInfo qci{.sType = VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO,
-                                            .pNext = nullptr,
-                                            .flags = 0,
-                                            .queryType = VK_QUERY_TYPE_TIMESTAMP,
-                                            .queryCount = 2 * kMaxTransactions,
-                                            .pipelineStatistics = 0};
-            IRIS_VK_TRY(vkCreateQueryPool(dev, &qci, nullptr, &mipTimestamps_));
-            timestampPeriodNs_ = device_.properties().limits.timestampPeriod;
-        }
-    }
+    if (Result r = vk::createTimestampPool(device_.physical(), dev, computeFamily_, 2 * kMaxTransactions, mipTimestamps_,
+                                           timestampPeriodNs_);
+        !r.ok())
+        return r;
     handover_.needed = computeFamily_ != graphicsFamily_;
     handover_.srcFamily = computeFamily_;
     handover_.uploadTimeline = timeline_;

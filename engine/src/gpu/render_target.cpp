@@ -50,15 +50,7 @@ Result OffscreenTarget::init(uint32_t width, uint32_t height) {
         .pQueueFamilyIndices = nullptr,
         .initialLayout = VK_IMAGE_LAYOUT_UNDEFINED,
     };
-    IRIS_VK_TRY(vkCreateImage(dev, &ici, nullptr, &image_));
-    VkMemoryRequirements req;
-    vkGetImageMemoryRequirements(dev, image_, &req);
-    const uint32_t type = vk::findMemoryType(device_.physical(), req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
-    if (type == UINT32_MAX) return Result(Status::Vulkan, "no device-local memory for the offscreen target");
-    const VkMemoryAllocateInfo mai{
-        .sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO, .pNext = nullptr, .allocationSize = req.size, .memoryTypeIndex = type};
-    IRIS_VK_TRY(vkAllocateMemory(dev, &mai, nullptr, &memory_));
-    IRIS_VK_TRY(vkBindImageMemory(dev, image_, memory_, 0));
+    IRIS_VK_TRY(vk::createDeviceImage(device_.physical(), dev, ici, image_, memory_));
     if (Result r = makeView(dev, image_, kFormat, view_); !r.ok()) return r;
     return vk::createMappedBuffer(device_.physical(), dev, VkDeviceSize(width) * height * 4,
                                   VK_BUFFER_USAGE_TRANSFER_DST_BIT, /*preferCached=*/true, readback_);

@@ -62,19 +62,10 @@ Result TileAtlas::init(uint64_t vramBudgetBytes) {
             .pQueueFamilyIndices = nullptr,
             .initialLayout = VK_IMAGE_LAYOUT_UNDEFINED,
         };
-        IRIS_VK_TRY(vkCreateImage(dev, &ici, nullptr, &image_));
-        VkMemoryRequirements req;
-        vkGetImageMemoryRequirements(dev, image_, &req);
-        const uint32_t type = vk::findMemoryType(device_.physical(), req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
-        const VkMemoryAllocateInfo mai{
-            .sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO, .pNext = nullptr, .allocationSize = req.size, .memoryTypeIndex = type};
-        vr = type == UINT32_MAX ? VK_ERROR_OUT_OF_DEVICE_MEMORY : vkAllocateMemory(dev, &mai, nullptr, &memory_);
+        vr = vk::createDeviceImage(device_.physical(), dev, ici, image_, memory_);
         if (vr == VK_SUCCESS) break;
-        vkDestroyImage(dev, image_, nullptr);
-        image_ = VK_NULL_HANDLE;
     }
     IRIS_VK_TRY(vr);
-    IRIS_VK_TRY(vkBindImageMemory(dev, image_, memory_, 0));
 
     const VkImageViewCreateInfo vci{
         .sType = VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO,

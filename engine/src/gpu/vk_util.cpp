@@ -1,5 +1,7 @@
 #include "gpu/vk_util.h"
 
+#include <vector>
+
 namespace iris::vk {
 
 const char* resultName(VkResult r) {
@@ -38,6 +40,49 @@ uint32_t findMemoryType(VkPhysicalDevice pd, uint32_t typeBits, VkMemoryProperty
         if (fallback == UINT32_MAX) fallback = i;
     }
     return fallback;
+}
+
+VkResult createDeviceImage(VkPhysicalDevice pd, VkDevice dev, const VkImageCreateInfo& info, VkImage& image,
+                           VkDeviceMemory& memory) {
+    image = VK_NULL_HANDLE;
+    memory = VK_NULL_HANDLE;
+    VkResult vr = vkCreateImage(dev, &info, nullptr, &image);
+    if (vr != VK_SUCCESS) return vr;
+    VkMemoryRequirements req;
+    vkGetImageMemoryRequirements(dev, image, &req);
+    const uint32_t type = findMemoryType(pd, req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
+    const VkMemoryAllocateInfo mai{
+        .sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO, .pNext = nullptr, .allocationSize = req.size, .memoryTypeIndex = type};
+    vr = type == UINT32_MAX ? VK_ERROR_OUT_OF_DEVICE_MEMORY : vkAllocateMemory(dev, &mai, nullptr, &memory);
+    if (vr == VK_SUCCESS) vr = vkBindImageMemory(dev, image, memory, 0);
+    if (vr != VK_SUCCESS) {
+        if (memory) vkFreeMemory(dev, memory, nullptr);
+        vkDestroyImage(dev, image, nullptr);
+        image = VK_NULL_HANDLE;
+        memory = VK_NULL_HANDLE;
+    }
+    return vr;
+}
+
+Result createTimestampPool(VkPhysicalDevice pd, VkDevice dev, uint32_t family, uint32_t count, VkQueryPool& pool,
+                           double& periodNs) {
+    pool = VK_NULL_HANDLE;
+    uint32_t n = 0;
+    vkGetPhysicalDeviceQueueFamilyProperties(pd, &n, nullptr);
+    std::vector<VkQueueFamilyProperties> qf(n);
+    vkGetPhysicalDeviceQueueFamilyProperties(pd, &n, qf.data());
+    VkPhysicalDeviceProperties props;
+    vkGetPhysicalDeviceProperties(pd, &props);
+    if (family >= n || qf[family].timestampValidBits == 0 || !(props.limits.timestampPeriod > 0)) return {};
+    const VkQueryPoolCreateInfo qci{.sType = VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO,
+                                    .pNext = nullptr,
+                                    .flags = 0,
+                                    .queryType = VK_QUERY_TYPE_TIMESTAMP,
+                                    .queryCount = count,
+                                    .pipelineStatistics = 0};
+    IRIS_VK_TRY(vkCreateQueryPool(dev, &qci, nullptr, &pool));
+    periodNs = props.limits.timestampPeriod;
+    return {};
 }
 
 Result createMappedBuffer(VkPhysicalDevice pd, VkDevice dev, VkDeviceSize size, VkBufferUsageFlags usage,

@@ -64,6 +64,16 @@ inline void pipelineBarrier(VkCommandBuffer cmd, const VkImageMemoryBarrier2* ba
     vkCmdPipelineBarrier2(cmd, &dep);
 }
 
+// Creates an image and binds it to its own device-local allocation. On failure nothing is
+// left behind and the VkResult says why (VK_ERROR_OUT_OF_DEVICE_MEMORY when no memory type fits).
+VkResult createDeviceImage(VkPhysicalDevice pd, VkDevice dev, const VkImageCreateInfo& info, VkImage& image,
+                           VkDeviceMemory& memory);
+
+// A timestamp query pool of `count` queries for work on `family`, and the nanoseconds per
+// tick. `pool` stays null (and the result ok) when that family has no timestamps.
+Result createTimestampPool(VkPhysicalDevice pd, VkDevice dev, uint32_t family, uint32_t count, VkQueryPool& pool,
+                           double& periodNs);
+
 // A host-visible buffer, persistently mapped.
 struct MappedBuffer {
     VkBuffer buffer = VK_NULL_HANDLE;

@@ -43,23 +43,10 @@ RenderThread::~RenderThread() {
 
 Result RenderThread::init() {
     VkDevice dev = device_.device();
-    {
-        uint32_t n = 0;
-        vkGetPhysicalDeviceQueueFamilyProperties(device_.physical(), &n, nullptr);
-        std::vector<VkQueueFamilyProperties> qf(n);
-        vkGetPhysicalDeviceQueueFamilyProperties(device_.physical(), &n, qf.data());
-        const uint32_t fam = device_.queueFamily();
-        if (fam < n && qf[fam].timestampValidBits > 0 && device_.properties().limits.timestampPeriod > 0) {
-            const VkQueryPoolCreateInfo qci{.sType = VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO,
-                                            .pNext = nullptr,
-                                            .flags = 0,
-                                            .queryType = VK_QUERY_TYPE_TIMESTAMP,
-                                            .queryCount = 2 * kFramesInFlight,
-                                            .pipelineStatistics = 0};
-            IRIS_VK_TRY(vkCreateQueryPool(dev, &qci, nullptr, &timestamps_));
-            timestampPeriodNs_ = device_.properties().limits.timestampPeriod;
-        }
-    }
+    if (Result r = vk::createTimestampPool(device_.physical(), dev, device_.queueFamily(), 2 * kFramesInFlight,
+                                           timestamps_, timestampPeriodNs_);
+        !r.ok())
+        return r;
     for (FrameSlot& f : frames_) {
         const VkCommandPoolCreateInfo pci{.sType = VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO,
                                           .pNext = nullptr,

@@ -225,45 +225,18 @@ bool BufferThread::submitNew(const Snapshot& snap) {
 
 Result BufferThread::submit(Transaction& tx) {
     using Role = gpu::Device::Role;
-    const auto cmdInfo = [](VkCommandBuffer c) {
-        return VkCommandBufferSubmitInfo{
-            .sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_SUBMIT_INFO, .pNext = nullptr, .commandBuffer = c, .deviceMask = 0};
-    };
-    const auto semInfo = [](VkSemaphore sem, uint64_t value, VkPipelineStageFlags2 stage) {
-        return VkSemaphoreSubmitInfo{.sType = VK_STRUCTURE_TYPE_SEMAPHORE_SUBMIT_INFO,
-                                     .pNext = nullptr,
-                                     .semaphore = sem,
-                                     .value = value,
-                                     .stageMask = stage,
-                                     .deviceIndex = 0};
-    };
-    VkSemaphoreSubmitInfo copyDone = semInfo(copyTimeline_, tx.signalValue, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT);
+    const VkSemaphoreSubmitInfo copyDone =
+        vk::semaphoreInfo(copyTimeline_, tx.signalValue, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT);
     if (separateCopy_) {
-        const VkCommandBufferSubmitInfo cbi = cmdInfo(tx.copyCmd);
-        const VkSubmitInfo2 si{.sType = VK_STRUCTURE_TYPE_SUBMIT_INFO_2,
-                               .pNext = nullptr,
-                               .flags = 0,
-                               .waitSemaphoreInfoCount = 0,
-                               .pWaitSemaphoreInfos = nullptr,
-                               .commandBufferInfoCount = 1,
-                               .pCommandBufferInfos = &cbi,
-                               .signalSemaphoreInfoCount = 1,
-                               .pSignalSemaphoreInfos = &copyDone};
-        IRIS_VK_TRY(device_.submit(Role::Transfer, si, VK_NULL_HANDLE));
+        const VkCommandBufferSubmitInfo cbi = vk::commandInfo(tx.copyCmd);
+        IRIS_VK_TRY(device_.submit(Role::Transfer, vk::submitInfo(&cbi, nullptr, 0, &copyDone, 1), VK_NULL_HANDLE));
     }
     // The compute stage waits for the copy (its acquire barrier needs the release to have run).
-    const VkSemaphoreSubmitInfo waitCopy = semInfo(copyTimeline_, tx.signalValue, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT);
-    const VkSemaphoreSubmitInfo sig = semInfo(timeline_, tx.signalValue, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT);
-    const VkCommandBufferSubmitInfo cbi = cmdInfo(tx.cmd);
-    const VkSubmitInfo2 si{.sType = VK_STRUCTURE_TYPE_SUBMIT_INFO_2,
-                           .pNext = nullptr,
-                           .flags = 0,
-                           .waitSemaphoreInfoCount = separateCopy_ ? 1u : 0u,
-                           .pWaitSemaphoreInfos = &waitCopy,
-                           .commandBufferInfoCount = 1,
-                           .pCommandBufferInfos = &cbi,
-                           .signalSemaphoreInfoCount = 1,
-                           .pSignalSemaphoreInfos = &sig};
+    const VkSemaphoreSubmitInfo waitCopy =
+        vk::semaphoreInfo(copyTimeline_, tx.signalValue, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT);
+    const VkSemaphoreSubmitInfo sig = vk::semaphoreInfo(timeline_, tx.signalValue, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT);
+    const VkCommandBufferSubmitInfo cbi = vk::commandInfo(tx.cmd);
+    const VkSubmitInfo2 si = vk::submitInfo(&cbi, &waitCopy, separateCopy_ ? 1u : 0u, &sig, 1);
     IRIS_VK_TRY(device_.submit(Role::Compute, si, VK_NULL_HANDLE));
     return {};
 }

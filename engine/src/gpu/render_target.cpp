@@ -4,22 +4,6 @@
 
 namespace iris::gpu {
 
-namespace {
-Result makeView(VkDevice dev, VkImage image, VkFormat format, VkImageView& out) {
-    const VkImageViewCreateInfo vci{
-        .sType = VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO,
-        .pNext = nullptr,
-        .flags = 0,
-        .image = image,
-        .viewType = VK_IMAGE_VIEW_TYPE_2D,
-        .format = format,
-        .components = {},
-        .subresourceRange = vk::colorRange(0, 1, 0, 1),
-    };
-    IRIS_VK_TRY(vkCreateImageView(dev, &vci, nullptr, &out));
-    return {};
-}
-} // namespace
 
 OffscreenTarget::~OffscreenTarget() {
     VkDevice dev = device_.device();
@@ -51,7 +35,7 @@ Result OffscreenTarget::init(uint32_t width, uint32_t height) {
         .initialLayout = VK_IMAGE_LAYOUT_UNDEFINED,
     };
     IRIS_VK_TRY(vk::createDeviceImage(device_.physical(), dev, ici, image_, memory_));
-    if (Result r = makeView(dev, image_, kFormat, view_); !r.ok()) return r;
+    if (Result r = vk::createImageView(dev, image_, VK_IMAGE_VIEW_TYPE_2D, kFormat, vk::colorRange(0, 1, 0, 1), view_); !r.ok()) return r;
     return vk::createMappedBuffer(device_.physical(), dev, VkDeviceSize(width) * height * 4,
                                   VK_BUFFER_USAGE_TRANSFER_DST_BIT, /*preferCached=*/true, readback_);
 }
@@ -145,7 +129,7 @@ Result Swapchain::recreate(uint32_t width, uint32_t height) {
     renderDone_.resize(n);
     const VkSemaphoreCreateInfo semci{.sType = VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO, .pNext = nullptr, .flags = 0};
     for (uint32_t i = 0; i < n; ++i) {
-        if (Result r = makeView(dev, images_[i], format_, views_[i]); !r.ok()) return r;
+        if (Result r = vk::createImageView(dev, images_[i], VK_IMAGE_VIEW_TYPE_2D, format_, vk::colorRange(0, 1, 0, 1), views_[i]); !r.ok()) return r;
         IRIS_VK_TRY(vkCreateSemaphore(dev, &semci, nullptr, &renderDone_[i]));
     }
     return {};

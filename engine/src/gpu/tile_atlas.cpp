@@ -67,22 +67,12 @@ Result TileAtlas::init(uint64_t vramBudgetBytes) {
     }
     IRIS_VK_TRY(vr);
 
-    const VkImageViewCreateInfo vci{
-        .sType = VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO,
-        .pNext = nullptr,
-        .flags = 0,
-        .image = image_,
-        .viewType = VK_IMAGE_VIEW_TYPE_2D_ARRAY,
-        .format = kFormat,
-        .components = {},
-        .subresourceRange = vk::colorRange(),
-    };
-    IRIS_VK_TRY(vkCreateImageView(dev, &vci, nullptr, &view_));
-
+    if (Result r = vk::createImageView(dev, image_, VK_IMAGE_VIEW_TYPE_2D_ARRAY, kFormat, vk::colorRange(), view_); !r.ok())
+        return r;
     for (uint32_t m = 0; m < kTileMipLevels; ++m) {
-        VkImageViewCreateInfo mci = vci;
-        mci.subresourceRange = vk::colorRange(m, 1);
-        IRIS_VK_TRY(vkCreateImageView(dev, &mci, nullptr, &mipViews_[m]));
+        if (Result r = vk::createImageView(dev, image_, VK_IMAGE_VIEW_TYPE_2D_ARRAY, kFormat, vk::colorRange(m, 1), mipViews_[m]);
+            !r.ok())
+            return r;
     }
 
     const VkSamplerCreateInfo sci{
@@ -134,16 +124,8 @@ Result TileAtlas::init(uint64_t vramBudgetBytes) {
     VkFence fence;
     const VkFenceCreateInfo fci{.sType = VK_STRUCTURE_TYPE_FENCE_CREATE_INFO, .pNext = nullptr, .flags = 0};
     vkCreateFence(dev, &fci, nullptr, &fence);
-    const VkCommandBufferSubmitInfo cbi{.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_SUBMIT_INFO, .pNext = nullptr, .commandBuffer = cmd, .deviceMask = 0};
-    const VkSubmitInfo2 si{.sType = VK_STRUCTURE_TYPE_SUBMIT_INFO_2,
-                           .pNext = nullptr,
-                           .flags = 0,
-                           .waitSemaphoreInfoCount = 0,
-                           .pWaitSemaphoreInfos = nullptr,
-                           .commandBufferInfoCount = 1,
-                           .pCommandBufferInfos = &cbi,
-                           .signalSemaphoreInfoCount = 0,
-                           .pSignalSemaphoreInfos = nullptr};
+    const VkCommandBufferSubmitInfo cbi = vk::commandInfo(cmd);
+    const VkSubmitInfo2 si = vk::submitInfo(&cbi);
     VkResult sr = device_.submit(si, fence);
     if (sr == VK_SUCCESS) sr = vkWaitForFences(dev, 1, &fence, VK_TRUE, UINT64_MAX);
     vkDestroyFence(dev, fence, nullptr);

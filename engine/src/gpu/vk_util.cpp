@@ -64,6 +64,22 @@ VkResult createDeviceImage(VkPhysicalDevice pd, VkDevice dev, const VkImageCreat
     return vr;
 }
 
+Result createImageView(VkDevice dev, VkImage image, VkImageViewType type, VkFormat format,
+                       VkImageSubresourceRange range, VkImageView& out) {
+    const VkImageViewCreateInfo vci{
+        .sType = VK_STRUCTURE_TYPE_IMAGE_VIEW_CREATE_INFO,
+        .pNext = nullptr,
+        .flags = 0,
+        .image = image,
+        .viewType = type,
+        .format = format,
+        .components = {},
+        .subresourceRange = range,
+    };
+    IRIS_VK_TRY(vkCreateImageView(dev, &vci, nullptr, &out));
+    return {};
+}
+
 Result createTimestampPool(VkPhysicalDevice pd, VkDevice dev, uint32_t family, uint32_t count, VkQueryPool& pool,
                            double& periodNs) {
     pool = VK_NULL_HANDLE;

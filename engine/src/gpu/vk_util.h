@@ -74,6 +74,53 @@ VkResult createDeviceImage(VkPhysicalDevice pd, VkDevice dev, const VkImageCreat
 Result createTimestampPool(VkPhysicalDevice pd, VkDevice dev, uint32_t family, uint32_t count, VkQueryPool& pool,
                            double& periodNs);
 
+// Submission builders (synchronization2). The returned structs point at what they were given:
+// keep those alive until the submit call.
+inline VkCommandBufferSubmitInfo commandInfo(VkCommandBuffer cmd) {
+    return VkCommandBufferSubmitInfo{
+        .sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_SUBMIT_INFO, .pNext = nullptr, .commandBuffer = cmd, .deviceMask = 0};
+}
+inline VkSemaphoreSubmitInfo semaphoreInfo(VkSemaphore sem, uint64_t value, VkPipelineStageFlags2 stage) {
+    return VkSemaphoreSubmitInfo{.sType = VK_STRUCTURE_TYPE_SEMAPHORE_SUBMIT_INFO,
+                                 .pNext = nullptr,
+                                 .semaphore = sem,
+                                 .value = value,
+                                 .stageMask = stage,
+                                 .deviceIndex = 0};
+}
+inline VkSubmitInfo2 submitInfo(const VkCommandBufferSubmitInfo* cmd, const VkSemaphoreSubmitInfo* waits = nullptr,
+                                uint32_t waitCount = 0, const VkSemaphoreSubmitInfo* signals = nullptr,
+                                uint32_t signalCount = 0) {
+    return VkSubmitInfo2{.sType = VK_STRUCTURE_TYPE_SUBMIT_INFO_2,
+                         .pNext = nullptr,
+                         .flags = 0,
+                         .waitSemaphoreInfoCount = waitCount,
+                         .pWaitSemaphoreInfos = waits,
+                         .commandBufferInfoCount = 1,
+                         .pCommandBufferInfos = cmd,
+                         .signalSemaphoreInfoCount = signalCount,
+                         .pSignalSemaphoreInfos = signals};
+}
+
+inline void pipelineBarrier(VkCommandBuffer cmd, const VkBufferMemoryBarrier2& barrier) {
+    const VkDependencyInfo dep{
+        .sType = VK_STRUCTURE_TYPE_DEPENDENCY_INFO,
+        .pNext = nullptr,
+        .dependencyFlags = 0,
+        .memoryBarrierCount = 0,
+        .pMemoryBarriers = nullptr,
+        .bufferMemoryBarrierCount = 1,
+        .pBufferMemoryBarriers = &barrier,
+        .imageMemoryBarrierCount = 0,
+        .pImageMemoryBarriers = nullptr,
+    };
+    vkCmdPipelineBarrier2(cmd, &dep);
+}
+
+// A colour view of `range` of an image.
+Result createImageView(VkDevice dev, VkImage image, VkImageViewType type, VkFormat format,
+                       VkImageSubresourceRange range, VkImageView& out);
+
 // A host-visible buffer, persistently mapped.
 struct MappedBuffer {
     VkBuffer buffer = VK_NULL_HANDLE;

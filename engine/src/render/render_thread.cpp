@@ -462,16 +462,7 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
             .offset = 0,
             .size = VK_WHOLE_SIZE,
         };
-        const VkDependencyInfo dep{.sType = VK_STRUCTURE_TYPE_DEPENDENCY_INFO,
-                                   .pNext = nullptr,
-                                   .dependencyFlags = 0,
-                                   .memoryBarrierCount = 0,
-                                   .pMemoryBarriers = nullptr,
-                                   .bufferMemoryBarrierCount = 1,
-                                   .pBufferMemoryBarriers = &toHost,
-                                   .imageMemoryBarrierCount = 0,
-                                   .pImageMemoryBarriers = nullptr};
-        vkCmdPipelineBarrier2(cmd, &dep);
+        vk::pipelineBarrier(cmd, toHost);
     } else if (kind_ == TargetKind::Surface) {
         const VkImageMemoryBarrier2 toPresent = vk::imageBarrier(
             image, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
@@ -484,41 +475,16 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
     f.timed = timestamps_ != VK_NULL_HANDLE;
 
     IRIS_VK_TRY(vkResetFences(dev, 1, &f.fence));
-    const VkCommandBufferSubmitInfo cbi{
-        .sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_SUBMIT_INFO, .pNext = nullptr, .commandBuffer = cmd, .deviceMask = 0};
+    const VkCommandBufferSubmitInfo cbi = vk::commandInfo(cmd);
     const bool surface = kind_ == TargetKind::Surface;
-    const VkSemaphoreSubmitInfo waitAcq{.sType = VK_STRUCTURE_TYPE_SEMAPHORE_SUBMIT_INFO,
-                                        .pNext = nullptr,
-                                        .semaphore = f.acquired,
-                                        .value = 0,
-                                        .stageMask = VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
-                                        .deviceIndex = 0};
-    const VkSemaphoreSubmitInfo sigDone{.sType = VK_STRUCTURE_TYPE_SEMAPHORE_SUBMIT_INFO,
-                                        .pNext = nullptr,
-                                        .semaphore = surface ? swapchain_->renderDone(imageIndex) : VK_NULL_HANDLE,
-                                        .value = 0,
-                                        .stageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
-                                        .deviceIndex = 0};
     VkSemaphoreSubmitInfo waits[2];
     uint32_t waitCount = 0;
-    if (surface) waits[waitCount++] = waitAcq;
-    if (uploadWait) {
-        waits[waitCount++] = VkSemaphoreSubmitInfo{.sType = VK_STRUCTURE_TYPE_SEMAPHORE_SUBMIT_INFO,
-                                                   .pNext = nullptr,
-                                                   .semaphore = handover_.uploadTimeline,
-                                                   .value = uploadWait,
-                                                   .stageMask = VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT,
-                                                   .deviceIndex = 0};
-    }
-    const VkSubmitInfo2 si{.sType = VK_STRUCTURE_TYPE_SUBMIT_INFO_2,
-                           .pNext = nullptr,
-                           .flags = 0,
-                           .waitSemaphoreInfoCount = waitCount,
-                           .pWaitSemaphoreInfos = waits,
-                           .commandBufferInfoCount = 1,
-                           .pCommandBufferInfos = &cbi,
-                           .signalSemaphoreInfoCount = surface ? 1u : 0u,
-                           .pSignalSemaphoreInfos = &sigDone};
+    if (surface) waits[waitCount++] = vk::semaphoreInfo(f.acquired, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT);
+    if (uploadWait)
+        waits[waitCount++] = vk::semaphoreInfo(handover_.uploadTimeline, uploadWait, VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT);
+    const VkSemaphoreSubmitInfo sigDone =
+        vk::semaphoreInfo(surface ? swapchain_->renderDone(imageIndex) : VK_NULL_HANDLE, 0, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT);
+    const VkSubmitInfo2 si = vk::submitInfo(&cbi, waits, waitCount, &sigDone, surface ? 1u : 0u);
     if (const VkResult sr = device_.submit(si, f.fence); sr != VK_SUCCESS) {
         // The fence was reset but nothing will signal it: replace it with a signalled one so
         // the next use of this frame slot does not wait forever.

@@ -217,7 +217,7 @@ Result Engine::open(const std::string& path) {
     if (impl_->generation == 0) impl_->generation = 1;
     slide->generation = impl_->generation;
     impl_->cache.dropOtherGenerations(slide->generation);
-    impl_->shared.clearError();
+    impl_->shared.clearErrorForSlide(slide->generation);
     impl_->shared.update([&](Snapshot& s) {
         s.slide = slide;
         s.fieldId = 0;
@@ -341,6 +341,7 @@ void Engine::setEnhance(bool on) {
         if (impl_->generation == 0) impl_->generation = 1;
         slide->generation = impl_->generation;
         impl_->cache.dropOtherGenerations(slide->generation);
+        impl_->shared.renumberSlide(slide->generation);
     }
     impl_->shared.update([&](Snapshot& s) {
         s.enhance = on;

@@ -48,7 +48,7 @@ bool LoaderPool::loadOne() {
         const Result r = snap.slide->source->readTile(t.level, t.tx, t.ty, buf.get());
         const bool failed = !r.ok();
         if (failed) {
-            shared_.setError(r);
+            shared_.setSlideError(snap.slide->generation, r);
             log_.error(r.message());
             fillFailedTilePlaceholder(buf.get());
         }

@@ -78,6 +78,13 @@ public:
         std::lock_guard lock(errorMutex_);
         if (error_.ok() && !r.ok()) error_ = r;
     }
+    // An error that belongs to one slide (a tile that failed to decode): dropped when that
+    // slide has been replaced meanwhile, so a loader still finishing a tile of the previous
+    // slide cannot stick its error on the new one.
+    void setSlideError(uint32_t generation, const Result& r) {
+        std::lock_guard lock(errorMutex_);
+        if (generation == errorGeneration_ && error_.ok() && !r.ok()) error_ = r;
+    }
     Result error() const {
         std::lock_guard lock(errorMutex_);
         return error_;
@@ -86,6 +93,18 @@ public:
         std::lock_guard lock(errorMutex_);
         error_ = {};
     }
+    // The open slide got a new generation (same file, e.g. after an enhancement change): its
+    // tile errors keep counting; the error already recorded stays.
+    void renumberSlide(uint32_t generation) {
+        std::lock_guard lock(errorMutex_);
+        errorGeneration_ = generation;
+    }
+    // Clears the error and makes `generation` the slide whose tile errors count.
+    void clearErrorForSlide(uint32_t generation) {
+        std::lock_guard lock(errorMutex_);
+        error_ = {};
+        errorGeneration_ = generation;
+    }
 
 private:
     mutable std::mutex mutex_;
@@ -93,6 +112,7 @@ private:
     std::atomic<uint64_t> wake_{0};
     mutable std::mutex errorMutex_;
     Result error_;
+    uint32_t errorGeneration_ = 0; // the open slide's generation (guarded by errorMutex_)
 };
 
 } // namespace iris

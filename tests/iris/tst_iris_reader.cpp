@@ -564,6 +564,12 @@ private slots:
         QVERIFY2(std::abs(info->mppX - mpp) < 1e-6 && std::abs(info->mppY - mpp) < 1e-6,
                  qPrintable(QString("mpp %1 x %2").arg(info->mppX).arg(info->mppY)));
         QVERIFY2(std::abs(info->objectivePower - magnification) < 1e-6, qPrintable(QString::number(info->objectivePower)));
+        for (const iris::LevelInfo& li : info->levels) {
+            // Per level: the slide's mpp grows and its magnification shrinks with the downsample.
+            QVERIFY(std::abs(li.mppX - mpp * li.downsample) < 1e-6 && std::abs(li.mppY - mpp * li.downsample) < 1e-6);
+            QVERIFY(std::abs(li.magnification - (magnification > 0 ? magnification / li.downsample : 0)) < 1e-6);
+        }
+        QVERIFY(info->iccProfile.empty()); // the fixtures carry none (iris.icc-profile-bytes 0)
 
         // Properties: sorted, unique; the reader's own and the attributes as stored.
         auto prop = [&](const std::string& k) -> std::optional<std::string> {

@@ -85,6 +85,9 @@ struct LevelInfo {
     double downsample = 1; // level-0 pixels per pixel of this level
     int64_t tilesX = 0;    // the engine's own 256×256 grid over this level
     int64_t tilesY = 0;
+    double mppX = 0;       // microns per pixel of this level (slide mpp × downsample); 0 when unknown
+    double mppY = 0;
+    double magnification = 0; // objective power at this level (slide power ÷ downsample); 0 when unknown
 };
 
 struct SlideInfo {
@@ -98,6 +101,7 @@ struct SlideInfo {
     double objectivePower = 0;         // scanning objective (for example 20 or 40); 0 when unknown
     std::vector<std::pair<std::string, std::string>> properties; // every property, sorted by name
     std::vector<std::string> associatedImages;                     // "label", "macro", "thumbnail", …
+    std::vector<uint8_t> iccProfile;   // the embedded ICC colour profile's bytes; empty when none
 };
 
 // The view: which level-0 point is at the centre of the target, and how many

@@ -830,6 +830,11 @@ Expected<std::unique_ptr<SlideSource>> IrisFileSource::open(const std::string& p
         return layout.error();
     }
     SlideInfo info = makeInfo(path, *layout);
+    if (layout->hasIcc && layout->iccSize > 0) {
+        // parse() checked that the profile's bytes lie inside the file.
+        info.iccProfile.assign(map->data + layout->iccOffset, map->data + layout->iccOffset + layout->iccSize);
+    }
+    fillLevelPhysics(info);
     return std::unique_ptr<SlideSource>(
         new IrisFileSource(map->data, map->size, name, std::move(layout.value()), std::move(info)));
 }

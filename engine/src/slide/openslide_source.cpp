@@ -114,6 +114,7 @@ Expected<std::unique_ptr<SlideSource>> OpenSlideSource::open(const std::string& 
     if (const char* const* names = openslide_get_associated_image_names(osr)) {
         for (; *names; ++names) info.associatedImages.emplace_back(*names);
     }
+    fillLevelPhysics(info);
     return std::unique_ptr<SlideSource>(new OpenSlideSource(osr, std::move(info)));
 }
 

@@ -19,6 +19,14 @@ void fillTileGrid(LevelInfo& level) {
     level.tilesY = (level.height + kTileSize - 1) / kTileSize;
 }
 
+void fillLevelPhysics(SlideInfo& info) {
+    for (LevelInfo& l : info.levels) {
+        l.mppX = info.mppX > 0 ? info.mppX * l.downsample : 0;
+        l.mppY = info.mppY > 0 ? info.mppY * l.downsample : 0;
+        l.magnification = info.objectivePower > 0 ? info.objectivePower / l.downsample : 0;
+    }
+}
+
 void padTileEdges(uint8_t* rgba, int validWidth, int validHeight) {
     if (validWidth <= 0 || validHeight <= 0) {
         std::memset(rgba, 0, kTileBytes);

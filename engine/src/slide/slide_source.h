@@ -37,6 +37,10 @@ Expected<std::unique_ptr<SlideSource>> openSlideSource(const std::string& path, 
 // Fills the LevelInfo tile grid fields (tilesX/Y) from width/height.
 void fillTileGrid(LevelInfo& level);
 
+// Fills each level's mpp and magnification from the slide's (level-0) values and the
+// level's downsample. Every reader calls it once its SlideInfo is complete.
+void fillLevelPhysics(SlideInfo& info);
+
 // Repeats the last valid column/row of a partially filled tile into its padding.
 void padTileEdges(uint8_t* rgba, int validWidth, int validHeight);
 

@@ -37,6 +37,7 @@ Expected<std::unique_ptr<SlideSource>> SyntheticSource::open(const std::string& 
         if (std::max(l.width, l.height) <= 512 || k >= 40) break;
     }
     info.properties = {{"openslide.vendor", "synthetic"}, {"synthetic.size", std::to_string(w) + "x" + std::to_string(h)}};
+    fillLevelPhysics(info);
     return std::unique_ptr<SlideSource>(new SyntheticSource(std::move(info)));
 }
 

@@ -334,6 +334,17 @@ Expected<std::unique_ptr<SlideSource>> TiffTileSource::tryOpen(const std::string
         src->levels_.push_back(lv);
     }
     if (src->levels_.empty()) return notMine(name, "no levels");
+    src->info_ = info;
+    {
+        // The colour profile of the full-resolution image (TIFFTAG_ICCPROFILE, 34675).
+        uint32_t iccSize = 0;
+        void* icc = nullptr;
+        if (TIFFSetDirectory(probe->tif, src->levels_[0].dir) &&
+            TIFFGetField(probe->tif, TIFFTAG_ICCPROFILE, &iccSize, &icc) && icc && iccSize > 0) {
+            const auto* b = static_cast<const uint8_t*>(icc);
+            src->info_.iccProfile.assign(b, b + iccSize);
+        }
+    }
     src->pool_.resize(src->levels_.size());
     // Keep the probe: it becomes the first pooled handle of the level it can reach first.
     if (TIFFSetDirectory(probe->tif, src->levels_[0].dir)) {
@@ -351,7 +362,7 @@ TiffTileSource::~TiffTileSource() {
 }
 
 const SlideInfo& TiffTileSource::info() const {
-    return meta_->info();
+    return info_;
 }
 
 Expected<Image> TiffTileSource::readAssociatedImage(const std::string& name) {

@@ -60,7 +60,8 @@ private:
     void release(size_t level, std::unique_ptr<Handle> handle);
     Expected<std::shared_ptr<const DecodedTile>> fileTile(size_t level, uint32_t col, uint32_t row);
 
-    std::unique_ptr<SlideSource> meta_; // the OpenSlide reader: SlideInfo and associated images
+    std::unique_ptr<SlideSource> meta_; // the OpenSlide reader: associated images
+    SlideInfo info_;                    // OpenSlide's, plus the ICC profile OpenSlide 3.4 does not read
     std::string fileName_;              // for messages
     int fd_ = -1;                       // shared by every handle (pread only)
     uint64_t fileSize_ = 0;

@@ -1,11 +1,13 @@
 #version 450
 // Mip reduction: every mip level (128×128 … 1×1) of every tile of a microtransaction in one
-// dispatch, one workgroup per tile, each level computed from the 1× base level only.
+// dispatch, each level computed from the 1× base level only.
 //
 // Integration (buffer/buffer_thread.cpp, gpu/mip_pipeline.cpp): binding 0 is a storage view
-// of mip 0 of the whole atlas (all layers), binding 1 an array of 8 storage views, mips 1..8.
-// The push constants give each workgroup its atlas layer, the enhance switch and the gain λ.
-// The base level must be written and made visible to the compute stage before the dispatch.
+// of mip 0 of the whole atlas (all layers), binding 1 an array of 8 storage views, mips 1..8,
+// bindings 2 and 3 the per-slot scratch (level-4 sums and arrival counters, zeroed once when
+// the pipeline is created). The push constants give each tile of the batch its atlas layer,
+// the enhance switch and the gain λ. The base level must be written and made visible to the
+// compute stage before the dispatch.
 //
 // Kernel (docs/ENHANCEMENT.md; CPU reference engine/src/gpu/mip_kernel.cpp), per channel, for
 // level k (r = 2^k, n = 256/r): S = integer sum of the r×r base block (exact), A = S/(r²·255),
@@ -14,29 +16,52 @@
 //   enhance = 1: clamp(A + λ·(A − G), 0, 1), A − G from the exact integer 16·S − Σ w·S.
 // Only tile texels are read, so a tile's mips do not depend on its neighbours.
 //
-// Thread t owns a 16×16 block of the base: it sums it bottom-up in integers; levels 1–2 of
-// its block are stored from those sums (plain) or from block sums over a one-texel halo
-// (enhanced); the 8×8-block sums (level 3) and the 16×16-block sums go to shared memory, and
-// levels 3–8 are computed from shared grids after a barrier.
+// Work split (the dispatch is 16 × tiles workgroups of 256 threads):
+//   - Workgroup (x, y) handles region x (a 64×64 quarter-of-a-quarter of tile y). It loads the
+//     region plus a 16-texel halo (one level-4 texel; none without enhance) once, builds the
+//     integer block sums of levels 1–4 over that window in shared memory, and writes its part
+//     of levels 1–4: each blur only needs one texel of halo at its own level.
+//   - Levels 5–8 need the whole tile. Each region writes its 4×4 level-4 sums to the slot's
+//     scratch, then counts itself in with an atomic add on the slot's counter; the workgroup
+//     that arrives 16th (old value ≡ 15 mod 16, so the counter never needs resetting) reads
+//     all 256 sums back and writes levels 5–8. This is the single-pass pattern of AMD's
+//     FidelityFX SPD: no second dispatch, no workgroup ever waits for another.
+// Every sum fits 16 bits per channel up to level 4 (255 · 256 = 65280), so levels 1–4 are
+// stored RG|BA-packed in two uints.
 
 layout(local_size_x = 256) in;
 
 layout(set = 0, binding = 0, rgba8) uniform readonly image2DArray baseLevel;
 layout(set = 0, binding = 1, rgba8) uniform writeonly image2DArray mipLevel[8];
+layout(set = 0, binding = 2, std430) coherent buffer Level4Sums { uvec2 level4[]; }; // 256 per slot
+layout(set = 0, binding = 3, std430) coherent buffer Arrivals { uint arrivals[]; };  // one per slot
 
 layout(push_constant) uniform Push {
-    uvec4 layers[2]; // atlas layer of workgroup i: layers[i / 4][i % 4]
+    uvec4 layers[2]; // atlas layer of tile i: layers[i / 4][i % 4]
     uint enhance;    // 0: area average; 1: sharpened
     float lambda;    // sharpening gain λ (mipkernel::kLambda)
 } pc;
 
-shared uvec2 sums8[1024]; // 32×32 grid of 8×8-block sums, RG and BA packed 16+16 bits (≤ 16320)
-shared uvec4 sums16[256]; // 16×16 grid of 16×16-block sums
-shared uvec4 sums32[64];  // 8×8 grid of 32×32-block sums
-shared uvec4 sums64[16];
-shared uvec4 sums128[4];
+const int kHalo = 16; // base texels around a region: one level-4 texel
+
+// Windows (region + halo) of level k, side (64 + 2·16) >> k, origin (regionOrigin − 16) >> k.
+shared uvec2 s1[48 * 48];
+shared uvec2 s2[24 * 24];
+shared uvec2 s3[12 * 12];
+shared uvec2 s4[6 * 6];
+// The last region's whole-tile grids: level 4 (packed), 5, 6, 7.
+shared uvec2 t16[256];
+shared uvec4 t32[64];
+shared uvec4 t64[16];
+shared uvec4 t128[4];
+shared bool lastRegion;
 
 int layer;
+ivec2 origin;  // the region's top-left base texel
+bool plain;
+
+uvec2 pack(uvec4 v) { return uvec2(v.x | (v.y << 16), v.z | (v.w << 16)); }
+uvec4 unpack(uvec2 v) { return uvec4(v.x & 0xFFFFu, v.x >> 16, v.y & 0xFFFFu, v.y >> 16); }
 
 uvec4 loadBase(ivec2 p) {
     return uvec4(round(imageLoad(baseLevel, ivec3(p, layer)) * 255.0));
@@ -68,131 +93,152 @@ void store(int lvl, ivec2 p, vec4 v) {
     }
 }
 
-uvec4 get8(int i) { const uvec2 v = sums8[i]; return uvec4(v.x & 0xFFFFu, v.x >> 16, v.y & 0xFFFFu, v.y >> 16); }
-uvec4 get16(int i) { return sums16[i]; }
-uvec4 get32(int i) { return sums32[i]; }
-uvec4 get64(int i) { return sums64[i]; }
-uvec4 get128(int i) { return sums128[i]; }
+// Window accessors: level-k texel q (tile coordinates, inside the window) → its block sum.
+uvec4 w1(ivec2 q) { const ivec2 c = q - ((origin - kHalo) >> 1); return unpack(s1[c.y * 48 + c.x]); }
+uvec4 w2(ivec2 q) { const ivec2 c = q - ((origin - kHalo) >> 2); return unpack(s2[c.y * 24 + c.x]); }
+uvec4 w3(ivec2 q) { const ivec2 c = q - ((origin - kHalo) >> 3); return unpack(s3[c.y * 12 + c.x]); }
+uvec4 w4(ivec2 q) { const ivec2 c = q - ((origin - kHalo) >> 4); return unpack(s4[c.y * 6 + c.x]); }
+uvec4 g16(ivec2 q) { return unpack(t16[q.y * 16 + q.x]); }
+uvec4 g32(ivec2 q) { return t32[q.y * 8 + q.x]; }
+uvec4 g64(ivec2 q) { return t64[q.y * 4 + q.x]; }
+uvec4 g128(ivec2 q) { return t128[q.y * 2 + q.x]; }
 
+// Σ w·S over the 3×3 neighbourhood of q on an N×N level grid, indices clamped to the tile.
 #define BLUR_FN(NAME, GET, N)                                                        \
     uvec4 NAME(ivec2 p) {                                                            \
         uvec4 g = uvec4(0);                                                          \
         for (int j = -1; j <= 1; ++j)                                                \
             for (int i = -1; i <= 1; ++i) {                                          \
                 const ivec2 q = clamp(p + ivec2(i, j), ivec2(0), ivec2(N - 1));      \
-                g += uint((2 - abs(i)) * (2 - abs(j))) * GET(q.y * N + q.x);         \
+                g += uint((2 - abs(i)) * (2 - abs(j))) * GET(q);                     \
             }                                                                        \
         return g;                                                                    \
     }
-BLUR_FN(blur8, get8, 32)
-BLUR_FN(blur16, get16, 16)
-BLUR_FN(blur32, get32, 8)
-BLUR_FN(blur64, get64, 4)
-BLUR_FN(blur128, get128, 2)
+BLUR_FN(blur1, w1, 128)
+BLUR_FN(blur2, w2, 64)
+BLUR_FN(blur3, w3, 32)
+BLUR_FN(blur4, w4, 16)
+BLUR_FN(blur5, g32, 8)
+BLUR_FN(blur6, g64, 4)
+BLUR_FN(blur7, g128, 2)
 
-// Sum of the r×r base block of level-k texel q.
-uvec4 blockSum(ivec2 q, int r) {
-    uvec4 s = uvec4(0);
-    for (int y = 0; y < r; ++y)
-        for (int x = 0; x < r; ++x) s += loadBase(q * r + ivec2(x, y));
-    return s;
+// Whether window cell c of level k (side 96 >> k) is needed: inside the tile, and inside the
+// region itself unless the blur needs the halo.
+bool needed(int k, ivec2 c, out ivec2 q) {
+    const int halo = kHalo >> k;
+    q = ((origin - kHalo) >> k) + c;
+    const int n = 256 >> k;
+    if (any(lessThan(q, ivec2(0))) || any(greaterThanEqual(q, ivec2(n)))) return false;
+    return !plain || (all(greaterThanEqual(c, ivec2(halo))) && all(lessThan(c, ivec2(halo + (64 >> k)))));
 }
 
-// Enhanced level 1 (r = 2, m = 8) or 2 (r = 4, m = 4) of this thread's block, from block sums
-// over a one-texel halo clamped to the tile.
-void enhancedSmallLevel(int lvl, ivec2 block) {
-    const int r = 1 << lvl, m = 16 >> lvl, n = 256 >> lvl;
-    uvec4 h[100]; // (m + 2)² ≤ 10 × 10
-    const int w = m + 2;
-    for (int j = 0; j < w; ++j)
-        for (int i = 0; i < w; ++i) {
-            const ivec2 q = clamp(block * m + ivec2(i - 1, j - 1), ivec2(0), ivec2(n - 1));
-            h[j * w + i] = blockSum(q, r);
-        }
-    for (int y = 0; y < m; ++y)
-        for (int x = 0; x < m; ++x) {
-            uvec4 g = uvec4(0);
-            for (int j = 0; j < 3; ++j)
-                for (int i = 0; i < 3; ++i)
-                    g += uint((2 - abs(i - 1)) * (2 - abs(j - 1))) * h[(y + j) * w + x + i];
-            store(lvl, block * m + ivec2(x, y), level(h[(y + 1) * w + x + 1], g, float(r * r)));
-        }
-}
+// Writes the region's part of level k from its window (s: the texel's sum, blurred from the window).
+#define OUTPUT_FN(NAME, K, GET, BLUR)                                                \
+    void NAME(uint t) {                                                              \
+        const int side = 64 >> K;                                                    \
+        for (int i = int(t); i < side * side; i += 256) {                            \
+            const ivec2 q = (origin >> K) + ivec2(i % side, i / side);               \
+            store(K, q, level(GET(q), plain ? uvec4(0) : BLUR(q), float(1 << (2 * K)))); \
+        }                                                                            \
+    }
+OUTPUT_FN(output1, 1, w1, blur1)
+OUTPUT_FN(output2, 2, w2, blur2)
+OUTPUT_FN(output3, 3, w3, blur3)
+OUTPUT_FN(output4, 4, w4, blur4)
 
 void main() {
-    const uint wg = gl_WorkGroupID.x;
-    layer = int(pc.layers[wg / 4u][wg % 4u]);
+    const uint tile = gl_WorkGroupID.y;
+    layer = int(pc.layers[tile / 4u][tile % 4u]);
+    const uint region = gl_WorkGroupID.x; // 0..15, row-major 4×4
+    origin = 64 * ivec2(int(region % 4u), int(region / 4u));
+    plain = pc.enhance == 0u;
     const uint t = gl_LocalInvocationIndex;
-    const ivec2 block = ivec2(int(t % 16u), int(t / 16u)); // this thread's 16×16 block
-    const ivec2 o = block * 16;
-    const bool plain = pc.enhance == 0u;
+    ivec2 q;
 
-    uvec4 acc4 = uvec4(0);
-    for (int q3 = 0; q3 < 4; ++q3) {
-        const ivec2 o3 = o + 8 * ivec2(q3 & 1, q3 >> 1);
-        uvec4 acc3 = uvec4(0);
-        for (int q2 = 0; q2 < 4; ++q2) {
-            const ivec2 o2 = o3 + 4 * ivec2(q2 & 1, q2 >> 1);
-            uvec4 acc2 = uvec4(0);
-            for (int q1 = 0; q1 < 4; ++q1) {
-                const ivec2 o1 = o2 + 2 * ivec2(q1 & 1, q1 >> 1);
-                const uvec4 s1 = loadBase(o1) + loadBase(o1 + ivec2(1, 0)) + loadBase(o1 + ivec2(0, 1)) +
-                                 loadBase(o1 + ivec2(1, 1));
-                if (plain) store(1, o1 / 2, average(s1, 4.0));
-                acc2 += s1;
-            }
-            if (plain) store(2, o2 / 4, average(acc2, 16.0));
-            acc3 += acc2;
+    // Level 1 over the window, straight from the base level: 9 cells per thread.
+    for (int i = int(t); i < 48 * 48; i += 256) {
+        const ivec2 c = ivec2(i % 48, i / 48);
+        if (!needed(1, c, q)) continue;
+        const ivec2 b = 2 * q;
+        s1[i] = pack(loadBase(b) + loadBase(b + ivec2(1, 0)) + loadBase(b + ivec2(0, 1)) + loadBase(b + ivec2(1, 1)));
+    }
+    barrier();
+    // Levels 2–4 over their windows, each from the one below (a cell's children are 2c + {0,1}²).
+    for (int i = int(t); i < 24 * 24; i += 256) {
+        const ivec2 c = ivec2(i % 24, i / 24);
+        if (!needed(2, c, q)) continue;
+        const int j = 2 * c.y * 48 + 2 * c.x;
+        s2[i] = pack(unpack(s1[j]) + unpack(s1[j + 1]) + unpack(s1[j + 48]) + unpack(s1[j + 49]));
+    }
+    barrier();
+    if (t < 12u * 12u) {
+        const ivec2 c = ivec2(int(t % 12u), int(t / 12u));
+        if (needed(3, c, q)) {
+            const int j = 2 * c.y * 24 + 2 * c.x;
+            s3[t] = pack(unpack(s2[j]) + unpack(s2[j + 1]) + unpack(s2[j + 24]) + unpack(s2[j + 25]));
         }
-        const ivec2 p3 = o3 / 8;
-        sums8[p3.y * 32 + p3.x] = uvec2(acc3.x | (acc3.y << 16), acc3.z | (acc3.w << 16));
-        acc4 += acc3;
     }
-    sums16[t] = acc4;
-    if (!plain) {
-        enhancedSmallLevel(1, block);
-        enhancedSmallLevel(2, block);
+    barrier();
+    if (t < 6u * 6u) {
+        const ivec2 c = ivec2(int(t % 6u), int(t / 6u));
+        if (needed(4, c, q)) {
+            const int j = 2 * c.y * 12 + 2 * c.x;
+            s4[t] = pack(unpack(s3[j]) + unpack(s3[j + 1]) + unpack(s3[j + 12]) + unpack(s3[j + 13]));
+        }
     }
     barrier();
 
-    for (int q = 0; q < 4; ++q) {
-        const ivec2 p3 = block * 2 + ivec2(q & 1, q >> 1);
-        store(3, p3, level(get8(p3.y * 32 + p3.x), plain ? uvec4(0) : blur8(p3), 64.0));
-    }
-    store(4, block, level(acc4, plain ? uvec4(0) : blur16(block), 256.0));
+    output1(t);
+    output2(t);
+    output3(t);
+    output4(t);
 
+    // Hand the region's level-4 sums to whichever region of this tile finishes last.
+    if (t < 16u) {
+        const ivec2 p = (origin >> 4) + ivec2(int(t % 4u), int(t / 4u));
+        level4[uint(layer) * 256u + uint(p.y * 16 + p.x)] = pack(w4(p));
+    }
+    memoryBarrierBuffer();
+    barrier();
+    if (t == 0u) lastRegion = (atomicAdd(arrivals[layer], 1u) % 16u) == 15u;
+    barrier();
+    if (!lastRegion) return; // uniform across the workgroup
+    memoryBarrierBuffer();
+
+    t16[t] = level4[uint(layer) * 256u + t];
+    barrier();
     if (t < 64u) {
         const ivec2 p = ivec2(int(t % 8u), int(t / 8u));
-        const int i = p.y * 32 + p.x * 2; // top-left of the 2×2 in the 16-wide grid
-        sums32[t] = sums16[i] + sums16[i + 1] + sums16[i + 16] + sums16[i + 17];
+        const ivec2 b = 2 * p;
+        t32[t] = g16(b) + g16(b + ivec2(1, 0)) + g16(b + ivec2(0, 1)) + g16(b + ivec2(1, 1));
     }
     barrier();
     if (t < 64u) {
         const ivec2 p = ivec2(int(t % 8u), int(t / 8u));
-        store(5, p, level(sums32[t], plain ? uvec4(0) : blur32(p), 1024.0));
+        store(5, p, level(t32[t], plain ? uvec4(0) : blur5(p), 1024.0));
     }
     if (t < 16u) {
         const ivec2 p = ivec2(int(t % 4u), int(t / 4u));
         const int i = p.y * 16 + p.x * 2;
-        sums64[t] = sums32[i] + sums32[i + 1] + sums32[i + 8] + sums32[i + 9];
+        t64[t] = t32[i] + t32[i + 1] + t32[i + 8] + t32[i + 9];
     }
     barrier();
     if (t < 16u) {
         const ivec2 p = ivec2(int(t % 4u), int(t / 4u));
-        store(6, p, level(sums64[t], plain ? uvec4(0) : blur64(p), 4096.0));
+        store(6, p, level(t64[t], plain ? uvec4(0) : blur6(p), 4096.0));
     }
     if (t < 4u) {
         const ivec2 p = ivec2(int(t % 2u), int(t / 2u));
         const int i = p.y * 8 + p.x * 2;
-        sums128[t] = sums64[i] + sums64[i + 1] + sums64[i + 4] + sums64[i + 5];
+        t128[t] = t64[i] + t64[i + 1] + t64[i + 4] + t64[i + 5];
     }
     barrier();
     if (t < 4u) {
         const ivec2 p = ivec2(int(t % 2u), int(t / 2u));
-        store(7, p, level(sums128[t], plain ? uvec4(0) : blur128(p), 16384.0));
+        store(7, p, level(t128[t], plain ? uvec4(0) : blur7(p), 16384.0));
     }
     if (t == 0u) {
-        const uvec4 s = sums128[0] + sums128[1] + sums128[2] + sums128[3];
+        const uvec4 s = t128[0] + t128[1] + t128[2] + t128[3];
         store(8, ivec2(0), level(s, 16u * s, 65536.0)); // a 1×1 grid: G = A
     }
 }

@@ -2,6 +2,9 @@
 
 #include "gpu/mip_kernel.h"
 #include "gpu/vk_util.h"
+
+#include <algorithm>
+#include <string>
 #include <iris_shaders/mip_reduce_comp.h>
 
 namespace iris::gpu {
@@ -23,25 +26,46 @@ MipPipeline::~MipPipeline() {
     if (pool_) vkDestroyDescriptorPool(dev, pool_, nullptr);
     if (layout_) vkDestroyPipelineLayout(dev, layout_, nullptr);
     if (setLayout_) vkDestroyDescriptorSetLayout(dev, setLayout_, nullptr);
+    if (scratch_) vkDestroyBuffer(dev, scratch_, nullptr);
+    if (scratchMemory_) vkFreeMemory(dev, scratchMemory_, nullptr);
     if (module_) vkDestroyShaderModule(dev, module_, nullptr);
 }
 
 Result MipPipeline::init() {
     VkDevice dev = device_.device();
+    const VkPhysicalDeviceLimits& limits = device_.properties().limits;
+    if (limits.maxComputeSharedMemorySize < kSharedBytes) {
+        return Result(Status::Vulkan, "The GPU offers " + std::to_string(limits.maxComputeSharedMemorySize) +
+                                          " bytes of compute shared memory; the mip pass needs " +
+                                          std::to_string(kSharedBytes));
+    }
+    // Scratch: the level-4 sums, then the counters at an aligned offset.
+    const VkDeviceSize align = std::max<VkDeviceSize>(limits.minStorageBufferOffsetAlignment, 16);
+    const VkDeviceSize slots = std::max<uint32_t>(atlas_.slotCount(), 1);
+    sumsBytes_ = slots * 256 * 8;
+    countersOffset_ = (sumsBytes_ + align - 1) / align * align;
+    countersBytes_ = slots * 4;
+    IRIS_VK_TRY(vk::createDeviceBuffer(device_.physical(), dev, countersOffset_ + countersBytes_,
+                                       VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, scratch_,
+                                       scratchMemory_));
     const VkShaderModuleCreateInfo smci{.sType = VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO,
                                         .pNext = nullptr,
                                         .flags = 0,
                                         .codeSize = sizeof(mip_reduce_comp_spv),
                                         .pCode = mip_reduce_comp_spv};
     IRIS_VK_TRY(vkCreateShaderModule(dev, &smci, nullptr, &module_));
-    const VkDescriptorSetLayoutBinding bindings[2] = {
+    const VkDescriptorSetLayoutBinding bindings[4] = {
         {.binding = 0, .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, .descriptorCount = 1,
          .stageFlags = VK_SHADER_STAGE_COMPUTE_BIT, .pImmutableSamplers = nullptr},
         {.binding = 1, .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, .descriptorCount = kTileMipLevels - 1,
          .stageFlags = VK_SHADER_STAGE_COMPUTE_BIT, .pImmutableSamplers = nullptr},
+        {.binding = 2, .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, .descriptorCount = 1,
+         .stageFlags = VK_SHADER_STAGE_COMPUTE_BIT, .pImmutableSamplers = nullptr},
+        {.binding = 3, .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, .descriptorCount = 1,
+         .stageFlags = VK_SHADER_STAGE_COMPUTE_BIT, .pImmutableSamplers = nullptr},
     };
     const VkDescriptorSetLayoutCreateInfo dslci{
-        .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO, .pNext = nullptr, .flags = 0, .bindingCount = 2, .pBindings = bindings};
+        .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO, .pNext = nullptr, .flags = 0, .bindingCount = 4, .pBindings = bindings};
     IRIS_VK_TRY(vkCreateDescriptorSetLayout(dev, &dslci, nullptr, &setLayout_));
     const VkPushConstantRange push{.stageFlags = VK_SHADER_STAGE_COMPUTE_BIT, .offset = 0, .size = sizeof(MipPush)};
     const VkPipelineLayoutCreateInfo plci{.sType = VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO,
@@ -64,9 +88,10 @@ Result MipPipeline::init() {
     };
     IRIS_VK_TRY(vkCreateComputePipelines(dev, VK_NULL_HANDLE, 1, &cpci, nullptr, &pipeline_));
 
-    const VkDescriptorPoolSize ps{.type = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, .descriptorCount = kTileMipLevels};
+    const VkDescriptorPoolSize ps[2] = {{.type = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, .descriptorCount = kTileMipLevels},
+                                        {.type = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, .descriptorCount = 2}};
     const VkDescriptorPoolCreateInfo dpci{
-        .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO, .pNext = nullptr, .flags = 0, .maxSets = 1, .poolSizeCount = 1, .pPoolSizes = &ps};
+        .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO, .pNext = nullptr, .flags = 0, .maxSets = 1, .poolSizeCount = 2, .pPoolSizes = ps};
     IRIS_VK_TRY(vkCreateDescriptorPool(dev, &dpci, nullptr, &pool_));
     const VkDescriptorSetAllocateInfo dsai{.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO,
                                            .pNext = nullptr,
@@ -77,19 +102,48 @@ Result MipPipeline::init() {
     VkDescriptorImageInfo infos[kTileMipLevels];
     for (uint32_t m = 0; m < kTileMipLevels; ++m)
         infos[m] = {.sampler = VK_NULL_HANDLE, .imageView = atlas_.mipView(m), .imageLayout = VK_IMAGE_LAYOUT_GENERAL};
-    const VkWriteDescriptorSet writes[2] = {
+    const VkDescriptorBufferInfo buffers[2] = {{.buffer = scratch_, .offset = 0, .range = sumsBytes_},
+                                               {.buffer = scratch_, .offset = countersOffset_, .range = countersBytes_}};
+    const VkWriteDescriptorSet writes[4] = {
         {.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .pNext = nullptr, .dstSet = set_, .dstBinding = 0, .dstArrayElement = 0,
          .descriptorCount = 1, .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, .pImageInfo = &infos[0],
          .pBufferInfo = nullptr, .pTexelBufferView = nullptr},
         {.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .pNext = nullptr, .dstSet = set_, .dstBinding = 1, .dstArrayElement = 0,
          .descriptorCount = kTileMipLevels - 1, .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, .pImageInfo = &infos[1],
          .pBufferInfo = nullptr, .pTexelBufferView = nullptr},
+        {.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .pNext = nullptr, .dstSet = set_, .dstBinding = 2, .dstArrayElement = 0,
+         .descriptorCount = 1, .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, .pImageInfo = nullptr,
+         .pBufferInfo = &buffers[0], .pTexelBufferView = nullptr},
+        {.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .pNext = nullptr, .dstSet = set_, .dstBinding = 3, .dstArrayElement = 0,
+         .descriptorCount = 1, .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, .pImageInfo = nullptr,
+         .pBufferInfo = &buffers[1], .pTexelBufferView = nullptr},
     };
-    vkUpdateDescriptorSets(dev, 2, writes, 0, nullptr);
+    vkUpdateDescriptorSets(dev, 4, writes, 0, nullptr);
     return {};
 }
 
-void MipPipeline::record(VkCommandBuffer cmd, const int* layers, uint32_t count, bool enhance) const {
+void MipPipeline::record(VkCommandBuffer cmd, const int* layers, uint32_t count, bool enhance) {
+    if (!countersZeroed_) {
+        // The counters only ever grow by 16 per tile (the shader tests old % 16), so zeroing
+        // them once, before the first dispatch, is enough.
+        vkCmdFillBuffer(cmd, scratch_, countersOffset_, countersBytes_, 0);
+        countersZeroed_ = true;
+    }
+    // Order this dispatch's scratch accesses after the fill and after earlier dispatches on
+    // this queue (a slot's scratch is reused when the slot is refilled).
+    const VkBufferMemoryBarrier2 b{
+        .sType = VK_STRUCTURE_TYPE_BUFFER_MEMORY_BARRIER_2,
+        .pNext = nullptr,
+        .srcStageMask = VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT | VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+        .srcAccessMask = VK_ACCESS_2_TRANSFER_WRITE_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+        .dstStageMask = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+        .dstAccessMask = VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+        .srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED,
+        .dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED,
+        .buffer = scratch_,
+        .offset = 0,
+        .size = VK_WHOLE_SIZE};
+    vk::pipelineBarrier(cmd, b);
     MipPush push{};
     for (uint32_t i = 0; i < count && i < kMaxTiles; ++i) push.layers[i] = uint32_t(layers[i]);
     push.enhance = enhance ? 1u : 0u;
@@ -97,7 +151,7 @@ void MipPipeline::record(VkCommandBuffer cmd, const int* layers, uint32_t count,
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_);
     vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 1, &set_, 0, nullptr);
     vkCmdPushConstants(cmd, layout_, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push), &push);
-    vkCmdDispatch(cmd, count, 1, 1);
+    vkCmdDispatch(cmd, kRegionsPerTile, count, 1);
 }
 
 } // namespace iris::gpu

@@ -64,6 +64,36 @@ VkResult createDeviceImage(VkPhysicalDevice pd, VkDevice dev, const VkImageCreat
     return vr;
 }
 
+VkResult createDeviceBuffer(VkPhysicalDevice pd, VkDevice dev, VkDeviceSize size, VkBufferUsageFlags usage,
+                            VkBuffer& buffer, VkDeviceMemory& memory) {
+    buffer = VK_NULL_HANDLE;
+    memory = VK_NULL_HANDLE;
+    const VkBufferCreateInfo bci{.sType = VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO,
+                                 .pNext = nullptr,
+                                 .flags = 0,
+                                 .size = size,
+                                 .usage = usage,
+                                 .sharingMode = VK_SHARING_MODE_EXCLUSIVE,
+                                 .queueFamilyIndexCount = 0,
+                                 .pQueueFamilyIndices = nullptr};
+    VkResult vr = vkCreateBuffer(dev, &bci, nullptr, &buffer);
+    if (vr != VK_SUCCESS) return vr;
+    VkMemoryRequirements req;
+    vkGetBufferMemoryRequirements(dev, buffer, &req);
+    const uint32_t type = findMemoryType(pd, req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
+    const VkMemoryAllocateInfo mai{
+        .sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO, .pNext = nullptr, .allocationSize = req.size, .memoryTypeIndex = type};
+    vr = type == UINT32_MAX ? VK_ERROR_OUT_OF_DEVICE_MEMORY : vkAllocateMemory(dev, &mai, nullptr, &memory);
+    if (vr == VK_SUCCESS) vr = vkBindBufferMemory(dev, buffer, memory, 0);
+    if (vr != VK_SUCCESS) {
+        if (memory) vkFreeMemory(dev, memory, nullptr);
+        vkDestroyBuffer(dev, buffer, nullptr);
+        buffer = VK_NULL_HANDLE;
+        memory = VK_NULL_HANDLE;
+    }
+    return vr;
+}
+
 Result createImageView(VkDevice dev, VkImage image, VkImageViewType type, VkFormat format,
                        VkImageSubresourceRange range, VkImageView& out) {
     const VkImageViewCreateInfo vci{

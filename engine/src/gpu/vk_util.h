@@ -69,6 +69,10 @@ inline void pipelineBarrier(VkCommandBuffer cmd, const VkImageMemoryBarrier2* ba
 VkResult createDeviceImage(VkPhysicalDevice pd, VkDevice dev, const VkImageCreateInfo& info, VkImage& image,
                            VkDeviceMemory& memory);
 
+// A buffer bound to its own device-local allocation; same contract as createDeviceImage.
+VkResult createDeviceBuffer(VkPhysicalDevice pd, VkDevice dev, VkDeviceSize size, VkBufferUsageFlags usage,
+                            VkBuffer& buffer, VkDeviceMemory& memory);
+
 // A timestamp query pool of `count` queries for work on `family`, and the nanoseconds per
 // tick. `pool` stays null (and the result ok) when that family has no timestamps.
 Result createTimestampPool(VkPhysicalDevice pd, VkDevice dev, uint32_t family, uint32_t count, VkQueryPool& pool,

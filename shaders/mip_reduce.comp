@@ -1,20 +1,10 @@
 #version 450
-// Mip reduction: every mip level (128×128 … 1×1) of every tile of a microtransaction in one
-// dispatch, each level computed from the 1× base level only.
-//
-// Integration (buffer/buffer_thread.cpp, gpu/mip_pipeline.cpp): binding 0 is a storage view
-// of mip 0 of the whole atlas (all layers), binding 1 an array of 8 storage views, mips 1..8,
-// bindings 2 and 3 the per-slot scratch (level-4 sums and arrival counters, zeroed once when
-// the pipeline is created). The push constants give each tile of the batch its atlas layer,
-// the enhance switch and the gain λ. The base level must be written and made visible to the
-// compute stage before the dispatch.
-//
-// Kernel (docs/ENHANCEMENT.md; CPU reference engine/src/gpu/mip_kernel.cpp), per channel, for
-// level k (r = 2^k, n = 256/r): S = integer sum of the r×r base block (exact), A = S/(r²·255),
-// G = (1 2 1)ᵀ(1 2 1)/16 blur of A on the level's grid with indices clamped to the tile, and
-//   enhance = 0: A (the exact area average)
-//   enhance = 1: clamp(A + λ·(A − G), 0, 1), A − G from the exact integer 16·S − Σ w·S.
-// Only tile texels are read, so a tile's mips do not depend on its neighbours.
+#extension GL_GOOGLE_include_directive : require
+// Mip reduction, the wide schedule (GPUs): every mip level (128×128 … 1×1) of every tile of a
+// microtransaction in one dispatch of 16 × tiles workgroups, each level computed from the 1×
+// base level only. The kernel, the common bindings and push constants: mip_common.glsl.
+// Bindings 2 and 3 are the per-slot scratch (level-4 sums and arrival counters, zeroed once by
+// gpu/mip_pipeline.cpp).
 //
 // Work split (the dispatch is 16 × tiles workgroups of 256 threads):
 //   - Workgroup (x, y) handles region x (a 64×64 quarter-of-a-quarter of tile y). It loads the
@@ -29,18 +19,10 @@
 // Every sum fits 16 bits per channel up to level 4 (255 · 256 = 65280), so levels 1–4 are
 // stored RG|BA-packed in two uints.
 
-layout(local_size_x = 256) in;
+#include "mip_common.glsl"
 
-layout(set = 0, binding = 0, rgba8) uniform readonly image2DArray baseLevel;
-layout(set = 0, binding = 1, rgba8) uniform writeonly image2DArray mipLevel[8];
 layout(set = 0, binding = 2, std430) coherent buffer Level4Sums { uvec2 level4[]; }; // 256 per slot
 layout(set = 0, binding = 3, std430) coherent buffer Arrivals { uint arrivals[]; };  // one per slot
-
-layout(push_constant) uniform Push {
-    uvec4 layers[2]; // atlas layer of tile i: layers[i / 4][i % 4]
-    uint enhance;    // 0: area average; 1: sharpened
-    float lambda;    // sharpening gain λ (mipkernel::kLambda)
-} pc;
 
 const int kHalo = 16; // base texels around a region: one level-4 texel
 
@@ -56,64 +38,19 @@ shared uvec4 t64[16];
 shared uvec4 t128[4];
 shared bool lastRegion;
 
-int layer;
 ivec2 origin;  // the region's top-left base texel
 bool plain;
 
-uvec2 pack(uvec4 v) { return uvec2(v.x | (v.y << 16), v.z | (v.w << 16)); }
-uvec4 unpack(uvec2 v) { return uvec4(v.x & 0xFFFFu, v.x >> 16, v.y & 0xFFFFu, v.y >> 16); }
-
-uvec4 loadBase(ivec2 p) {
-    return uvec4(round(imageLoad(baseLevel, ivec3(p, layer)) * 255.0));
-}
-
-vec4 average(uvec4 sum, float texels) {
-    return vec4(sum) / (texels * 255.0);
-}
-
-// s: the texel's block sum; g: Σ b_i b_j S over its clamped 3×3 neighbourhood (weights sum 16).
-vec4 level(uvec4 s, uvec4 g, float texels) {
-    const vec4 a = average(s, texels);
-    if (pc.enhance == 0u) return a;
-    const ivec4 d = ivec4(16u * s) - ivec4(g);
-    return clamp(a + pc.lambda * (vec4(d) / (16.0 * texels * 255.0)), 0.0, 1.0);
-}
-
-// Constant indices only (no dynamic indexing of the image array is needed).
-void store(int lvl, ivec2 p, vec4 v) {
-    switch (lvl) {
-    case 1: imageStore(mipLevel[0], ivec3(p, layer), v); break;
-    case 2: imageStore(mipLevel[1], ivec3(p, layer), v); break;
-    case 3: imageStore(mipLevel[2], ivec3(p, layer), v); break;
-    case 4: imageStore(mipLevel[3], ivec3(p, layer), v); break;
-    case 5: imageStore(mipLevel[4], ivec3(p, layer), v); break;
-    case 6: imageStore(mipLevel[5], ivec3(p, layer), v); break;
-    case 7: imageStore(mipLevel[6], ivec3(p, layer), v); break;
-    case 8: imageStore(mipLevel[7], ivec3(p, layer), v); break;
-    }
-}
-
 // Window accessors: level-k texel q (tile coordinates, inside the window) → its block sum.
-uvec4 w1(ivec2 q) { const ivec2 c = q - ((origin - kHalo) >> 1); return unpack(s1[c.y * 48 + c.x]); }
-uvec4 w2(ivec2 q) { const ivec2 c = q - ((origin - kHalo) >> 2); return unpack(s2[c.y * 24 + c.x]); }
-uvec4 w3(ivec2 q) { const ivec2 c = q - ((origin - kHalo) >> 3); return unpack(s3[c.y * 12 + c.x]); }
-uvec4 w4(ivec2 q) { const ivec2 c = q - ((origin - kHalo) >> 4); return unpack(s4[c.y * 6 + c.x]); }
-uvec4 g16(ivec2 q) { return unpack(t16[q.y * 16 + q.x]); }
+uvec4 w1(ivec2 q) { const ivec2 c = q - ((origin - kHalo) >> 1); return unpack16(s1[c.y * 48 + c.x]); }
+uvec4 w2(ivec2 q) { const ivec2 c = q - ((origin - kHalo) >> 2); return unpack16(s2[c.y * 24 + c.x]); }
+uvec4 w3(ivec2 q) { const ivec2 c = q - ((origin - kHalo) >> 3); return unpack16(s3[c.y * 12 + c.x]); }
+uvec4 w4(ivec2 q) { const ivec2 c = q - ((origin - kHalo) >> 4); return unpack16(s4[c.y * 6 + c.x]); }
+uvec4 g16(ivec2 q) { return unpack16(t16[q.y * 16 + q.x]); }
 uvec4 g32(ivec2 q) { return t32[q.y * 8 + q.x]; }
 uvec4 g64(ivec2 q) { return t64[q.y * 4 + q.x]; }
 uvec4 g128(ivec2 q) { return t128[q.y * 2 + q.x]; }
 
-// Σ w·S over the 3×3 neighbourhood of q on an N×N level grid, indices clamped to the tile.
-#define BLUR_FN(NAME, GET, N)                                                        \
-    uvec4 NAME(ivec2 p) {                                                            \
-        uvec4 g = uvec4(0);                                                          \
-        for (int j = -1; j <= 1; ++j)                                                \
-            for (int i = -1; i <= 1; ++i) {                                          \
-                const ivec2 q = clamp(p + ivec2(i, j), ivec2(0), ivec2(N - 1));      \
-                g += uint((2 - abs(i)) * (2 - abs(j))) * GET(q);                     \
-            }                                                                        \
-        return g;                                                                    \
-    }
 BLUR_FN(blur1, w1, 128)
 BLUR_FN(blur2, w2, 64)
 BLUR_FN(blur3, w3, 32)
@@ -160,7 +97,7 @@ void main() {
         const ivec2 c = ivec2(i % 48, i / 48);
         if (!needed(1, c, q)) continue;
         const ivec2 b = 2 * q;
-        s1[i] = pack(loadBase(b) + loadBase(b + ivec2(1, 0)) + loadBase(b + ivec2(0, 1)) + loadBase(b + ivec2(1, 1)));
+        s1[i] = pack16(loadBase(b) + loadBase(b + ivec2(1, 0)) + loadBase(b + ivec2(0, 1)) + loadBase(b + ivec2(1, 1)));
     }
     barrier();
     // Levels 2–4 over their windows, each from the one below (a cell's children are 2c + {0,1}²).
@@ -168,14 +105,14 @@ void main() {
         const ivec2 c = ivec2(i % 24, i / 24);
         if (!needed(2, c, q)) continue;
         const int j = 2 * c.y * 48 + 2 * c.x;
-        s2[i] = pack(unpack(s1[j]) + unpack(s1[j + 1]) + unpack(s1[j + 48]) + unpack(s1[j + 49]));
+        s2[i] = pack16(unpack16(s1[j]) + unpack16(s1[j + 1]) + unpack16(s1[j + 48]) + unpack16(s1[j + 49]));
     }
     barrier();
     if (t < 12u * 12u) {
         const ivec2 c = ivec2(int(t % 12u), int(t / 12u));
         if (needed(3, c, q)) {
             const int j = 2 * c.y * 24 + 2 * c.x;
-            s3[t] = pack(unpack(s2[j]) + unpack(s2[j + 1]) + unpack(s2[j + 24]) + unpack(s2[j + 25]));
+            s3[t] = pack16(unpack16(s2[j]) + unpack16(s2[j + 1]) + unpack16(s2[j + 24]) + unpack16(s2[j + 25]));
         }
     }
     barrier();
@@ -183,7 +120,7 @@ void main() {
         const ivec2 c = ivec2(int(t % 6u), int(t / 6u));
         if (needed(4, c, q)) {
             const int j = 2 * c.y * 12 + 2 * c.x;
-            s4[t] = pack(unpack(s3[j]) + unpack(s3[j + 1]) + unpack(s3[j + 12]) + unpack(s3[j + 13]));
+            s4[t] = pack16(unpack16(s3[j]) + unpack16(s3[j + 1]) + unpack16(s3[j + 12]) + unpack16(s3[j + 13]));
         }
     }
     barrier();
@@ -196,7 +133,7 @@ void main() {
     // Hand the region's level-4 sums to whichever region of this tile finishes last.
     if (t < 16u) {
         const ivec2 p = (origin >> 4) + ivec2(int(t % 4u), int(t / 4u));
-        level4[uint(layer) * 256u + uint(p.y * 16 + p.x)] = pack(w4(p));
+        level4[uint(layer) * 256u + uint(p.y * 16 + p.x)] = pack16(w4(p));
     }
     memoryBarrierBuffer();
     barrier();

@@ -40,6 +40,7 @@ struct Engine::Impl {
         if (Result r = atlas.init(config.vramBudgetBytes); !r.ok()) return r;
         if (Result r = pipeline.init(); !r.ok()) return r;
         if (Result r = mips.init(); !r.ok()) return r;
+        log.info(std::string("mip pass: ") + gpu::MipPipeline::scheduleName(mips.schedule()) + " schedule");
         handover = std::make_unique<Handover>(atlas.slotCount());
         render = std::make_unique<RenderThread>(shared, device, atlas, pipeline, *handover, counters, log);
         if (Result r = render->init(); !r.ok()) return r;
@@ -362,6 +363,7 @@ DeviceInfo Engine::device() const {
     d.computeFamily = impl_->device.families().compute;
     d.transferFamily = impl_->device.families().transfer;
     d.atlasSlots = impl_->atlas.slotCount();
+    d.mipSchedule = gpu::MipPipeline::scheduleName(impl_->mips.schedule());
     return d;
 }
 

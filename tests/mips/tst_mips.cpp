@@ -1,5 +1,7 @@
-// mips.enhancement (issue 6): the single-dispatch mip reduction (shaders/mip_reduce.comp)
-// against its CPU reference (engine/src/gpu/mip_kernel.cpp, compiled into this test).
+// mips.enhancement (issue 6): the single-dispatch mip reduction against its CPU reference
+// (engine/src/gpu/mip_kernel.cpp, compiled into this test). CTest runs it once per schedule
+// (IRIS_MIP_SCHEDULE=wide: shaders/mip_reduce.comp, 16 workgroups per tile; =serial:
+// shaders/mip_reduce_serial.comp), and the test checks the engine really uses that schedule.
 //
 // Reading GPU mips back. There is no engine hook; instead a slide whose only level is level 0
 // (synthetic:512x512, and CMU-1-Small-Region.svs, both single-level) is rendered at downsample
@@ -169,6 +171,9 @@ private slots:
         QVERIFY2(engine_, describe(engine_.error).c_str());
         if (!validationLayerInstalled()) qWarning("validation layer not installed: validationMessageCount proves nothing");
         QVERIFY(engine_->bindOffscreen(kFrame, kFrame).ok());
+        const QByteArray schedule = qgetenv("IRIS_MIP_SCHEDULE");
+        qInfo("mip schedule: %s", engine_->device().mipSchedule.c_str());
+        if (!schedule.isEmpty()) QCOMPARE(QString::fromStdString(engine_->device().mipSchedule), QString(schedule));
     }
     void cleanupTestCase() {
         if (engine_) QCOMPARE(engine_->validationMessageCount(), uint64_t(0));

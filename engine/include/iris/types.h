@@ -173,6 +173,7 @@ struct DeviceInfo {
     uint32_t computeFamily = 0;
     uint32_t transferFamily = 0;
     uint32_t atlasSlots = 0;     // tile slots the VRAM budget bought
+    std::string mipSchedule;     // "wide" (16 workgroups per tile, GPUs) or "serial" (one, CPU devices)
 };
 
 // Memory the engine holds, readable at any time.

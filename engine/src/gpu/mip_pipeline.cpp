@@ -4,8 +4,10 @@
 #include "gpu/vk_util.h"
 
 #include <algorithm>
+#include <cstdlib>
 #include <string>
 #include <iris_shaders/mip_reduce_comp.h>
+#include <iris_shaders/mip_reduce_serial_comp.h>
 
 namespace iris::gpu {
 
@@ -34,10 +36,15 @@ MipPipeline::~MipPipeline() {
 Result MipPipeline::init() {
     VkDevice dev = device_.device();
     const VkPhysicalDeviceLimits& limits = device_.properties().limits;
-    if (limits.maxComputeSharedMemorySize < kSharedBytes) {
-        return Result(Status::Vulkan, "The GPU offers " + std::to_string(limits.maxComputeSharedMemorySize) +
-                                          " bytes of compute shared memory; the mip pass needs " +
-                                          std::to_string(kSharedBytes));
+    schedule_ = device_.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU ? Schedule::Serial : Schedule::Wide;
+    if (const char* env = std::getenv("IRIS_MIP_SCHEDULE")) {
+        const std::string v = env;
+        if (v == "wide") schedule_ = Schedule::Wide;
+        else if (v == "serial") schedule_ = Schedule::Serial;
+        else if (!v.empty()) return Result(Status::InvalidArgument, "IRIS_MIP_SCHEDULE must be wide or serial, not '" + v + "'");
+    }
+    if (schedule_ == Schedule::Wide && limits.maxComputeSharedMemorySize < kSharedBytes) {
+        schedule_ = Schedule::Serial; // 13.4 KiB: within Vulkan's 16 KiB minimum
     }
     // Scratch: the level-4 sums, then the counters at an aligned offset.
     const VkDeviceSize align = std::max<VkDeviceSize>(limits.minStorageBufferOffsetAlignment, 16);
@@ -51,8 +58,9 @@ Result MipPipeline::init() {
     const VkShaderModuleCreateInfo smci{.sType = VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO,
                                         .pNext = nullptr,
                                         .flags = 0,
-                                        .codeSize = sizeof(mip_reduce_comp_spv),
-                                        .pCode = mip_reduce_comp_spv};
+                                        .codeSize = schedule_ == Schedule::Wide ? sizeof(mip_reduce_comp_spv)
+                                                                                : sizeof(mip_reduce_serial_comp_spv),
+                                        .pCode = schedule_ == Schedule::Wide ? mip_reduce_comp_spv : mip_reduce_serial_comp_spv};
     IRIS_VK_TRY(vkCreateShaderModule(dev, &smci, nullptr, &module_));
     const VkDescriptorSetLayoutBinding bindings[4] = {
         {.binding = 0, .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, .descriptorCount = 1,
@@ -122,7 +130,7 @@ Result MipPipeline::init() {
     return {};
 }
 
-void MipPipeline::record(VkCommandBuffer cmd, const int* layers, uint32_t count, bool enhance) {
+void MipPipeline::recordScratchBarrier(VkCommandBuffer cmd) {
     if (!countersZeroed_) {
         // The counters only ever grow by 16 per tile (the shader tests old % 16), so zeroing
         // them once, before the first dispatch, is enough.
@@ -144,6 +152,10 @@ void MipPipeline::record(VkCommandBuffer cmd, const int* layers, uint32_t count,
         .offset = 0,
         .size = VK_WHOLE_SIZE};
     vk::pipelineBarrier(cmd, b);
+}
+
+void MipPipeline::record(VkCommandBuffer cmd, const int* layers, uint32_t count, bool enhance) {
+    if (schedule_ == Schedule::Wide) recordScratchBarrier(cmd);
     MipPush push{};
     for (uint32_t i = 0; i < count && i < kMaxTiles; ++i) push.layers[i] = uint32_t(layers[i]);
     push.enhance = enhance ? 1u : 0u;
@@ -151,7 +163,7 @@ void MipPipeline::record(VkCommandBuffer cmd, const int* layers, uint32_t count,
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_);
     vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 1, &set_, 0, nullptr);
     vkCmdPushConstants(cmd, layout_, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push), &push);
-    vkCmdDispatch(cmd, kRegionsPerTile, count, 1);
+    vkCmdDispatch(cmd, schedule_ == Schedule::Wide ? kRegionsPerTile : 1, count, 1);
 }
 
 } // namespace iris::gpu

@@ -1,7 +1,10 @@
-// The mip compute pipeline (shaders/mip_reduce.comp): all mip levels of up to 8 tiles in one
-// dispatch of 16 workgroups per tile (one per 64×64 region; the last region of a tile to
-// finish also makes levels 5–8), each level computed from the base level only: the exact area
-// average, or with enhance the sharpened kernel of gpu/mip_kernel.h (docs/ENHANCEMENT.md).
+// The mip compute pipeline: all mip levels of up to 8 tiles in one dispatch, each level
+// computed from the base level only: the exact area average, or with enhance the sharpened
+// kernel of gpu/mip_kernel.h (docs/ENHANCEMENT.md). Two schedules of the same kernel:
+//   wide   (shaders/mip_reduce.comp, GPUs): 16 workgroups per tile, one per 64×64 region; the
+//          last region of a tile to finish also makes levels 5–8;
+//   serial (shaders/mip_reduce_serial.comp, CPU devices): one workgroup per tile.
+// The device type picks one; IRIS_MIP_SCHEDULE=wide|serial overrides it (tests run both).
 //
 // Owned by the engine, used only by the buffer thread (record() is not thread-safe).
 #pragma once
@@ -15,16 +18,23 @@ class MipPipeline {
 public:
     static constexpr uint32_t kMaxTiles = 8;
     static constexpr uint32_t kRegionsPerTile = 16;     // workgroups per tile
-    static constexpr uint32_t kSharedBytes = 27876;     // the shader's shared memory (checked at init)
+    static constexpr uint32_t kSharedBytes = 27876;     // the wide shader's shared memory (checked at init)
+    enum class Schedule { Wide, Serial };
     MipPipeline(Device& device, TileAtlas& atlas) : device_(device), atlas_(atlas) {}
     ~MipPipeline();
     Result init();
+    Schedule schedule() const { return schedule_; }
+    static const char* scheduleName(Schedule s) { return s == Schedule::Wide ? "wide" : "serial"; }
     // Records the dispatch for `count` atlas layers (count ≤ kMaxTiles); enhance selects the
     // sharpened kernel, else the exact area average.
     // The first call also zeroes the per-slot arrival counters (in the same command buffer).
     void record(VkCommandBuffer cmd, const int* layers, uint32_t count, bool enhance);
 
 private:
+    // Wide schedule: zeroes the counters on first use, then orders this dispatch's scratch
+    // accesses after the previous dispatch's.
+    void recordScratchBarrier(VkCommandBuffer cmd);
+
     Device& device_;
     TileAtlas& atlas_;
     VkShaderModule module_ = VK_NULL_HANDLE;
@@ -41,6 +51,7 @@ private:
     VkDeviceSize countersOffset_ = 0;
     VkDeviceSize countersBytes_ = 0;
     bool countersZeroed_ = false;
+    Schedule schedule_ = Schedule::Wide;
 };
 
 } // namespace iris::gpu

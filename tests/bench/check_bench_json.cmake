@@ -2,7 +2,7 @@
 # p25 ≤ median ≤ p75 and plausible values, and the ratios agree with the medians.
 # Usage: cmake -DJSON=file.json -P check_bench_json.cmake
 file(READ "${JSON}" j)
-foreach(key device size source)
+foreach(key device size source mip_schedule)
   string(JSON v ERROR_VARIABLE err GET "${j}" ${key})
   if(err OR v STREQUAL "")
     message(FATAL_ERROR "missing or empty '${key}': ${err}")

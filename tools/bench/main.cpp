@@ -55,6 +55,7 @@ struct TracePoint {
 struct SizeResult {
     uint32_t w = 0, h = 0;
     std::string device;
+    std::string mipSchedule;
     std::vector<double> lrTefov, hrTefov, lrTpt, hrTpt, rate, frameMs;
     std::vector<std::string> condition; // per field: magnification label
     std::vector<double> condHr, condTpt;
@@ -87,6 +88,7 @@ SizeResult runSize(const Options& o, uint32_t W, uint32_t H) {
     }
     iris::Engine& e = **created;
     res.device = e.device().name;
+    res.mipSchedule = e.device().mipSchedule;
     if (auto r = e.bindOffscreen(W, H, /*readback=*/false); !r) {
         res.notes = r.message();
         return res;
@@ -208,7 +210,7 @@ std::string resultJson(const Options& o, const SizeResult& r) {
       << jstr(r.osr.note + (r.floor.note.empty() ? "" : " decode floor: " + r.floor.note)) << "\n  },\n  \"ratios\": {"
       << "\n    \"hr_tefov_vs_openslide\": " << jnum(hr.median / osr.median)
       << ",\n    \"hr_tefov_vs_decode_floor\": " << jnum(hr.median / flo.median) << "\n  },\n  \"moves\": " << r.movesDone
-      << ",\n  \"mip_us_per_tile\": " << jnum(r.mipUsPerTile)
+      << ",\n  \"mip_schedule\": " << jstr(r.mipSchedule) << ",\n  \"mip_us_per_tile\": " << jnum(r.mipUsPerTile)
       << ",\n  \"mip_share_of_hr_tpt\": " << jnum(r.mipUsPerTile / quartiles(r.hrTpt).median)
       << ",\n  \"timeouts\": " << r.timeouts << ",\n  \"notes\": " << jstr(r.notes) << "\n}";
     return j.str();
@@ -233,7 +235,8 @@ void printTable(const SizeResult& r) {
     const double hr = quartiles(r.hrTefov).median;
     std::printf("  HR TeFOV vs OpenSlide: %.3f×   vs decode floor: %.3f×\n", hr / quartiles(r.osr.ms).median,
                 hr / quartiles(r.floor.ms).median);
-    std::printf("  mip pass (GPU timestamps): %.2f us per tile = %.1f%% of the HR time per tile\n", r.mipUsPerTile,
+    std::printf("  mip pass (%s schedule, GPU timestamps): %.2f us per tile = %.1f%% of the HR time per tile\n",
+                r.mipSchedule.c_str(), r.mipUsPerTile,
                 100.0 * r.mipUsPerTile / quartiles(r.hrTpt).median);
     if (!r.floor.note.empty()) std::printf("  decode floor: %s\n", r.floor.note.c_str());
     if (!r.notes.empty()) std::printf("  notes: %s\n", r.notes.c_str());

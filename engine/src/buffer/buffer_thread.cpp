@@ -177,10 +177,17 @@ bool BufferThread::submitNew(const Snapshot& snap) {
     auto txIt = std::find_if(txns_.begin(), txns_.end(), [](const Transaction& t) { return t.signalValue == 0; });
     if (txIt == txns_.end() || freeStaging_.empty()) return false;
     Transaction& tx = *txIt;
-    const std::vector<TileRef> region = bufferRegion(snap.slide->info, snap.slide->generation, snap.viewport, perimeter_);
-    std::unordered_set<uint64_t> keep;
-    keep.reserve(region.size() * 2);
-    for (const TileRef& t : region) keep.insert(t.key);
+    if (regionSlide_ != snap.slide.get() || regionSerial_ != snap.viewSerial) {
+        // Once per view, not once per wake-up (every decoded tile wakes this thread).
+        region_ = bufferRegion(snap.slide->info, snap.slide->generation, snap.viewport, perimeter_);
+        keep_.clear();
+        keep_.reserve(region_.size() * 2);
+        for (const TileRef& t : region_) keep_.insert(t.key);
+        regionSlide_ = snap.slide.get();
+        regionSerial_ = snap.viewSerial;
+    }
+    const std::vector<TileRef>& region = region_;
+    const std::unordered_set<uint64_t>& keep = keep_;
     gpu::TileMap& map = atlas_.map();
     const auto outsideRegion = [&](uint64_t k) { return keep.count(k) != 0; };
     auto* base = static_cast<uint8_t*>(staging_.mapped);

@@ -15,6 +15,7 @@
 
 #include <atomic>
 #include <thread>
+#include <unordered_set>
 #include <vector>
 
 #include "cache/tile_cache.h"
@@ -63,6 +64,11 @@ private:
     UploadCounters& counters_;
     const Log& log_;
     const int perimeter_;
+    // The buffer region of the last view seen (slide identity + view serial), and its keys.
+    const void* regionSlide_ = nullptr;
+    uint64_t regionSerial_ = 0;
+    std::vector<TileRef> region_;
+    std::unordered_set<uint64_t> keep_;
 
     VkCommandPool pool_ = VK_NULL_HANDLE;         // compute family
     VkCommandPool copyPool_ = VK_NULL_HANDLE;     // transfer family, when separate

@@ -38,22 +38,54 @@ void LoaderPool::run() {
     }
 }
 
+std::shared_ptr<LoaderPool::Plan> LoaderPool::planFor(const Snapshot& snap) {
+    {
+        std::lock_guard lock(planMutex_);
+        // A plan of this view, or of a newer one (this loader's snapshot may be older), serves.
+        if (plan_ && plan_->slide == snap.slide.get() && plan_->viewSerial >= snap.viewSerial) return plan_;
+    }
+    auto plan = std::make_shared<Plan>();
+    plan->slide = snap.slide.get();
+    plan->viewSerial = snap.viewSerial;
+    plan->scannedEpoch.store(cache_.releaseEpoch(), std::memory_order_relaxed);
+    plan->tiles = bufferRegion(snap.slide->info, snap.slide->generation, snap.viewport, perimeter_);
+    std::lock_guard lock(planMutex_);
+    if (!plan_ || plan_->slide != plan->slide || plan_->viewSerial < plan->viewSerial) plan_ = plan;
+    return plan_;
+}
+
+void LoaderPool::decode(const Snapshot& snap, const TileRef& t) {
+    std::unique_ptr<uint8_t[]> buf = cache_.acquireBuffer();
+    const Result r = snap.slide->source->readTile(t.level, t.tx, t.ty, buf.get());
+    const bool failed = !r.ok();
+    if (failed) {
+        shared_.setSlideError(snap.slide->generation, r);
+        log_.error(r.message());
+        fillFailedTilePlaceholder(buf.get());
+    }
+    cache_.publish(t.key, std::move(buf), failed);
+    shared_.bump(); // the buffer thread may now upload it
+}
+
 bool LoaderPool::loadOne() {
     const Snapshot snap = shared_.snapshot();
     if (!snap.slide) return false;
-    const std::vector<TileRef> region = bufferRegion(snap.slide->info, snap.slide->generation, snap.viewport, perimeter_);
-    for (const TileRef& t : region) {
+    const std::shared_ptr<Plan> plan = planFor(snap);
+    for (;;) {
+        const size_t i = plan->next.fetch_add(1, std::memory_order_relaxed);
+        if (i >= plan->tiles.size()) break;
+        if (!cache_.tryClaim(plan->tiles[i].key)) continue;
+        decode(snap, plan->tiles[i]);
+        return true;
+    }
+    // Every tile of the plan has been tried. One the cache gave back since (evicted before it
+    // was uploaded, dropped) is claimable again: scan the region in priority order for it.
+    const uint64_t epoch = cache_.releaseEpoch();
+    if (plan->scannedEpoch.exchange(epoch, std::memory_order_acq_rel) == epoch) return false;
+    for (const TileRef& t : plan->tiles) {
         if (!cache_.tryClaim(t.key)) continue;
-        std::unique_ptr<uint8_t[]> buf = cache_.acquireBuffer();
-        const Result r = snap.slide->source->readTile(t.level, t.tx, t.ty, buf.get());
-        const bool failed = !r.ok();
-        if (failed) {
-            shared_.setSlideError(snap.slide->generation, r);
-            log_.error(r.message());
-            fillFailedTilePlaceholder(buf.get());
-        }
-        cache_.publish(t.key, std::move(buf), failed);
-        shared_.bump(); // the buffer thread may now upload it
+        decode(snap, t);
+        plan->scannedEpoch.store(0, std::memory_order_relaxed); // look again after this one
         return true;
     }
     return false;

@@ -1,9 +1,17 @@
 // The loader pool: N threads that decode tiles into the RAM cache. Pull-style: each time a
-// loader picks a tile it recomputes the buffer region from the newest published view and
-// takes the first tile (in priority order) that is neither cached nor being decoded, so a
-// stale work list cannot exist. Loaders never touch Vulkan.
+// loader picks a tile it takes the newest published view, and works through the buffer
+// region of that view in priority order, taking the first tile that is neither cached nor
+// being decoded. The region is computed once per view (a Plan, shared by the loaders) and
+// handed out by an atomic cursor, so picking a tile costs one claim, not a scan of the region
+// under the cache's mutex; a plan of an older view is replaced before the next pick, so a
+// stale work list is never followed. When the cursor has passed the end, a loader scans the
+// region again only if the cache has given a tile back since (TileCache::releaseEpoch).
+// Loaders never touch Vulkan.
 #pragma once
 
+#include <atomic>
+#include <memory>
+#include <mutex>
 #include <thread>
 #include <vector>
 
@@ -20,14 +28,25 @@ public:
     void stop();
 
 private:
+    struct Plan {
+        const OpenSlide* slide = nullptr; // identity only (the snapshot keeps it alive)
+        uint64_t viewSerial = 0;
+        std::vector<TileRef> tiles;       // the buffer region, in priority order
+        std::atomic<size_t> next{0};      // the first tile no loader has tried yet
+        std::atomic<uint64_t> scannedEpoch{0};
+    };
     void run();
     bool loadOne();
+    std::shared_ptr<Plan> planFor(const Snapshot& snap);
+    void decode(const Snapshot& snap, const TileRef& t);
 
     SharedState& shared_;
     TileCache& cache_;
     const Log& log_;
     const int perimeter_;
     std::vector<std::thread> threads_;
+    std::mutex planMutex_;         // guards plan_ (held to copy or replace a pointer)
+    std::shared_ptr<Plan> plan_;
 };
 
 // Fills a tile with the visible "could not be decoded" placeholder (grey with red diagonals).

@@ -50,7 +50,10 @@ void TileCache::publish(uint64_t key, std::unique_ptr<uint8_t[]> pixels, bool fa
 void TileCache::abandon(uint64_t key, std::unique_ptr<uint8_t[]> buffer) {
     std::lock_guard lock(mutex_);
     auto it = entries_.find(key);
-    if (it != entries_.end() && !it->second.pixels) entries_.erase(it);
+    if (it != entries_.end() && !it->second.pixels) {
+        entries_.erase(it);
+        releaseEpoch_.fetch_add(1, std::memory_order_release);
+    }
     recycleLocked(std::move(buffer));
 }
 
@@ -79,6 +82,7 @@ void TileCache::evictOverBudgetLocked() {
         recycleLocked(std::move(it->second.pixels));
         entries_.erase(it);
         --readyCount_;
+        releaseEpoch_.fetch_add(1, std::memory_order_release);
     }
 }
 
@@ -92,6 +96,7 @@ void TileCache::dropOtherGenerations(uint32_t generation) {
                 --readyCount_;
             }
             it = entries_.erase(it);
+            releaseEpoch_.fetch_add(1, std::memory_order_release);
         } else {
             ++it;
         }

@@ -1,7 +1,9 @@
 // RAM cache of decoded tiles, bounded by a byte budget, in recycled buffers.
-// Issue-2 slice: one mutex; the lock-free directory comes with the engine core issue.
+// One mutex, held for map operations only: loaders take each tile of their work list with one
+// tryClaim (LoaderPool), not a scan of the region per tile.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <list>
 #include <memory>
@@ -29,6 +31,11 @@ public:
     // Forgets every tile whose generation differs from `generation`.
     void dropOtherGenerations(uint32_t generation);
 
+    // Counts the times a tile that was claimed or decoded became claimable again (evicted,
+    // abandoned, dropped with its generation). Loaders that passed a tile in their work list
+    // scan the region again only when this changed (see LoaderPool).
+    uint64_t releaseEpoch() const { return releaseEpoch_.load(std::memory_order_acquire); }
+
     uint64_t bytesUsed() const;
     uint64_t budgetBytes() const { return budget_; }
 
@@ -47,6 +54,7 @@ private:
     std::list<uint64_t> lru_; // ready entries, most recent at the front
     std::vector<std::unique_ptr<uint8_t[]>> freeBuffers_;
     uint64_t readyCount_ = 0;
+    std::atomic<uint64_t> releaseEpoch_{0}; // written under mutex_, read without it
 };
 
 } // namespace iris

@@ -24,7 +24,8 @@
 //   * errors: bad source, missing or unwritable output folder, output that is a folder or the
 //     source itself, bad options — each its Status and message, nothing left behind;
 //   * iris-encode: exit codes, progress and summary, the default output name, and SIGINT /
-//     SIGTERM mid-encode → exit 130 with nothing left behind.
+//     SIGTERM mid-encode → exit 130 with nothing left behind; a full disk → "disk full", exit
+//     1, nothing left behind (on a 1 MiB tmpfs in a private mount namespace, where allowed).
 #include <QtCore/QProcess>
 #include <QtTest>
 
@@ -739,6 +740,34 @@ private slots:
             QVERIFY(err.contains("interrupted; nothing was written"));
             QVERIFY2(leftovers(big).empty(), qPrintable(join(leftovers(big))));
         }
+    }
+
+    // A full disk: iris-encode onto a 1 MiB tmpfs, mounted in a private mount namespace of
+    // its own (unshare), so that no mount outlives the test even if it crashes. Where that is
+    // not allowed (no CAP_SYS_ADMIN, no unshare) the case is skipped.
+    void diskFull() {
+        const QString exe = QStringLiteral(IRIS_ENCODE_EXE);
+        const fs::path mnt = outDir("iris-roundtrip") / "full-disk";
+        fs::create_directories(mnt);
+        const QString script = QStringLiteral(
+            "mount -t tmpfs -o size=1m tmpfs \"$1\" || exit 77; "
+            "\"$2\" --quiet synthetic:4000x3000 -o \"$1/full.iris\"; rc=$?; "
+            "echo \"left: $(ls -A \"$1\")\"; exit $rc");
+        QProcess p;
+        p.start(QStringLiteral("unshare"), {"--mount", "--propagation", "private", "sh", "-c", script, "sh",
+                                            QString::fromStdString(mnt.string()), exe});
+        if (!p.waitForStarted()) QSKIP("no unshare");
+        QVERIFY(p.waitForFinished(120000));
+        const QString out = QString::fromUtf8(p.readAllStandardOutput());
+        const QString err = QString::fromUtf8(p.readAllStandardError());
+        if (p.exitCode() == 77 || !out.contains("left:")) {
+            QSKIP(qPrintable("cannot mount a small tmpfs here: " + err.trimmed()));
+        }
+        qInfo("%s%s", qPrintable(err), qPrintable(out));
+        QCOMPARE(p.exitCode(), 1);
+        QVERIFY2(err.contains("Cannot write '" + QString::fromStdString((mnt / "full.iris").string()) + "': disk full"),
+                 qPrintable(err));
+        QCOMPARE(out.trimmed(), QString("left:")); // no output, no partial file
     }
 };
 

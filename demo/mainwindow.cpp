@@ -17,6 +17,7 @@
 #include <iris/IrisSlideView.h>
 
 #include "associatedimagesdock.h"
+#include "exportdialog.h"
 #include "recentfiles.h"
 #include "sampleslide.h"
 #include "slideformats.h"
@@ -102,6 +103,9 @@ void MainWindow::createActions()
     m_closeAction->setShortcut(QKeySequence::Close);
     connect(m_closeAction, &QAction::triggered, m_view, &IrisSlideView::closeSlide);
 
+    m_exportAction = new QAction(tr("&Export as .iris…"), this);
+    connect(m_exportAction, &QAction::triggered, this, &MainWindow::exportAsIris);
+
     m_quitAction = new QAction(tr("&Quit"), this);
     m_quitAction->setShortcut(QKeySequence::Quit);
     m_quitAction->setMenuRole(QAction::QuitRole);
@@ -147,6 +151,7 @@ void MainWindow::createMenus()
     file->addAction(m_sampleAction);
     file->addSeparator();
     file->addAction(m_closeAction);
+    file->addAction(m_exportAction);
     file->addSeparator();
     file->addAction(m_quitAction);
 
@@ -210,6 +215,14 @@ void MainWindow::showOpenDialog()
     openSlide(path, true);
 }
 
+void MainWindow::exportAsIris()
+{
+    if (!m_view->hasSlide())
+        return;
+    if (ExportDialog *dialog = ExportDialog::start(this, m_view->slidePath()))
+        connect(dialog, &ExportDialog::openRequested, this, [this](const QString &path) { openSlide(path, true); });
+}
+
 void MainWindow::onSlideOpened(const IrisSlideInfo &info)
 {
     setWindowTitle(tr("%1 — Iris View").arg(QFileInfo(info.path).fileName()));
@@ -240,6 +253,7 @@ void MainWindow::updateActions()
     const bool has = m_view->hasSlide();
     const bool magnifications = has && m_view->objectivePower() > 0;
     m_closeAction->setEnabled(has);
+    m_exportAction->setEnabled(has);
     m_fitAction->setEnabled(has);
     m_zoomInAction->setEnabled(has);
     m_zoomOutAction->setEnabled(has);

@@ -32,6 +32,7 @@ public Q_SLOTS:
     bool openSlide(const QString &path, bool userInitiated = true);
     void openSample();
     void showOpenDialog();
+    void exportAsIris();
 
 protected:
     void dragEnterEvent(QDragEnterEvent *event) override;
@@ -61,6 +62,7 @@ private:
     QAction *m_openAction = nullptr;
     QAction *m_sampleAction = nullptr;
     QAction *m_closeAction = nullptr;
+    QAction *m_exportAction = nullptr;
     QAction *m_quitAction = nullptr;
     QAction *m_fitAction = nullptr;
     QAction *m_zoomInAction = nullptr;

@@ -38,8 +38,11 @@
 
 #include <iris/engine.h>
 
+#include "iris_test_util.h"
+
 using namespace std::chrono_literals;
 namespace fs = std::filesystem;
+using namespace iris_test;
 
 namespace {
 
@@ -56,114 +59,6 @@ constexpr double kMaxPsnrLoss = 0.5;     // dB below the reference region's own 
 constexpr double kMinLevel1Psnr = 25.0;  // dB, the level-1 check (see there)
 constexpr double kMinImagePsnr = 30.0;   // dB, associated images (re-encoded JPEG) vs OpenSlide's
 constexpr auto kFrameTimeout = 60s;
-
-// ---- locations ------------------------------------------------------------------------
-
-std::optional<fs::path> irisDir() {
-    for (const char* var : {"IRIS_TESTDATA", "IRIS_TESTDATA_DEFAULT"}) {
-        const char* v = std::getenv(var);
-        if (!v || !*v) continue;
-        std::error_code ec;
-        const fs::path p = fs::path(v) / "slides" / "iris";
-        if (fs::is_directory(p, ec)) return p;
-    }
-    return std::nullopt;
-}
-
-fs::path fixture(const char* name) { return irisDir().value_or(fs::path()) / name; }
-fs::path sourceSlide(const char* name) { return irisDir().value_or(fs::path()).parent_path() / "aperio" / name; }
-
-fs::path outDir() {
-    const char* v = std::getenv("IRIS_TEST_OUT");
-    fs::path p = (v && *v) ? fs::path(v) : fs::temp_directory_path() / "iris-test-out";
-    p /= "iris";
-    std::error_code ec;
-    fs::create_directories(p, ec);
-    return p;
-}
-
-// ---- bytes ----------------------------------------------------------------------------
-
-using Bytes = std::vector<uint8_t>;
-
-Bytes readAll(const fs::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    return Bytes(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-}
-
-// Written under a temporary name and renamed, so that a file the engine still has mapped is
-// never truncated under it.
-bool writeAll(const fs::path& p, const Bytes& b) {
-    const fs::path tmp = p.string() + ".tmp";
-    {
-        std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-        out.write(reinterpret_cast<const char*>(b.data()), std::streamsize(b.size()));
-        if (!out) return false;
-    }
-    std::error_code ec;
-    fs::rename(tmp, p, ec);
-    return !ec;
-}
-
-uint64_t get(const Bytes& b, uint64_t off, int n) {
-    uint64_t v = 0;
-    for (int i = n - 1; i >= 0; --i) v = (v << 8) | b.at(off + uint64_t(i));
-    return v;
-}
-
-void put(Bytes& b, uint64_t off, uint64_t v, int n) {
-    for (int i = 0; i < n; ++i) b.at(off + uint64_t(i)) = uint8_t(v >> (8 * i));
-}
-
-void putF32(Bytes& b, uint64_t off, float f) {
-    uint32_t u;
-    std::memcpy(&u, &f, 4);
-    put(b, off, u, 4);
-}
-
-void append(Bytes& b, uint64_t v, int n) {
-    for (int i = 0; i < n; ++i) b.push_back(uint8_t(v >> (8 * i)));
-}
-
-constexpr uint64_t kNull = ~0ull;
-
-// The test's own reading of the block locations (field offsets from the spec's table).
-struct Ife {
-    Bytes b;
-    uint64_t u(uint64_t off, int n) const { return get(b, off, n); }
-    uint64_t tileTable() const { return u(22, 8); }
-    uint64_t metadata() const { return u(30, 8); }
-    uint64_t layerExtents() const { return u(tileTable() + 28, 8); }
-    uint64_t layer(uint32_t i) const { return layerExtents() + 16 + i * u(layerExtents() + 10, 2); }
-    uint64_t tileOffsets() const { return u(tileTable() + 20, 8); }
-    uint64_t tileEntry(uint64_t i) const { return tileOffsets() + 16 + i * u(tileOffsets() + 10, 2); }
-    uint64_t tileOffset(uint64_t i) const { return u(tileEntry(i), 5); }
-    uint64_t tileSize(uint64_t i) const { return u(tileEntry(i) + 5, 3); }
-    uint64_t attributes() const { return u(metadata() + 16, 8); }
-    uint64_t attributeSizes() const { return u(attributes() + 13, 8); }
-    uint64_t images() const { return u(metadata() + 24, 8); }
-    uint64_t imageEntry(uint32_t i) const { return images() + 16 + i * u(images() + 10, 2); }
-    void fixFileSize() { put(b, 6, b.size(), 8); }
-
-    // Copies an array block to the end of the file with entries `grow` bytes longer (the
-    // new bytes hold 0xA5, standing for fields of a later version) and returns its offset.
-    uint64_t appendWiderArray(uint64_t at, int grow) {
-        const uint16_t stride = uint16_t(u(at + 10, 2));
-        const uint32_t count = uint32_t(u(at + 12, 4));
-        const uint16_t tag = uint16_t(u(at + 8, 2));
-        const uint64_t off = b.size();
-        append(b, off, 8);
-        append(b, tag, 2);
-        append(b, uint64_t(stride + grow), 2);
-        append(b, count, 4);
-        for (uint32_t i = 0; i < count; ++i) {
-            const uint64_t e = at + 16 + uint64_t(i) * stride;
-            for (uint16_t k = 0; k < stride; ++k) b.push_back(b[e + k]);
-            for (int k = 0; k < grow; ++k) b.push_back(0xA5);
-        }
-        return off;
-    }
-};
 
 Ife load(const char* name) { return Ife{readAll(fixture(name))}; }
 
@@ -226,49 +121,6 @@ std::optional<iris::Image> openslideAssociated(const fs::path& slide, const std:
     return img;
 }
 
-// PSNR of RGB over the pixels where `where(x, y)` holds; +inf when identical, NaN when none.
-double psnr(const iris::Image& a, const iris::Image& b, const std::function<bool(uint32_t, uint32_t)>& where,
-            uint64_t* compared = nullptr) {
-    if (a.width != b.width || a.height != b.height) return std::numeric_limits<double>::quiet_NaN();
-    double se = 0;
-    uint64_t n = 0;
-    for (uint32_t y = 0; y < a.height; ++y) {
-        for (uint32_t x = 0; x < a.width; ++x) {
-            if (where && !where(x, y)) continue;
-            const size_t i = (size_t(y) * a.width + x) * 4;
-            for (int c = 0; c < 3; ++c) {
-                const double d = double(a.rgba[i + size_t(c)]) - double(b.rgba[i + size_t(c)]);
-                se += d * d;
-            }
-            ++n;
-        }
-    }
-    if (compared) *compared = n;
-    if (n == 0) return std::numeric_limits<double>::quiet_NaN();
-    const double mse = se / double(3 * n);
-    return mse == 0 ? std::numeric_limits<double>::infinity() : 10.0 * std::log10(255.0 * 255.0 / mse);
-}
-
-// PSNR (over `where`) of the reference after a quality-90 4:2:2 JPEG round trip.
-double honestPsnr(const iris::Image& ref, const std::function<bool(uint32_t, uint32_t)>& where) {
-    tjhandle c = tjInitCompress();
-    tjhandle d = tjInitDecompress();
-    unsigned char* jpeg = nullptr;
-    unsigned long size = 0;
-    iris::Image out = ref;
-    double p = std::numeric_limits<double>::quiet_NaN();
-    if (c && d &&
-        tjCompress2(c, ref.rgba.data(), int(ref.width), 0, int(ref.height), TJPF_RGBA, &jpeg, &size, TJSAMP_422, 90, 0) ==
-            0 &&
-        tjDecompress2(d, jpeg, size, out.rgba.data(), int(ref.width), 0, int(ref.height), TJPF_RGBA, 0) == 0) {
-        p = psnr(out, ref, where);
-    }
-    tjFree(jpeg);
-    if (c) tjDestroy(c);
-    if (d) tjDestroy(d);
-    return p;
-}
-
 std::array<uint8_t, 3> backgroundBytes() {
     std::array<uint8_t, 3> out{};
     for (int c = 0; c < 3; ++c) out[size_t(c)] = uint8_t(std::lround(kBackground[size_t(c)] * 255.0f));
@@ -298,8 +150,6 @@ Bytes encodePng(uint32_t w, uint32_t h, const std::vector<uint8_t>& rgba) {
     out.resize(size);
     return out;
 }
-
-std::string describe(const iris::Result& r) { return std::string(iris::statusName(r.status())) + ": " + r.message(); }
 
 // ---- the validation rules -------------------------------------------------------------
 
@@ -422,30 +272,7 @@ class TestIrisReader : public QObject {
     std::unique_ptr<iris::Engine> e_;
 
     std::optional<iris::Frame> render(double x0, double y0, double ds, std::string* why) {
-        iris::View v;
-        v.centerX = x0 + kW * 0.5 * ds;
-        v.centerY = y0 + kH * 0.5 * ds;
-        v.downsample = ds;
-        e_->setView(v);
-        if (const iris::Result r = e_->waitForFrame(kFrameTimeout); !r.ok()) {
-            *why = "waitForFrame: " + describe(r);
-            return std::nullopt;
-        }
-        auto f = e_->readFrame();
-        if (!f) {
-            *why = "readFrame: " + describe(f.error());
-            return std::nullopt;
-        }
-        if (f->image.width != kW || f->image.height != kH || !f->complete) {
-            *why = "the frame is incomplete or of the wrong size";
-            return std::nullopt;
-        }
-        if (std::abs(f->view.centerX - v.centerX) > 1e-6 || std::abs(f->view.centerY - v.centerY) > 1e-6 ||
-            std::abs(f->view.downsample - ds) > 1e-9) {
-            *why = "the frame shows another view";
-            return std::nullopt;
-        }
-        return std::move(f.value());
+        return renderAt(*e_, x0, y0, ds, kW, kH, kFrameTimeout, why);
     }
 
     fs::path write(const std::string& name, const Bytes& b) {

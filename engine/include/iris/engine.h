@@ -17,10 +17,6 @@
 
 namespace iris {
 
-// Which reader opens a slide file. Auto: the format table's order (fast paths first,
-// OpenSlide last). OpenSlide: always OpenSlide. Iris: only .iris files.
-enum class SourcePreference { Auto, OpenSlide, Iris };
-
 struct EngineConfig {
     SourcePreference source = SourcePreference::Auto;
     uint64_t ramBudgetBytes = 1ull << 30;   // decoded tiles kept in RAM

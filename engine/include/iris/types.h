@@ -34,6 +34,7 @@ enum class Status : int {
     NoSlide,            // the call needs an open slide
     NotBound,           // the call needs a render target (offscreen or surface)
     Timeout,
+    Cancelled,          // the caller's cancel flag stopped the operation (encodeIris)
 };
 
 IRIS_API const char* statusName(Status s) noexcept;
@@ -78,6 +79,11 @@ private:
     std::optional<T> value_;
     Result error_;
 };
+
+// Which reader opens a slide file (EngineConfig::source, EncodeOptions::source). Auto: the
+// format table's order (fast paths first, OpenSlide last). OpenSlide: always OpenSlide.
+// Iris: only .iris files.
+enum class SourcePreference { Auto, OpenSlide, Iris };
 
 struct LevelInfo {
     int64_t width = 0;     // pixels of this level

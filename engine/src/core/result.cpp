@@ -17,6 +17,7 @@ const char* statusName(Status s) noexcept {
     case Status::NoSlide: return "no slide";
     case Status::NotBound: return "no render target";
     case Status::Timeout: return "timeout";
+    case Status::Cancelled: return "cancelled";
     }
     return "unknown";
 }

@@ -25,30 +25,7 @@ namespace ife {
 
 namespace {
 
-// ---- the format's constants (shared/formats/iris-file-extension.md) -------------------
-
-constexpr uint32_t kMagic = 0x49726973; // "sirI" on disk
-constexpr uint16_t kRecoveryBase = 0x5500;
-
-enum Tag : uint16_t {
-    FILE_HEADER = 1,
-    TILE_TABLE,
-    CIPHER,
-    METADATA,
-    ATTRIBUTES,
-    LAYER_EXTENTS,
-    TILE_OFFSETS,
-    ATTRIBUTE_SIZES,
-    ATTRIBUTE_BYTES,
-    IMAGES,
-    IMAGE_BYTES,
-    ICC_PROFILE,
-    ANNOTATIONS,
-    ANNOTATION_BYTES,
-    ANNOTATION_GROUP_SIZES,
-    ANNOTATION_GROUP_BYTES,
-    CLINICAL_METADATA,
-};
+// ---- names for messages ----------------------------------------------------------------
 
 const char* tagName(unsigned code) {
     static const char* const names[] = {
@@ -59,25 +36,6 @@ const char* tagName(unsigned code) {
     };
     return code < std::size(names) ? names[code] : nullptr;
 }
-
-// Fixed sizes: what a reader of this version needs to find inside the file.
-constexpr uint64_t kHeaderSize = 38;
-constexpr uint64_t kTileTableSize10 = 44, kTileTableSize11 = 46; // 1.1 adds TILE_LENGTH
-constexpr uint64_t kMetadataSize10 = 56, kMetadataSize11 = 68;   // 1.1 adds CLINICAL_OFFSET, MICRONS_PLANE
-constexpr uint64_t kCipherSize = 10;
-constexpr uint64_t kAttributesSize = 29;
-constexpr uint64_t kArrayHeader = 16;       // VALIDATION, RECOVERY, STRIDE, COUNT
-constexpr uint64_t kAnnotationsHeader = 32; // ... GROUP_SIZES_OFFSET, GROUP_BYTES_OFFSET
-constexpr uint64_t kByteArrayHeader = 14;   // VALIDATION, RECOVERY, COUNT
-constexpr uint64_t kClinicalHeader = 15;    // ... ENCODING
-constexpr uint64_t kImageBytesHeader = 16;  // VALIDATION, RECOVERY, TITLE_SIZE, IMAGE_SIZE
-// Entry sizes of version 1.0: the least STRIDE a reader of the fields it knows accepts.
-constexpr uint16_t kLayerEntry = 12;        // X_TILES, Y_TILES, SCALE (1.1: + Z_PLANES)
-constexpr uint16_t kTileEntry = 8;          // OFFSET u40, SIZE u24
-constexpr uint16_t kAttributeSizeEntry = 6; // KEY_SIZE, VALUE_SIZE (later: + KIND)
-constexpr uint16_t kImageEntry = 20;
-constexpr uint16_t kAnnotationEntry = 39;
-constexpr uint16_t kGroupSizeEntry = 6;
 
 // The engine addresses at most 2^21 tiles a side (view_model.h), 2^29 pixels.
 constexpr uint32_t kMaxTilesPerSide = 1u << 21;
@@ -544,7 +502,7 @@ Expected<Layout> parse(const uint8_t* data, uint64_t size, const std::string& na
     out.xExtent = p.u32(tt + 36);
     out.yExtent = p.u32(tt + 40);
     const uint16_t tileLength = v11 ? p.u16(tt + 44) : 0;
-    out.tileLength = tileLength ? tileLength : 256;
+    out.tileLength = tileLength ? tileLength : kTileLength;
     switch (out.encoding) {
     case kEncodingJpeg:
     case kEncodingAvif: break;
@@ -559,7 +517,7 @@ Expected<Layout> parse(const uint8_t* data, uint64_t size, const std::string& na
         return p.unsupported("its tiles are encrypted (a CIPHER block at byte " + num(cipher) +
                              "); encrypted .iris files are not supported");
     }
-    if (out.tileLength != 256) {
+    if (out.tileLength != kTileLength) {
         return p.unsupported("its TILE_LENGTH is " + num(out.tileLength) +
                              " pixels; this reader supports only 256-pixel tiles");
     }
@@ -728,7 +686,8 @@ SlideInfo makeInfo(const std::string& path, const ife::Layout& L) {
     if (L.micronsPlane > 0) props.emplace_back("iris.microns-plane", fmtShortest(L.micronsPlane));
     if (L.hasAttributes) {
         // Version 1.0 made FREE_TEXT an alias of I2S (1); VERSION 0 marks free text.
-        const bool freeText = L.attributeFormat == 3 || (L.attributeFormat == 1 && L.attributeVersion == 0);
+        const bool freeText = L.attributeFormat == ife::kMetadataFreeText ||
+                              (L.attributeFormat == ife::kMetadataI2S && L.attributeVersion == 0);
         props.emplace_back("iris.attributes.format", freeText ? "FREE_TEXT" : metadataFormatName(L.attributeFormat));
         props.emplace_back("iris.attributes.version", num(L.attributeVersion));
         props.emplace_back("iris.attributes.count", num(L.attributes.size()));

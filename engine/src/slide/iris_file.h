@@ -24,12 +24,70 @@ namespace iris {
 // The parsed and validated structure of an .iris file (values as stored unless said).
 namespace ife {
 
+// ---- the format's constants (shared/formats/iris-file-extension.md), for the reader and
+// the encoder (codec/iris_writer.*) alike ------------------------------------------------
+
+inline constexpr uint32_t kMagic = 0x49726973; // "sirI" on disk
+inline constexpr uint16_t kRecoveryBase = 0x5500;
 inline constexpr uint64_t kNullOffset = 0xFFFFFFFFFFFFFFFFull;
 inline constexpr uint64_t kNullTile = 0xFFFFFFFFFFull; // u40
+inline constexpr uint64_t kMaxTileOffset = kNullTile - 1; // the largest u40 offset that is not NULL_TILE
+inline constexpr uint32_t kMaxTileSize = 0xFFFFFFu;       // u24
+inline constexpr uint32_t kTileLength = 256;              // TILE_LENGTH when absent (1.0) or 0
 inline constexpr int kMaxLayers = 64;                   // the engine's tile key holds 6 level bits
+
+// Block types: the RECOVERY tag on disk is kRecoveryBase | Tag.
+enum Tag : uint16_t {
+    FILE_HEADER = 1,
+    TILE_TABLE,
+    CIPHER,
+    METADATA,
+    ATTRIBUTES,
+    LAYER_EXTENTS,
+    TILE_OFFSETS,
+    ATTRIBUTE_SIZES,
+    ATTRIBUTE_BYTES,
+    IMAGES,
+    IMAGE_BYTES,
+    ICC_PROFILE,
+    ANNOTATIONS,
+    ANNOTATION_BYTES,
+    ANNOTATION_GROUP_SIZES,
+    ANNOTATION_GROUP_BYTES,
+    CLINICAL_METADATA,
+};
+
+// Fixed sizes: what a reader of this version needs to find inside the file, and what a
+// version 1.0 writer writes.
+inline constexpr uint64_t kHeaderSize = 38;
+inline constexpr uint64_t kTileTableSize10 = 44, kTileTableSize11 = 46; // 1.1 adds TILE_LENGTH
+inline constexpr uint64_t kMetadataSize10 = 56, kMetadataSize11 = 68;   // 1.1 adds CLINICAL_OFFSET, MICRONS_PLANE
+inline constexpr uint64_t kCipherSize = 10;
+inline constexpr uint64_t kAttributesSize = 29;
+inline constexpr uint64_t kArrayHeader = 16;       // VALIDATION, RECOVERY, STRIDE, COUNT
+inline constexpr uint64_t kAnnotationsHeader = 32; // ... GROUP_SIZES_OFFSET, GROUP_BYTES_OFFSET
+inline constexpr uint64_t kByteArrayHeader = 14;   // VALIDATION, RECOVERY, COUNT
+inline constexpr uint64_t kClinicalHeader = 15;    // ... ENCODING
+inline constexpr uint64_t kImageBytesHeader = 16;  // VALIDATION, RECOVERY, TITLE_SIZE, IMAGE_SIZE
+// Entry sizes of version 1.0: the least STRIDE a reader of the fields it knows accepts.
+inline constexpr uint16_t kLayerEntry = 12;        // X_TILES, Y_TILES, SCALE (1.1: + Z_PLANES)
+inline constexpr uint16_t kTileEntry = 8;          // OFFSET u40, SIZE u24
+inline constexpr uint16_t kAttributeSizeEntry = 6; // KEY_SIZE, VALUE_SIZE (later: + KIND)
+inline constexpr uint16_t kImageEntry = 20;
+inline constexpr uint16_t kAnnotationEntry = 39;
+inline constexpr uint16_t kGroupSizeEntry = 6;
 
 enum TileEncoding : uint8_t { kEncodingUndefined = 0, kEncodingIris = 1, kEncodingJpeg = 2, kEncodingAvif = 3 };
 enum ImageEncoding : uint8_t { kImageUndefined = 0, kImagePng = 1, kImageJpeg = 2, kImageAvif = 3 };
+enum PixelFormat : uint8_t {
+    kFormatUndefined = 0,
+    kFormatB8G8R8 = 1,
+    kFormatR8G8B8 = 2,
+    kFormatB8G8R8A8 = 3,
+    kFormatR8G8B8A8 = 4,
+};
+// Version 1.0 has no FREE_TEXT code of its own: free text is I2S with attribute VERSION 0.
+enum MetadataFormat : uint8_t { kMetadataUndefined = 0, kMetadataI2S = 1, kMetadataDicom = 2, kMetadataFreeText = 3 };
 
 struct Layer {
     uint32_t xTiles = 0;
@@ -62,7 +120,7 @@ struct Layout {
     uint32_t revision = 0;
     uint8_t encoding = 0;    // TileEncoding
     uint8_t pixelFormat = 0;
-    uint32_t tileLength = 256;
+    uint32_t tileLength = kTileLength;
     uint32_t xExtent = 0, yExtent = 0;  // as stored
     bool extentIsLowestLayer = false;   // which reading of X/Y_EXTENT matched
     std::vector<Layer> layers;          // as stored: lowest resolution first

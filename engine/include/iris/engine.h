@@ -110,8 +110,10 @@ public:
     // over the tiles, alpha-blended on a semi-transparent plate, each in a corner of the
     // target (several in one corner stack inwards, in the order of `Overlay`). All are off
     // by default, so frames hold slide pixels only; nothing is drawn while no slide is open,
-    // the scale bar is hidden when the slide states no mpp, the readout when it states no
-    // objective power, and an overlay that does not fit into the target is left out.
+    // the scale bar is hidden when the slide states no mpp, the readout when it states
+    // neither objective power nor mpp (with mpp alone the objective is taken as 10 µm / mpp,
+    // as IrisSlideView's magnification() does), and an overlay that does not fit into the
+    // target is left out.
     // Turning on a labelled overlay (scale bar, magnification) before any font was chosen
     // looks up the default font on the calling thread (fontconfig; see setOverlayFont).
     void setOverlayVisible(Overlay overlay, bool visible);

@@ -153,7 +153,8 @@ struct OverlayLayout {
     double scaleBarMicrons = 0;
     double scaleBarPixels = 0;
     std::string scaleBarLabel;
-    // Magnification: objective power × level-0 downsample / view downsample, and its label.
+    // Magnification: objective × level-0 downsample / view downsample (the objective is the
+    // stated objective power, else 10 µm / mpp), and its label.
     double magnification = 0;
     std::string magnificationLabel;
     // Overview: the thumbnail's pixels (the slide's level-0 origin is at its top-left corner),

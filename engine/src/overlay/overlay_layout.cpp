@@ -57,6 +57,12 @@ double niceScaleMicrons(double micronsPerPixel, double maxPixels) {
     return decimal(5, n - 2);
 }
 
+double effectiveObjective(const SlideInfo& slide) {
+    if (slide.objectivePower > 0 && std::isfinite(slide.objectivePower)) return slide.objectivePower;
+    const double mpp = (slide.mppX > 0 && slide.mppY > 0) ? (slide.mppX + slide.mppY) / 2 : std::max(slide.mppX, slide.mppY);
+    return mpp > 0 && std::isfinite(mpp) ? 10.0 / mpp : 0;
+}
+
 std::string scaleLabel(double microns) {
     if (microns >= 1000) return shortest(microns / 1000) + " mm";
     return shortest(microns) + " \u00B5m"; // MICRO SIGN
@@ -134,9 +140,10 @@ OverlayPlan layoutOverlays(const SlideInfo* slide, const Viewport& vp, const Ove
     }
 
     // Magnification readout: a label on a plate; nothing to show without a font.
-    if (s.visible[size_t(Overlay::Magnification)] && slide->objectivePower > 0 && std::isfinite(slide->objectivePower)) {
+    const double objective = effectiveObjective(*slide);
+    if (s.visible[size_t(Overlay::Magnification)] && objective > 0) {
         const double level0 = slide->levels.empty() ? 1.0 : slide->levels.front().downsample;
-        const double m = slide->objectivePower * level0 / v.downsample;
+        const double m = objective * level0 / v.downsample;
         const std::string label = magnificationLabel(m);
         const TextMetrics tm = measure(label);
         if (tm.ok) {

@@ -37,8 +37,10 @@ OverlayFrame OverlayRenderer::prepare(uint32_t slot, const Snapshot& snap, VkExt
     OverlayFrame out;
     const overlay::OverlaySettings& settings = snap.overlays;
     if (!snap.slide || !settings.visibleAny()) return out;
-    if (glyphs_.fontId() != (settings.font ? settings.font->id : 0)) {
+    const uint64_t wanted = settings.font ? settings.font->id : 0;
+    if (glyphs_.fontId() != wanted && (wanted == 0 || wanted != failedFontId_)) {
         out.fontError = glyphs_.setFont(settings.font); // leaves no face on error: no labels
+        if (!out.fontError.ok()) failedFontId_ = wanted;  // reported once, not every frame
     }
 
     const double ratio = settings.devicePixelRatio;

@@ -57,6 +57,7 @@ private:
     const Log& log_;
     gpu::OverlayPipeline pipeline_;
     overlay::GlyphCache glyphs_;
+    uint64_t failedFontId_ = 0; // a font FreeType could not make a face of
     std::vector<Slot> slots_;
 };
 

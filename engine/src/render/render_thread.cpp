@@ -597,7 +597,7 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
         haveFrame_ = true;
     }
     publishFrame(snap, complete, count, std::chrono::duration<double, std::milli>(Clock::now() - t0).count(),
-                     overlay.plan.layout);
+                 overlay.plan.layout);
     return {};
 }
 

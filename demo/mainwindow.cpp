@@ -163,6 +163,66 @@ void MainWindow::createMenus()
     presets->addActions(m_presetActions);
     view->addSeparator();
     view->addAction(m_enhanceAction);
+
+    // Overlays the engine draws over the slide: each shown or hidden and put in a corner,
+    // remembered across runs. The checks follow the view (also when set from elsewhere).
+    QMenu *overlays = view->addMenu(tr("O&verlays"));
+    const struct {
+        IrisSlideView::Overlay overlay;
+        QString title;
+        QString key;
+    } kinds[] = {
+        {IrisSlideView::ScaleBar, tr("&Scale Bar"), QStringLiteral("scaleBar")},
+        {IrisSlideView::MagnificationLabel, tr("&Magnification Readout"), QStringLiteral("magnification")},
+        {IrisSlideView::Overview, tr("&Overview Map"), QStringLiteral("overview")},
+    };
+    const std::pair<IrisSlideView::OverlayCorner, QString> corners[] = {
+        {IrisSlideView::TopLeft, tr("Top &Left")},
+        {IrisSlideView::TopRight, tr("Top &Right")},
+        {IrisSlideView::BottomLeft, tr("&Bottom Left")},
+        {IrisSlideView::BottomRight, tr("Bottom Ri&ght")},
+    };
+    QSettings settings;
+    for (const auto &kind : kinds) {
+        const IrisSlideView::Overlay overlay = kind.overlay;
+        const QString visibleKey = QStringLiteral("overlays/%1/visible").arg(kind.key);
+        const QString cornerKey = QStringLiteral("overlays/%1/corner").arg(kind.key);
+        m_view->setOverlayVisible(overlay, settings.value(visibleKey, m_view->isOverlayVisible(overlay)).toBool());
+        const int corner = settings.value(cornerKey, int(m_view->overlayCorner(overlay))).toInt();
+        if (corner >= IrisSlideView::TopLeft && corner <= IrisSlideView::BottomRight)
+            m_view->setOverlayCorner(overlay, IrisSlideView::OverlayCorner(corner));
+
+        QMenu *menu = overlays->addMenu(kind.title);
+        QAction *show = menu->addAction(tr("&Show"));
+        show->setCheckable(true);
+        connect(show, &QAction::triggered, m_view, [this, overlay, visibleKey](bool on) {
+            m_view->setOverlayVisible(overlay, on);
+            QSettings().setValue(visibleKey, on);
+        });
+        menu->addSeparator();
+        QList<QAction *> placed;
+        for (const auto &[where, title] : corners) {
+            QAction *action = menu->addAction(title);
+            action->setCheckable(true);
+            action->setData(int(where));
+            placed << action;
+        }
+        const auto sync = [this, overlay, show, placed] {
+            show->setChecked(m_view->isOverlayVisible(overlay));
+            for (QAction *action : placed)
+                action->setChecked(action->data().toInt() == int(m_view->overlayCorner(overlay)));
+        };
+        for (QAction *action : placed) {
+            connect(action, &QAction::triggered, m_view, [this, overlay, cornerKey, action, sync] {
+                m_view->setOverlayCorner(overlay, IrisSlideView::OverlayCorner(action->data().toInt()));
+                QSettings().setValue(cornerKey, action->data().toInt());
+                sync(); // one corner stays checked, also when the checked one was clicked again
+            });
+        }
+        connect(m_view, &IrisSlideView::overlaysChanged, menu, sync);
+        sync();
+    }
+
     view->addSeparator();
     view->addAction(m_properties->toggleViewAction());
     view->addAction(m_images->toggleViewAction());

@@ -54,7 +54,9 @@ QString IrisSlideViewPlugin::whatsThis() const
     return QStringLiteral(
         "Shows a digital pathology whole-slide image (any format OpenSlide reads, or .iris) "
         "rendered with Vulkan: drag to pan, wheel or pinch to zoom, arrow keys move one field, "
-        "0 fits the slide, 1-4 jump to 5x, 10x, 20x and 40x.");
+        "0 fits the slide, 1-4 jump to 5x, 10x, 20x and 40x. A scale bar, the magnification "
+        "and an overview map (click it to go there) are drawn over the slide; each can be "
+        "switched off or moved to another corner.");
 }
 
 QString IrisSlideViewPlugin::includeFile() const
@@ -116,6 +118,24 @@ QString IrisSlideViewPlugin::domXml() const
     </property>
     <property name="vramBudgetMB">
       <number>512</number>
+    </property>
+    <property name="scaleBarVisible">
+      <bool>true</bool>
+    </property>
+    <property name="scaleBarCorner">
+      <enum>IrisSlideView::BottomLeft</enum>
+    </property>
+    <property name="magnificationLabelVisible">
+      <bool>true</bool>
+    </property>
+    <property name="magnificationLabelCorner">
+      <enum>IrisSlideView::TopLeft</enum>
+    </property>
+    <property name="overviewVisible">
+      <bool>true</bool>
+    </property>
+    <property name="overviewCorner">
+      <enum>IrisSlideView::TopRight</enum>
     </property>
   </widget>
   <customwidgets>

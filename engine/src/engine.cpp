@@ -15,6 +15,7 @@
 #include "gpu/mip_pipeline.h"
 #include "gpu/tile_atlas.h"
 #include "gpu/tile_pipeline.h"
+#include "overlay/font.h"
 #include "render/render_thread.h"
 #include "view/view_model.h"
 
@@ -116,6 +117,8 @@ struct Engine::Impl {
     std::unique_ptr<BufferThread> buffer;
     std::unique_ptr<LoaderPool> loaders;
     std::mutex openMutex; // serialises open/close (the disk work of open happens outside it)
+    std::mutex fontMutex; // serialises font choices (file and fontconfig work happen under it)
+    bool fontChosen = false; // guarded by fontMutex: a font was set, or the default was looked up
     uint32_t generation = 0;
     bool surfaceBound = false;
     bool offscreenBound = false;
@@ -351,6 +354,91 @@ void Engine::setEnhance(bool on) {
 }
 
 bool Engine::enhance() const { return impl_->shared.snapshot().enhance; }
+
+namespace {
+bool validOverlay(Overlay o) { return int(o) >= 0 && int(o) < kOverlayCount; }
+bool labelled(Overlay o) { return o == Overlay::ScaleBar || o == Overlay::Magnification; }
+} // namespace
+
+void Engine::setOverlayVisible(Overlay overlay, bool visible) {
+    if (!validOverlay(overlay)) return;
+    if (visible && labelled(overlay)) {
+        // The first labelled overlay needs a font: the default one, unless the host chose.
+        std::lock_guard lock(impl_->fontMutex);
+        if (!impl_->fontChosen) {
+            impl_->fontChosen = true;
+            Expected<std::string> file = overlay::findDefaultFontFile();
+            Expected<std::shared_ptr<const overlay::FontData>> font =
+                file ? overlay::loadFontFile(*file) : Expected<std::shared_ptr<const overlay::FontData>>(file.error());
+            if (font) {
+                impl_->log.info("overlay font: " + (*font)->path);
+                impl_->shared.update([&](Snapshot& s) { s.overlays.font = *font; });
+            } else {
+                impl_->shared.setError(font.error());
+                impl_->log.error("overlay labels are not drawn: " + font.error().message());
+            }
+        }
+    }
+    impl_->shared.update([&](Snapshot& s) { s.overlays.visible[size_t(overlay)] = visible; });
+}
+
+bool Engine::overlayVisible(Overlay overlay) const {
+    return validOverlay(overlay) && impl_->shared.snapshot().overlays.visible[size_t(overlay)];
+}
+
+void Engine::setOverlayCorner(Overlay overlay, Corner corner) {
+    if (!validOverlay(overlay) || int(corner) < 0 || int(corner) > 3) return;
+    impl_->shared.update([&](Snapshot& s) { s.overlays.corner[size_t(overlay)] = corner; });
+}
+
+Corner Engine::overlayCorner(Overlay overlay) const {
+    if (!validOverlay(overlay)) return Corner::TopLeft;
+    return impl_->shared.snapshot().overlays.corner[size_t(overlay)];
+}
+
+void Engine::setDevicePixelRatio(double ratio) {
+    if (!std::isfinite(ratio) || ratio <= 0) return;
+    ratio = std::clamp(ratio, 0.25, 8.0);
+    impl_->shared.update([&](Snapshot& s) { s.overlays.devicePixelRatio = ratio; });
+}
+
+double Engine::devicePixelRatio() const { return impl_->shared.snapshot().overlays.devicePixelRatio; }
+
+Result Engine::setOverlayFont(const std::string& path) {
+    std::lock_guard lock(impl_->fontMutex);
+    impl_->fontChosen = true;
+    Expected<std::string> file = path.empty() ? overlay::findDefaultFontFile() : Expected<std::string>(path);
+    Expected<std::shared_ptr<const overlay::FontData>> font =
+        file ? overlay::loadFontFile(*file) : Expected<std::shared_ptr<const overlay::FontData>>(file.error());
+    // On failure no font is left: labels are not drawn rather than drawn in a font the host did not ask for.
+    impl_->shared.update([&](Snapshot& s) { s.overlays.font = font ? *font : nullptr; });
+    if (!font) {
+        impl_->shared.setError(font.error());
+        impl_->log.error("overlay labels are not drawn: " + font.error().message());
+        return font.error();
+    }
+    impl_->log.info("overlay font: " + (*font)->path);
+    return {};
+}
+
+OverlayLayout Engine::overlayLayout() const { return impl_->render->overlayLayout(); }
+
+bool Engine::overviewHit(double x, double y, View* out) const {
+    if (!std::isfinite(x) || !std::isfinite(y)) return false;
+    std::shared_ptr<const SlideSource> shown;
+    const OverlayLayout layout = impl_->render->overlayLayout(&shown);
+    const Snapshot s = impl_->shared.snapshot();
+    if (!s.slide || !shown || shown != s.slide->source) return false; // laid out for another slide
+    const PixelRect& img = layout.overviewImage;
+    if (layout.rect(Overlay::Overview).empty() || !img.contains(x, y) || !(layout.overviewDownsample > 0)) return false;
+    if (out) {
+        View v = s.viewport.view;
+        v.centerX = std::clamp((x - img.x) * layout.overviewDownsample, 0.0, double(s.slide->info.width));
+        v.centerY = std::clamp((y - img.y) * layout.overviewDownsample, 0.0, double(s.slide->info.height));
+        *out = v;
+    }
+    return true;
+}
 
 Result Engine::error() const { return impl_->shared.error(); }
 void Engine::clearError() { impl_->shared.clearError(); }

@@ -136,7 +136,9 @@ void TstDesignerPlugin::domXmlParsesAndMatchesTheWidget()
         QVERIFY2(view.metaObject()->property(index).isWritable(), qPrintable(name));
         QVERIFY2(view.metaObject()->property(index).isDesignable(), qPrintable(name));
     }
-    for (const char *expected : {"backgroundColor", "enhance", "ramBudgetMB", "vramBudgetMB"})
+    for (const char *expected : {"backgroundColor", "enhance", "ramBudgetMB", "vramBudgetMB", "scaleBarVisible",
+                                 "scaleBarCorner", "magnificationLabelVisible", "magnificationLabelCorner",
+                                 "overviewVisible", "overviewCorner"})
         QVERIFY2(properties.contains(QLatin1String(expected)), expected);
 }
 
@@ -153,6 +155,9 @@ void TstDesignerPlugin::uicFormBuildsAndShowsASlide()
     QVERIFY(!view->kineticPanning());
     QCOMPARE(view->ramBudgetMB(), 256);
     QCOMPARE(view->vramBudgetMB(), 128);
+    QVERIFY(!view->isOverviewVisible());
+    QCOMPARE(view->scaleBarCorner(), IrisSlideView::TopRight);
+    QVERIFY(view->isMagnificationLabelVisible()); // not set in the form: the widget's default
 
     const QString slide = sampleSlide();
     QVERIFY2(QFileInfo::exists(slide), qPrintable(slide));

@@ -175,7 +175,7 @@ void TstIrisSlideView::checkPresentedMatchesHeadless(IrisSlideView *view, const 
     const QSize target = view->targetSize();
     QString error;
     const QImage headless = renderHeadless(slide, target, view->centre(), view->downsample(),
-                                           view->backgroundColor(), &error);
+                                           view->backgroundColor(), &error, view);
     QVERIFY2(!headless.isNull(), qPrintable(error));
 
     // The complete frame was submitted; its presentation reaches the X server a moment later.

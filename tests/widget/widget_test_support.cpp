@@ -95,7 +95,7 @@ QImage grabPresented(IrisSlideView *view)
 }
 
 QImage renderHeadless(const QString &path, QSize targetSize, QPointF centre, double downsample,
-                      const QColor &background, QString *error)
+                      const QColor &background, QString *error, const IrisSlideView *overlaysOf)
 {
     iris::EngineConfig config;
     config.validation = true;
@@ -114,6 +114,20 @@ QImage renderHeadless(const QString &path, QSize targetSize, QPointF centre, dou
     if (auto r = engine.open(QFile::encodeName(path).toStdString()); !r) {
         *error = QString::fromStdString(r.message());
         return {};
+    }
+    if (overlaysOf) {
+        if (!overlaysOf->overlayFont().isEmpty()) {
+            if (auto r = engine.setOverlayFont(QFile::encodeName(overlaysOf->overlayFont()).toStdString()); !r) {
+                *error = QString::fromStdString(r.message());
+                return {};
+            }
+        }
+        if (QWindow *window = overlaysOf->surfaceWindow())
+            engine.setDevicePixelRatio(window->devicePixelRatio());
+        for (auto o : {IrisSlideView::ScaleBar, IrisSlideView::MagnificationLabel, IrisSlideView::Overview}) {
+            engine.setOverlayCorner(iris::Overlay(int(o)), iris::Corner(int(overlaysOf->overlayCorner(o))));
+            engine.setOverlayVisible(iris::Overlay(int(o)), overlaysOf->isOverlayVisible(o));
+        }
     }
     engine.setView(iris::View{centre.x(), centre.y(), downsample});
     if (auto r = engine.waitForFrame(std::chrono::seconds(30)); !r) {

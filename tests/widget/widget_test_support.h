@@ -55,9 +55,11 @@ private:
 QImage grabPresented(IrisSlideView *view);
 
 // Renders path headless at the given view into a targetSize offscreen target and returns it
-// (RGBA8888); on failure returns a null image and sets *error.
+// (RGBA8888); on failure returns a null image and sets *error. With overlaysOf, the engine
+// draws the overlays that view shows, where it shows them, at its device pixel ratio (and
+// the frame must have every one of them); without, none.
 QImage renderHeadless(const QString &path, QSize targetSize, QPointF centre, double downsample,
-                      const QColor &background, QString *error);
+                      const QColor &background, QString *error, const IrisSlideView *overlaysOf = nullptr);
 
 struct ImageDifference {
     double meanAbs = 0;          // mean |a − b| over every channel of every pixel (0…255)

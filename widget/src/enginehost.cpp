@@ -3,6 +3,7 @@
 #include <atomic>
 #include <mutex>
 
+#include <QtCore/QFile>
 #include <QtGui/QColor>
 #include <QtGui/QVulkanInstance>
 #include <QtGui/QWindow>
@@ -75,6 +76,8 @@ bool EngineHost::create(QVulkanInstance *vulkan, const EngineSettings &settings,
     m_vulkan = vulkan;
     m_settings = settings;
     m_engine->setEnhance(settings.enhance);
+    m_settings.overlayFont.clear(); // a new engine has no font of the host's yet
+    applyOverlays(settings);
     g_liveEngines.fetch_add(1, std::memory_order_relaxed); // a counter for tests; orders nothing
 
     std::weak_ptr<Relay> weakRelay = m_relay;
@@ -101,6 +104,27 @@ bool EngineHost::create(QVulkanInstance *vulkan, const EngineSettings &settings,
     qCInfo(lcIrisWidget).noquote() << "engine ready on" << fromStd(device.name) << "with"
                                    << device.atlasSlots << "tile slots";
     return true;
+}
+
+void EngineHost::applyOverlays(const EngineSettings &settings)
+{
+    if (!m_engine)
+        return;
+    m_settings.overlayVisible = settings.overlayVisible;
+    m_settings.overlayCorner = settings.overlayCorner;
+    for (int i = 0; i < iris::kOverlayCount; ++i)
+        m_engine->setOverlayCorner(iris::Overlay(i), settings.overlayCorner[size_t(i)]);
+    // The font first: turning a labelled overlay on would otherwise look up the default one.
+    if (!settings.overlayFont.isEmpty() && settings.overlayFont != m_settings.overlayFont) {
+        const iris::Result r = m_engine->setOverlayFont(QFile::encodeName(settings.overlayFont).toStdString());
+        if (!r)
+            qCWarning(lcIrisWidget).noquote() << "overlay font:" << fromStd(r.message());
+    } else if (settings.overlayFont.isEmpty() && !m_settings.overlayFont.isEmpty()) {
+        m_engine->setOverlayFont({});
+    }
+    m_settings.overlayFont = settings.overlayFont;
+    for (int i = 0; i < iris::kOverlayCount; ++i)
+        m_engine->setOverlayVisible(iris::Overlay(i), settings.overlayVisible[size_t(i)]);
 }
 
 void EngineHost::destroy()

@@ -33,6 +33,11 @@ struct EngineSettings {
     bool validation = false;
     std::array<float, 3> background{0.96f, 0.96f, 0.96f};
     bool enhance = true;
+    // The widget shows every overlay by default (the engine's own default is none).
+    std::array<bool, iris::kOverlayCount> overlayVisible{true, true, true};
+    std::array<iris::Corner, iris::kOverlayCount> overlayCorner{iris::Corner::BottomLeft, iris::Corner::TopLeft,
+                                                                iris::Corner::TopRight};
+    QString overlayFont; // empty: the engine's default
 };
 
 // A QColor as the engine's background components. The engine's targets are UNORM (bytes
@@ -52,6 +57,8 @@ public:
     void destroy();
     iris::Engine *engine() const { return m_engine.get(); }
     const EngineSettings &settings() const { return m_settings; }
+    // Shows, places and re-fonts the overlays as `settings` say (only what changed).
+    void applyOverlays(const EngineSettings &settings);
 
     // Makes the engine present into window's surface at deviceSize.
     bool bindSurface(QWindow *window, QSize deviceSize, QString *error);

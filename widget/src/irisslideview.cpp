@@ -310,6 +310,71 @@ void IrisSlideView::setVramBudgetMB(int mb)
         d->settings.vramBudgetBytes = quint64(mb) * kMiB;
 }
 
+// --- overlays --------------------------------------------------------------------------
+
+bool IrisSlideView::isOverlayVisible(Overlay overlay) const
+{
+    Q_D(const IrisSlideView);
+    return overlay >= ScaleBar && overlay <= Overview && d->settings.overlayVisible[size_t(overlay)];
+}
+
+void IrisSlideView::setOverlayVisible(Overlay overlay, bool visible)
+{
+    Q_D(IrisSlideView);
+    if (overlay < ScaleBar || overlay > Overview || d->settings.overlayVisible[size_t(overlay)] == visible)
+        return;
+    d->settings.overlayVisible[size_t(overlay)] = visible;
+    d->host.applyOverlays(d->settings);
+    Q_EMIT overlaysChanged();
+}
+
+IrisSlideView::OverlayCorner IrisSlideView::overlayCorner(Overlay overlay) const
+{
+    Q_D(const IrisSlideView);
+    if (overlay < ScaleBar || overlay > Overview)
+        return TopLeft;
+    return OverlayCorner(int(d->settings.overlayCorner[size_t(overlay)]));
+}
+
+void IrisSlideView::setOverlayCorner(Overlay overlay, OverlayCorner corner)
+{
+    Q_D(IrisSlideView);
+    if (overlay < ScaleBar || overlay > Overview || corner < TopLeft || corner > BottomRight
+        || d->settings.overlayCorner[size_t(overlay)] == iris::Corner(int(corner))) {
+        return;
+    }
+    d->settings.overlayCorner[size_t(overlay)] = iris::Corner(int(corner));
+    d->host.applyOverlays(d->settings);
+    Q_EMIT overlaysChanged();
+}
+
+QRectF IrisSlideView::overlayRect(Overlay overlay) const
+{
+    Q_D(const IrisSlideView);
+    if (!d->engine() || overlay < ScaleBar || overlay > Overview)
+        return {};
+    const iris::PixelRect r = d->engine()->overlayLayout().rect(iris::Overlay(int(overlay)));
+    if (r.empty())
+        return {};
+    return QRectF(d->fromTarget(QPointF(r.x, r.y)), d->fromTarget(QPointF(r.x + r.width, r.y + r.height)));
+}
+
+QString IrisSlideView::overlayFont() const
+{
+    Q_D(const IrisSlideView);
+    return d->settings.overlayFont;
+}
+
+void IrisSlideView::setOverlayFont(const QString &path)
+{
+    Q_D(IrisSlideView);
+    if (path == d->settings.overlayFont)
+        return;
+    d->settings.overlayFont = path;
+    d->host.applyOverlays(d->settings); // a bad file is reported with the next frame (slideError)
+    Q_EMIT overlaysChanged();
+}
+
 // --- state -----------------------------------------------------------------------------
 
 bool IrisSlideView::isRendererAvailable() const
@@ -371,6 +436,13 @@ bool IrisSlideView::event(QEvent *event)
 void IrisSlideView::mousePressEvent(QMouseEvent *event)
 {
     Q_D(IrisSlideView);
+    // A press on the overview map moves the view there (and a drag keeps moving it) instead
+    // of starting a pan.
+    if (event->button() == Qt::LeftButton && d->moveToOverview(event->position(), false)) {
+        d->overviewDragging = true;
+        event->accept();
+        return;
+    }
     if (d->navigator.mousePress(event))
         event->accept();
     else
@@ -380,7 +452,16 @@ void IrisSlideView::mousePressEvent(QMouseEvent *event)
 void IrisSlideView::mouseMoveEvent(QMouseEvent *event)
 {
     Q_D(IrisSlideView);
+    if (d->overviewDragging) {
+        if (event->buttons() & Qt::LeftButton)
+            d->moveToOverview(event->position(), true);
+        else
+            d->overviewDragging = false; // the release went elsewhere
+        event->accept();
+        return;
+    }
     const bool used = d->navigator.mouseMove(event);
+    d->updateCursor(event->position());
     if (d->slide)
         Q_EMIT cursorMoved(mapToSlide(event->position()));
     if (used)
@@ -392,6 +473,11 @@ void IrisSlideView::mouseMoveEvent(QMouseEvent *event)
 void IrisSlideView::mouseReleaseEvent(QMouseEvent *event)
 {
     Q_D(IrisSlideView);
+    if (d->overviewDragging && event->button() == Qt::LeftButton) {
+        d->overviewDragging = false;
+        event->accept();
+        return;
+    }
     if (d->navigator.mouseRelease(event))
         event->accept();
     else
@@ -401,6 +487,12 @@ void IrisSlideView::mouseReleaseEvent(QMouseEvent *event)
 void IrisSlideView::mouseDoubleClickEvent(QMouseEvent *event)
 {
     Q_D(IrisSlideView);
+    // The second click of a double click on the overview moves the view again; it does not zoom.
+    if (event->button() == Qt::LeftButton && d->moveToOverview(event->position(), false)) {
+        d->overviewDragging = true;
+        event->accept();
+        return;
+    }
     if (d->navigator.mouseDoubleClick(event))
         event->accept();
     else

@@ -1,5 +1,6 @@
 #include "irisslideview_p.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include <QtCore/QFile>
@@ -156,6 +157,7 @@ void IrisSlideViewPrivate::bindIfReady()
         return;
     }
     boundDevicePixelRatio = window->devicePixelRatio();
+    engine()->setDevicePixelRatio(boundDevicePixelRatio); // overlays: text at device resolution
     engine()->setVisible(true);
     if (fitPending && slide) {
         fitPending = false;
@@ -182,6 +184,7 @@ void IrisSlideViewPrivate::onTargetSizeChanged(QSize deviceSize)
     const double ratio = window->devicePixelRatio();
     const iris::View before = engine()->view();
     engine()->resize(uint32_t(deviceSize.width()), uint32_t(deviceSize.height()));
+    engine()->setDevicePixelRatio(ratio);
     if (slide && boundDevicePixelRatio > 0 && ratio != boundDevicePixelRatio) {
         // Another screen: keep the same field in the same logical area, so the glass looks
         // as it did; the device-pixel downsample follows the new ratio.
@@ -364,6 +367,35 @@ double IrisSlideViewPrivate::clampDownsample(double downsample) const
     if (!engine() || !slide)
         return downsample;
     return zoomLimitsFor(*slide, engine()->fitView().downsample).clamp(downsample);
+}
+
+bool IrisSlideViewPrivate::moveToOverview(QPointF widgetPos, bool clamp)
+{
+    if (!engine() || !slide)
+        return false;
+    QPointF t = toTarget(widgetPos);
+    if (clamp) {
+        const iris::PixelRect img = engine()->overlayLayout().overviewImage;
+        if (img.empty())
+            return false;
+        t.setX(std::clamp(t.x(), double(img.x), img.x + img.width - 0.5));
+        t.setY(std::clamp(t.y(), double(img.y), img.y + img.height - 0.5));
+    }
+    iris::View view;
+    if (!engine()->overviewHit(t.x(), t.y(), &view))
+        return false;
+    navigator.stopMotion();
+    setView(view);
+    return true;
+}
+
+void IrisSlideViewPrivate::updateCursor(QPointF widgetPos)
+{
+    if (!window || navigator.isDragging())
+        return;
+    const QPointF t = toTarget(widgetPos);
+    const bool overview = engine() && slide && engine()->overviewHit(t.x(), t.y());
+    window->setCursor(overview ? Qt::PointingHandCursor : Qt::OpenHandCursor);
 }
 
 // --- NavigationTarget ------------------------------------------------------------------

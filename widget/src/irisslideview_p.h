@@ -58,6 +58,11 @@ public:
     QPointF toTarget(QPointF widgetPos) const;   // logical widget → device target pixels
     QPointF fromTarget(QPointF targetPos) const; // and back
     double clampDownsample(double downsample) const;
+    // Centres the view on the slide point under widgetPos when it lies on the overview map's
+    // thumbnail (clamp: a point beside it counts as its nearest edge, for drags); false otherwise.
+    bool moveToOverview(QPointF widgetPos, bool clamp);
+    // The pointer's shape over the view: a pointing hand over the overview map, else an open hand.
+    void updateCursor(QPointF widgetPos);
 
     // --- NavigationTarget ------------------------------------------------------------
     bool canNavigate() const override;
@@ -88,4 +93,5 @@ public:
     bool recovering = false;
     double boundDevicePixelRatio = 0;        // at the last bind or resize
     std::optional<iris::View> notifiedView;  // last view viewChanged() announced
+    bool overviewDragging = false;           // a press on the overview map: moves follow it
 };

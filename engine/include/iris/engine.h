@@ -101,6 +101,40 @@ public:
     void setEnhance(bool on);
     bool enhance() const;
 
+    // --- overlays ------------------------------------------------------------------
+    // The render thread draws the scale bar, the magnification readout and the overview map
+    // over the tiles, alpha-blended on a semi-transparent plate, each in a corner of the
+    // target (several in one corner stack inwards, in the order of `Overlay`). All are off
+    // by default, so frames hold slide pixels only; nothing is drawn while no slide is open,
+    // the scale bar is hidden when the slide states no mpp, the readout when it states
+    // neither objective power nor mpp (with mpp alone the objective is taken as 10 µm / mpp,
+    // as IrisSlideView's magnification() does), and an overlay that does not fit into the
+    // target is left out.
+    // Turning on a labelled overlay (scale bar, magnification) before any font was chosen
+    // looks up the default font on the calling thread (fontconfig; see setOverlayFont).
+    void setOverlayVisible(Overlay overlay, bool visible);
+    bool overlayVisible(Overlay overlay) const;
+    // Defaults: scale bar BottomLeft, magnification TopLeft, overview TopRight.
+    void setOverlayCorner(Overlay overlay, Corner corner);
+    Corner overlayCorner(Overlay overlay) const;
+    // Device pixels per logical pixel of the host's window (Qt's devicePixelRatio; 1 by
+    // default, clamped to 0.25…8). Overlays are laid out in logical pixels and drawn at
+    // device resolution: text is rasterised at pixel size = point size × ratio.
+    void setDevicePixelRatio(double ratio);
+    double devicePixelRatio() const;
+    // The font overlay labels use: a font file FreeType reads (TrueType, OpenType, …), read
+    // on the calling thread. An empty path picks the system's default sans-serif through
+    // fontconfig (DejaVu Sans). On failure (no such file, not a scalable font, fontconfig
+    // finds nothing) the error is returned, logged and recorded (error()), and overlays draw
+    // no text until a font loads; they keep drawing everything else.
+    Result setOverlayFont(const std::string& path);
+    // The overlays of the last frame rendered (into either kind of target): for hit-testing.
+    OverlayLayout overlayLayout() const;
+    // Whether target pixel (x, y) lies on the overview map's thumbnail of the last frame
+    // shown for the open slide. If it does and `out` is given, *out is the current view
+    // moved to be centred on the slide point under (x, y).
+    bool overviewHit(double x, double y, View* out = nullptr) const;
+
     // --- state ---------------------------------------------------------------------
     // First error wins and sticks until clearError() or a successful open().
     Result error() const;

@@ -125,12 +125,60 @@ struct Image {
     std::vector<uint8_t> rgba;
 };
 
+// --- overlays -------------------------------------------------------------------------
+// What the render thread can draw over the slide (Engine::setOverlayVisible).
+enum class Overlay : int {
+    ScaleBar = 0,      // a bar of a round physical length (1, 2 or 5 × 10^n µm), labelled
+    Magnification = 1, // the objective magnification of the view ("20.0×")
+    Overview = 2,      // a thumbnail of the whole slide with the current field outlined
+};
+inline constexpr int kOverlayCount = 3;
+enum class Corner : int { TopLeft = 0, TopRight = 1, BottomLeft = 2, BottomRight = 3 };
+
+// Target pixels [x, x + width) × [y, y + height). Empty (width or height 0): nothing there.
+struct PixelRect {
+    int32_t x = 0;
+    int32_t y = 0;
+    int32_t width = 0;
+    int32_t height = 0;
+    bool empty() const { return width <= 0 || height <= 0; }
+    bool contains(double px, double py) const {
+        return !empty() && px >= x && py >= y && px < double(x) + width && py < double(y) + height;
+    }
+    friend bool operator==(const PixelRect&, const PixelRect&) = default;
+};
+
+// Where a frame's overlays are, in target pixels. Every pixel an overlay changes lies inside
+// its rectangle (the render thread clips each overlay's drawing to it).
+struct OverlayLayout {
+    std::array<PixelRect, kOverlayCount> rects{}; // by Overlay; empty: not drawn
+    const PixelRect& rect(Overlay o) const { return rects[size_t(o)]; }
+    bool text = false;               // labels were drawn (false while no usable font is loaded)
+    // Scale bar: its physical length, that length in target pixels (microns / (mppX ×
+    // downsample)) and its label ("100 µm", "1 mm"; UTF-8).
+    double scaleBarMicrons = 0;
+    double scaleBarPixels = 0;
+    std::string scaleBarLabel;
+    // Magnification: objective × level-0 downsample / view downsample (the objective is the
+    // stated objective power, else 10 µm / mpp), and its label.
+    double magnification = 0;
+    std::string magnificationLabel;
+    // Overview: the thumbnail's pixels (the slide's level-0 origin is at its top-left corner),
+    // level-0 pixels per thumbnail pixel, and the view's field in target pixels (not clipped;
+    // the outline drawn is this rectangle clipped to the thumbnail).
+    PixelRect overviewImage;
+    double overviewDownsample = 0;
+    std::array<double, 4> overviewField{}; // x0, y0, x1, y1
+};
+
 // A rendered frame read back from the offscreen target.
 struct Frame {
     Image image;
     View view;              // the view this frame shows
     uint64_t serial = 0;    // increases with every frame rendered
     bool complete = false;  // every visible tile of the finest needed level was resident
+                            // (and every tile of the overview's thumbnail, when it is shown)
+    OverlayLayout overlays; // where this frame's overlays are
 };
 
 // Per-frame figures, delivered to the frame callback and kept in Engine::metrics().

@@ -14,6 +14,7 @@
 #include <mutex>
 
 #include "iris/types.h"
+#include "overlay/overlay_settings.h"
 #include "slide/slide_source.h"
 #include "view/view_model.h"
 
@@ -32,6 +33,7 @@ struct Snapshot {
     bool visible = true;
     std::array<float, 3> background{0.96f, 0.96f, 0.96f};
     bool enhance = true;
+    overlay::OverlaySettings overlays; // which overlays are on, where, the device pixel ratio, the font
     // The newest move to an entirely new field of view (0: none being timed). Set by the API
     // call that made the move; the render thread times the field from fieldStart.
     uint64_t fieldId = 0;

@@ -175,5 +175,96 @@ void invalidate(VkDevice dev, const MappedBuffer& b) {
     vkInvalidateMappedMemoryRanges(dev, 1, &range);
 }
 
-} // namespace iris::vk
+void flush(VkDevice dev, const MappedBuffer& b) {
+    if (b.coherent) return;
+    const VkMappedMemoryRange range{
+        .sType = VK_STRUCTURE_TYPE_MAPPED_MEMORY_RANGE, .pNext = nullptr, .memory = b.memory, .offset = 0, .size = VK_WHOLE_SIZE};
+    vkFlushMappedMemoryRanges(dev, 1, &range);
+}
 
+Result createShaderModule(VkDevice dev, const uint32_t* code, size_t bytes, VkShaderModule& out) {
+    const VkShaderModuleCreateInfo ci{
+        .sType = VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO, .pNext = nullptr, .flags = 0, .codeSize = bytes, .pCode = code};
+    IRIS_VK_TRY(vkCreateShaderModule(dev, &ci, nullptr, &out));
+    return {};
+}
+
+Expected<VkPipeline> createInstancedQuadPipeline(VkDevice dev, VkPipelineLayout layout, VkShaderModule vert,
+                                                 VkShaderModule frag, uint32_t instanceStride,
+                                                 const VkVertexInputAttributeDescription* attributes,
+                                                 uint32_t attributeCount, VkFormat format) {
+    const VkPipelineShaderStageCreateInfo stages[2] = {
+        {.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, .pNext = nullptr, .flags = 0,
+         .stage = VK_SHADER_STAGE_VERTEX_BIT, .module = vert, .pName = "main", .pSpecializationInfo = nullptr},
+        {.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, .pNext = nullptr, .flags = 0,
+         .stage = VK_SHADER_STAGE_FRAGMENT_BIT, .module = frag, .pName = "main", .pSpecializationInfo = nullptr},
+    };
+    const VkVertexInputBindingDescription vib{.binding = 0, .stride = instanceStride, .inputRate = VK_VERTEX_INPUT_RATE_INSTANCE};
+    const VkPipelineVertexInputStateCreateInfo vi{
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO, .pNext = nullptr, .flags = 0,
+        .vertexBindingDescriptionCount = 1, .pVertexBindingDescriptions = &vib,
+        .vertexAttributeDescriptionCount = attributeCount, .pVertexAttributeDescriptions = attributes};
+    const VkPipelineInputAssemblyStateCreateInfo ia{
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO, .pNext = nullptr, .flags = 0,
+        .topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_STRIP, .primitiveRestartEnable = VK_FALSE};
+    const VkPipelineViewportStateCreateInfo vp{
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO, .pNext = nullptr, .flags = 0,
+        .viewportCount = 1, .pViewports = nullptr, .scissorCount = 1, .pScissors = nullptr};
+    const VkPipelineRasterizationStateCreateInfo rs{
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_RASTERIZATION_STATE_CREATE_INFO, .pNext = nullptr, .flags = 0,
+        .depthClampEnable = VK_FALSE, .rasterizerDiscardEnable = VK_FALSE, .polygonMode = VK_POLYGON_MODE_FILL,
+        .cullMode = VK_CULL_MODE_NONE, .frontFace = VK_FRONT_FACE_COUNTER_CLOCKWISE, .depthBiasEnable = VK_FALSE,
+        .depthBiasConstantFactor = 0, .depthBiasClamp = 0, .depthBiasSlopeFactor = 0, .lineWidth = 1};
+    const VkPipelineMultisampleStateCreateInfo ms{
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_MULTISAMPLE_STATE_CREATE_INFO, .pNext = nullptr, .flags = 0,
+        .rasterizationSamples = VK_SAMPLE_COUNT_1_BIT, .sampleShadingEnable = VK_FALSE, .minSampleShading = 0,
+        .pSampleMask = nullptr, .alphaToCoverageEnable = VK_FALSE, .alphaToOneEnable = VK_FALSE};
+    // Premultiplied "over": what is drawn is premultiplied RGBA; the target stays opaque.
+    const VkPipelineColorBlendAttachmentState blend{
+        .blendEnable = VK_TRUE,
+        .srcColorBlendFactor = VK_BLEND_FACTOR_ONE,
+        .dstColorBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA,
+        .colorBlendOp = VK_BLEND_OP_ADD,
+        .srcAlphaBlendFactor = VK_BLEND_FACTOR_ONE,
+        .dstAlphaBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA,
+        .alphaBlendOp = VK_BLEND_OP_ADD,
+        .colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT | VK_COLOR_COMPONENT_B_BIT | VK_COLOR_COMPONENT_A_BIT,
+    };
+    const VkPipelineColorBlendStateCreateInfo cb{
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_COLOR_BLEND_STATE_CREATE_INFO, .pNext = nullptr, .flags = 0,
+        .logicOpEnable = VK_FALSE, .logicOp = VK_LOGIC_OP_COPY, .attachmentCount = 1, .pAttachments = &blend,
+        .blendConstants = {0, 0, 0, 0}};
+    const VkDynamicState dyn[2] = {VK_DYNAMIC_STATE_VIEWPORT, VK_DYNAMIC_STATE_SCISSOR};
+    const VkPipelineDynamicStateCreateInfo ds{
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_DYNAMIC_STATE_CREATE_INFO, .pNext = nullptr, .flags = 0, .dynamicStateCount = 2, .pDynamicStates = dyn};
+    const VkPipelineRenderingCreateInfo rci{
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_RENDERING_CREATE_INFO, .pNext = nullptr, .viewMask = 0,
+        .colorAttachmentCount = 1, .pColorAttachmentFormats = &format,
+        .depthAttachmentFormat = VK_FORMAT_UNDEFINED, .stencilAttachmentFormat = VK_FORMAT_UNDEFINED};
+    const VkGraphicsPipelineCreateInfo gci{
+        .sType = VK_STRUCTURE_TYPE_GRAPHICS_PIPELINE_CREATE_INFO,
+        .pNext = &rci,
+        .flags = 0,
+        .stageCount = 2,
+        .pStages = stages,
+        .pVertexInputState = &vi,
+        .pInputAssemblyState = &ia,
+        .pTessellationState = nullptr,
+        .pViewportState = &vp,
+        .pRasterizationState = &rs,
+        .pMultisampleState = &ms,
+        .pDepthStencilState = nullptr,
+        .pColorBlendState = &cb,
+        .pDynamicState = &ds,
+        .layout = layout,
+        .renderPass = VK_NULL_HANDLE,
+        .subpass = 0,
+        .basePipelineHandle = VK_NULL_HANDLE,
+        .basePipelineIndex = -1,
+    };
+    VkPipeline p = VK_NULL_HANDLE;
+    IRIS_VK_TRY(vkCreateGraphicsPipelines(dev, VK_NULL_HANDLE, 1, &gci, nullptr, &p));
+    return p;
+}
+
+} // namespace iris::vk

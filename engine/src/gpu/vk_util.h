@@ -125,6 +125,18 @@ inline void pipelineBarrier(VkCommandBuffer cmd, const VkBufferMemoryBarrier2& b
 Result createImageView(VkDevice dev, VkImage image, VkImageViewType type, VkFormat format,
                        VkImageSubresourceRange range, VkImageView& out);
 
+// A shader module from SPIR-V words (the generated iris_shaders headers).
+Result createShaderModule(VkDevice dev, const uint32_t* code, size_t bytes, VkShaderModule& out);
+
+// A graphics pipeline that draws one quad per instance (a 4-vertex triangle strip whose
+// corners the vertex shader makes from gl_VertexIndex) into one colour attachment of
+// `format` (dynamic rendering), blending premultiplied "over" (ONE, ONE_MINUS_SRC_ALPHA).
+// Viewport and scissor are dynamic. The per-instance attributes are at binding 0.
+Expected<VkPipeline> createInstancedQuadPipeline(VkDevice dev, VkPipelineLayout layout, VkShaderModule vert,
+                                                 VkShaderModule frag, uint32_t instanceStride,
+                                                 const VkVertexInputAttributeDescription* attributes,
+                                                 uint32_t attributeCount, VkFormat format);
+
 // A host-visible buffer, persistently mapped.
 struct MappedBuffer {
     VkBuffer buffer = VK_NULL_HANDLE;
@@ -138,5 +150,7 @@ Result createMappedBuffer(VkPhysicalDevice pd, VkDevice dev, VkDeviceSize size, 
 void destroyMappedBuffer(VkDevice dev, MappedBuffer& b);
 // Makes device writes visible to the host for non-coherent memory.
 void invalidate(VkDevice dev, const MappedBuffer& b);
+// Makes host writes visible to the device for non-coherent memory.
+void flush(VkDevice dev, const MappedBuffer& b);
 
 } // namespace iris::vk

@@ -21,7 +21,7 @@ float clearUnorm(float v) {
 RenderThread::RenderThread(SharedState& shared, gpu::Device& device, gpu::TileAtlas& atlas, gpu::TilePipeline& pipeline,
                            Handover& handover, const UploadCounters& counters, const Log& log)
     : shared_(shared), device_(device), atlas_(atlas), pipeline_(pipeline), handover_(handover), counters_(counters),
-      log_(log) {}
+      log_(log), overlays_(device, log) {}
 
 RenderThread::~RenderThread() {
     stop();
@@ -43,6 +43,7 @@ RenderThread::~RenderThread() {
 
 Result RenderThread::init() {
     VkDevice dev = device_.device();
+    if (Result r = overlays_.init(kFramesInFlight); !r.ok()) return r;
     if (Result r = vk::createTimestampPool(device_.physical(), dev, device_.queueFamily(), 2 * kFramesInFlight,
                                            timestamps_, timestampPeriodNs_);
         !r.ok())
@@ -372,6 +373,46 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
     progress.hrComplete = complete;
     trackField(snap, progress);
 
+    // Overlays, laid out for this target; the overview's thumbnail is the coarsest level's
+    // tiles (the ones kept resident), placed at the thumbnail's downsample after the view's
+    // tiles in the same instance buffer. While a shown thumbnail misses tiles of a level kept
+    // whole, the frame is not complete.
+    const uint32_t slotIndex = uint32_t(&f - frames_.data());
+    const OverlayFrame overlay = overlays_.prepare(slotIndex, snap, extent);
+    if (!overlay.fontError.ok()) {
+        shared_.setError(overlay.fontError);
+        log_.error("overlay font: " + overlay.fontError.message());
+    }
+    const uint32_t thumbFirst = count;
+    uint32_t thumbCount = 0;
+    for (const overlay::OverlayDraw& d : overlay.plan.draws) {
+        if (!d.thumbnail || !snap.slide) continue;
+        const SlideInfo& info = snap.slide->info;
+        const int base = chooseLevels(info, vp.view.downsample).base;
+        const LevelInfo& level = info.levels[size_t(base)];
+        const bool keptWhole = level.tilesX * level.tilesY <= kMaxResidentBaseTiles;
+        const TileRange range = visibleTiles(level, d.thumbnailView, 0);
+        const double lod = std::max(0.0, std::log2(d.thumbnailView.view.downsample / level.downsample));
+        for (int64_t ty = range.y0; ty <= range.y1; ++ty) {
+            for (int64_t tx = range.x0; tx <= range.x1; ++tx) {
+                const uint64_t key = TileKey::make(snap.slide->generation, base, tx, ty);
+                const int layer = thumbFirst + thumbCount < kMaxInstances ? atlas_.map().pin(key, serial) : -1;
+                if (layer < 0) {
+                    if (keptWhole) complete = false;
+                    continue;
+                }
+                f.pinned.push_back(layer);
+                const TilePlacement p = placeTile(level, d.thumbnailView, tx, ty);
+                const double ox = d.thumbnailRect.x, oy = d.thumbnailRect.y;
+                inst[thumbFirst + thumbCount++] = gpu::TileInstance{
+                    .rect = {float(ox + p.x0), float(oy + p.y0), float(ox + p.x1), float(oy + p.y1)},
+                    .texel = {float(p.validW), float(p.validH), float(layer), float(lod)},
+                    .scale = float(p.texelsPerPixel),
+                };
+            }
+        }
+    }
+
     VkCommandBuffer cmd = f.cmd;
     IRIS_VK_TRY(vkResetCommandBuffer(cmd, 0));
     const VkCommandBufferBeginInfo bi{.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO,
@@ -392,6 +433,7 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
         VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, vk::colorRange(0, 1, 0, 1));
     vk::pipelineBarrier(cmd, &toColor, 1);
     if (!acquires.empty()) vk::pipelineBarrier(cmd, acquires.data(), uint32_t(acquires.size()));
+    overlays_.recordUploads(cmd, slotIndex, overlay);
     const VkRenderingAttachmentInfo color{
         .sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO,
         .pNext = nullptr,
@@ -431,6 +473,23 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
         const VkDeviceSize offset = 0;
         vkCmdBindVertexBuffers(cmd, 0, 1, &f.instances.buffer, &offset);
         vkCmdDraw(cmd, 4, count, 0, 0);
+    }
+    const Result drawn = overlays_.recordDraws(cmd, slotIndex, overlay, format, extent, [&](const overlay::OverlayDraw&) {
+        if (thumbCount == 0) return;
+        const VkViewport viewport{0, 0, float(extent.width), float(extent.height), 0, 1};
+        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, *pipe);
+        vkCmdSetViewport(cmd, 0, 1, &viewport);
+        VkDescriptorSet set = pipeline_.descriptorSet();
+        vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline_.layout(), 0, 1, &set, 0, nullptr);
+        const gpu::TilePush push{{float(extent.width), float(extent.height)}};
+        vkCmdPushConstants(cmd, pipeline_.layout(), VK_SHADER_STAGE_VERTEX_BIT, 0, sizeof(push), &push);
+        const VkDeviceSize offset = 0;
+        vkCmdBindVertexBuffers(cmd, 0, 1, &f.instances.buffer, &offset);
+        vkCmdDraw(cmd, 4, thumbCount, 0, thumbFirst);
+    });
+    if (!drawn.ok()) { // the frame goes on without its overlays
+        shared_.setError(drawn);
+        log_.error("overlays: " + drawn.message());
     }
     vkCmdEndRendering(cmd);
 
@@ -512,12 +571,14 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
         } else {
             IRIS_VK_TRY(pr);
         }
-        publishFrame(snap, complete, count, std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+        publishFrame(snap, complete, count, std::chrono::duration<double, std::milli>(Clock::now() - t0).count(),
+                     overlay.plan.layout);
         return {};
     }
 
     if (!readback_) {
-        publishFrame(snap, complete, count, std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+        publishFrame(snap, complete, count, std::chrono::duration<double, std::milli>(Clock::now() - t0).count(),
+                     overlay.plan.layout);
         return {};
     }
     // Offscreen: the frame is read back right away (that is what an offscreen target is for).
@@ -532,17 +593,22 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
         lastFrame_.view = vp.view;
         lastFrame_.serial = serial;
         lastFrame_.complete = complete;
+        lastFrame_.overlays = overlay.plan.layout;
         haveFrame_ = true;
     }
-    publishFrame(snap, complete, count, std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+    publishFrame(snap, complete, count, std::chrono::duration<double, std::milli>(Clock::now() - t0).count(),
+                 overlay.plan.layout);
     return {};
 }
 
-void RenderThread::publishFrame(const Snapshot& snap, bool complete, uint32_t tiles, double cpuMs) {
+void RenderThread::publishFrame(const Snapshot& snap, bool complete, uint32_t tiles, double cpuMs,
+                                const OverlayLayout& overlays) {
     std::function<void(const FrameStats&)> cb;
     FrameStats stats;
     {
         std::lock_guard lock(mutex_);
+        lastOverlays_ = overlays;
+        lastOverlaySlide_ = snap.slide ? snap.slide->source : nullptr;
         const auto now = Clock::now();
         stats.serial = serial_;
         stats.intervalMs = lastFrameTime_.time_since_epoch().count() ? std::chrono::duration<double, std::milli>(now - lastFrameTime_).count() : 0;
@@ -575,6 +641,12 @@ void RenderThread::publishFrame(const Snapshot& snap, bool complete, uint32_t ti
     }
     cv_.notify_all(); // after the metrics, so a waiter that wakes sees this frame's figures
     if (cb) cb(stats);
+}
+
+OverlayLayout RenderThread::overlayLayout(std::shared_ptr<const SlideSource>* source) const {
+    std::lock_guard lock(mutex_);
+    if (source) *source = lastOverlaySlide_.lock();
+    return lastOverlays_;
 }
 
 EngineMetrics RenderThread::metrics() const {

@@ -1,8 +1,8 @@
 // The render thread: owns the render target (offscreen image or swapchain), the frame
 // command buffers and the instance buffers. Per frame it draws every ACTIVE tile of the
 // base level, then the LR level, then the HR level over them (tiles not yet buffered are
-// simply absent, so coarser ones show through). It renders while something changes and
-// sleeps on the shared wake counter otherwise.
+// simply absent, so coarser ones show through), then the overlays (OverlayRenderer). It
+// renders while something changes and sleeps on the shared wake counter otherwise.
 #pragma once
 
 #include <array>
@@ -20,6 +20,7 @@
 #include "gpu/render_target.h"
 #include "gpu/tile_atlas.h"
 #include "gpu/tile_pipeline.h"
+#include "render/overlay_renderer.h"
 
 namespace iris {
 
@@ -44,7 +45,9 @@ public:
     // Metrics: the render thread publishes with try_lock only (it never waits for a reader).
     EngineMetrics metrics() const;
     void resetMetrics();
-
+    // The overlays of the last frame rendered, and the slide source that frame showed (empty
+    // when none): a hit test applies the layout only to the slide it was made for.
+    OverlayLayout overlayLayout(std::shared_ptr<const SlideSource>* source = nullptr) const;
 
 private:
     static constexpr uint32_t kFramesInFlight = 2;
@@ -73,7 +76,7 @@ private:
     void applyTargetRequest();
     Result renderFrame(const Snapshot& snap);
     Result waitSlot(FrameSlot& f);
-    void publishFrame(const Snapshot& snap, bool complete, uint32_t tiles, double cpuMs);
+    void publishFrame(const Snapshot& snap, bool complete, uint32_t tiles, double cpuMs, const OverlayLayout& overlays);
     struct FieldProgress {
         bool hasLr = false, lrComplete = false, hrComplete = false;
         uint32_t lrTiles = 0, hrTiles = 0;
@@ -88,6 +91,7 @@ private:
     Handover& handover_;
     const UploadCounters& counters_;
     const Log& log_;
+    OverlayRenderer overlays_;
     VkQueryPool timestamps_ = VK_NULL_HANDLE; // 2 per frame slot; null when the queue has no timestamps
     double timestampPeriodNs_ = 0;
     double lastGpuMs_ = -1;
@@ -123,6 +127,8 @@ private:
     bool unbindDone_ = true;
     Frame lastFrame_;
     bool haveFrame_ = false;
+    OverlayLayout lastOverlays_;                      // of the last frame, either kind of target
+    std::weak_ptr<const SlideSource> lastOverlaySlide_; // the slide that frame showed
     uint64_t completeViewSerial_ = 0;
     std::function<void(const FrameStats&)> callback_;
     std::chrono::steady_clock::time_point lastFrameTime_{};

@@ -11,6 +11,7 @@
 #pragma once
 
 #include <QtCore/QPointF>
+#include <QtCore/QRectF>
 #include <QtCore/QScopedPointer>
 #include <QtCore/QString>
 #include <QtGui/QColor>
@@ -39,8 +40,26 @@ class IRIS_WIDGET_EXPORT IrisSlideView : public QWidget {
     Q_PROPERTY(int ramBudgetMB READ ramBudgetMB WRITE setRamBudgetMB)
     Q_PROPERTY(int vramBudgetMB READ vramBudgetMB WRITE setVramBudgetMB)
     Q_PROPERTY(double objectivePower READ objectivePower NOTIFY slidePathChanged STORED false)
+    // Overlays the engine draws over the slide (all shown by default; see the README).
+    Q_PROPERTY(bool scaleBarVisible READ isScaleBarVisible WRITE setScaleBarVisible NOTIFY overlaysChanged)
+    Q_PROPERTY(OverlayCorner scaleBarCorner READ scaleBarCorner WRITE setScaleBarCorner NOTIFY overlaysChanged)
+    Q_PROPERTY(bool magnificationLabelVisible READ isMagnificationLabelVisible WRITE setMagnificationLabelVisible
+                   NOTIFY overlaysChanged)
+    Q_PROPERTY(OverlayCorner magnificationLabelCorner READ magnificationLabelCorner WRITE setMagnificationLabelCorner
+                   NOTIFY overlaysChanged)
+    Q_PROPERTY(bool overviewVisible READ isOverviewVisible WRITE setOverviewVisible NOTIFY overlaysChanged)
+    Q_PROPERTY(OverlayCorner overviewCorner READ overviewCorner WRITE setOverviewCorner NOTIFY overlaysChanged)
+    Q_PROPERTY(QString overlayFont READ overlayFont WRITE setOverlayFont RESET resetOverlayFont NOTIFY overlaysChanged)
 
 public:
+    // The overlays: a scale bar (hidden when the slide states no mpp), the magnification
+    // readout (hidden when it states no objective power) and the overview map, a thumbnail
+    // of the whole slide with the current field outlined; clicking it moves the view there.
+    enum Overlay { ScaleBar, MagnificationLabel, Overview };
+    Q_ENUM(Overlay)
+    enum OverlayCorner { TopLeft, TopRight, BottomLeft, BottomRight };
+    Q_ENUM(OverlayCorner)
+
     explicit IrisSlideView(QWidget *parent = nullptr);
     ~IrisSlideView() override;
 
@@ -78,6 +97,33 @@ public:
     void setRamBudgetMB(int mb);
     int vramBudgetMB() const;
     void setVramBudgetMB(int mb);
+
+    // --- overlays ------------------------------------------------------------------
+    bool isOverlayVisible(Overlay overlay) const;
+    void setOverlayVisible(Overlay overlay, bool visible);
+    OverlayCorner overlayCorner(Overlay overlay) const;
+    void setOverlayCorner(Overlay overlay, OverlayCorner corner);
+    // Where the overlay is drawn in the last presented frame, in widget coordinates (logical
+    // pixels); empty when it is not shown.
+    QRectF overlayRect(Overlay overlay) const;
+    bool isScaleBarVisible() const { return isOverlayVisible(ScaleBar); }
+    void setScaleBarVisible(bool visible) { setOverlayVisible(ScaleBar, visible); }
+    OverlayCorner scaleBarCorner() const { return overlayCorner(ScaleBar); }
+    void setScaleBarCorner(OverlayCorner corner) { setOverlayCorner(ScaleBar, corner); }
+    bool isMagnificationLabelVisible() const { return isOverlayVisible(MagnificationLabel); }
+    void setMagnificationLabelVisible(bool visible) { setOverlayVisible(MagnificationLabel, visible); }
+    OverlayCorner magnificationLabelCorner() const { return overlayCorner(MagnificationLabel); }
+    void setMagnificationLabelCorner(OverlayCorner corner) { setOverlayCorner(MagnificationLabel, corner); }
+    bool isOverviewVisible() const { return isOverlayVisible(Overview); }
+    void setOverviewVisible(bool visible) { setOverlayVisible(Overview, visible); }
+    OverlayCorner overviewCorner() const { return overlayCorner(Overview); }
+    void setOverviewCorner(OverlayCorner corner) { setOverlayCorner(Overview, corner); }
+    // A font file for the overlays' labels; empty: the system's sans-serif (fontconfig's
+    // DejaVu Sans). A file that cannot be used is reported through slideError() and the
+    // labels are left out until a usable font is set.
+    QString overlayFont() const;
+    void setOverlayFont(const QString &path);
+    void resetOverlayFont() { setOverlayFont(QString()); }
 
     // --- state ---------------------------------------------------------------------
     // False when Vulkan could not be started; the widget then shows why in its place.
@@ -119,6 +165,8 @@ Q_SIGNALS:
     void cursorMoved(const QPointF &slidePos);
     void backgroundColorChanged(const QColor &color);
     void enhanceChanged(bool on);
+    // An overlay was shown, hidden or moved, or the overlay font changed.
+    void overlaysChanged();
 
 protected:
     bool event(QEvent *event) override;

@@ -1,0 +1,165 @@
+#include "gpu/overlay_pipeline.h"
+
+#include <cstddef>
+
+#include <iris_shaders/overlay_frag.h>
+#include <iris_shaders/overlay_vert.h>
+
+namespace iris::gpu {
+
+OverlayPipeline::~OverlayPipeline() {
+    VkDevice dev = device_.device();
+    if (!dev) return;
+    for (auto& [f, p] : pipelines_) vkDestroyPipeline(dev, p, nullptr);
+    if (pool_) vkDestroyDescriptorPool(dev, pool_, nullptr);
+    if (layout_) vkDestroyPipelineLayout(dev, layout_, nullptr);
+    if (setLayout_) vkDestroyDescriptorSetLayout(dev, setLayout_, nullptr);
+    if (sampler_) vkDestroySampler(dev, sampler_, nullptr);
+    if (atlasView_) vkDestroyImageView(dev, atlasView_, nullptr);
+    if (atlas_) vkDestroyImage(dev, atlas_, nullptr);
+    if (atlasMemory_) vkFreeMemory(dev, atlasMemory_, nullptr);
+    if (vert_) vkDestroyShaderModule(dev, vert_, nullptr);
+    if (frag_) vkDestroyShaderModule(dev, frag_, nullptr);
+}
+
+Result OverlayPipeline::init(uint32_t atlasSize) {
+    VkDevice dev = device_.device();
+    if (Result r = vk::createShaderModule(dev, overlay_vert_spv, sizeof(overlay_vert_spv), vert_); !r.ok()) return r;
+    if (Result r = vk::createShaderModule(dev, overlay_frag_spv, sizeof(overlay_frag_spv), frag_); !r.ok()) return r;
+
+    constexpr VkFormat kFormat = VK_FORMAT_R8_UNORM; // sampled R8 is mandatory in Vulkan
+    const VkImageCreateInfo ici{
+        .sType = VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO,
+        .pNext = nullptr,
+        .flags = 0,
+        .imageType = VK_IMAGE_TYPE_2D,
+        .format = kFormat,
+        .extent = {atlasSize, atlasSize, 1},
+        .mipLevels = 1,
+        .arrayLayers = 1,
+        .samples = VK_SAMPLE_COUNT_1_BIT,
+        .tiling = VK_IMAGE_TILING_OPTIMAL,
+        .usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+        .sharingMode = VK_SHARING_MODE_EXCLUSIVE,
+        .queueFamilyIndexCount = 0,
+        .pQueueFamilyIndices = nullptr,
+        .initialLayout = VK_IMAGE_LAYOUT_UNDEFINED,
+    };
+    IRIS_VK_TRY(vk::createDeviceImage(device_.physical(), dev, ici, atlas_, atlasMemory_));
+    if (Result r = vk::createImageView(dev, atlas_, VK_IMAGE_VIEW_TYPE_2D, kFormat, vk::colorRange(0, 1, 0, 1), atlasView_);
+        !r.ok())
+        return r;
+    // The shader uses texelFetch; a sampler is still part of a combined image sampler.
+    const VkSamplerCreateInfo sci{
+        .sType = VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO,
+        .pNext = nullptr,
+        .flags = 0,
+        .magFilter = VK_FILTER_NEAREST,
+        .minFilter = VK_FILTER_NEAREST,
+        .mipmapMode = VK_SAMPLER_MIPMAP_MODE_NEAREST,
+        .addressModeU = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
+        .addressModeV = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
+        .addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
+        .mipLodBias = 0,
+        .anisotropyEnable = VK_FALSE,
+        .maxAnisotropy = 1,
+        .compareEnable = VK_FALSE,
+        .compareOp = VK_COMPARE_OP_ALWAYS,
+        .minLod = 0,
+        .maxLod = 0,
+        .borderColor = VK_BORDER_COLOR_FLOAT_TRANSPARENT_BLACK,
+        .unnormalizedCoordinates = VK_FALSE,
+    };
+    IRIS_VK_TRY(vkCreateSampler(dev, &sci, nullptr, &sampler_));
+
+    const VkDescriptorSetLayoutBinding binding{
+        .binding = 0,
+        .descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
+        .descriptorCount = 1,
+        .stageFlags = VK_SHADER_STAGE_FRAGMENT_BIT,
+        .pImmutableSamplers = nullptr,
+    };
+    const VkDescriptorSetLayoutCreateInfo dslci{
+        .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO, .pNext = nullptr, .flags = 0, .bindingCount = 1, .pBindings = &binding};
+    IRIS_VK_TRY(vkCreateDescriptorSetLayout(dev, &dslci, nullptr, &setLayout_));
+    const VkPushConstantRange push{.stageFlags = VK_SHADER_STAGE_VERTEX_BIT, .offset = 0, .size = sizeof(OverlayPush)};
+    const VkPipelineLayoutCreateInfo plci{
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO,
+        .pNext = nullptr,
+        .flags = 0,
+        .setLayoutCount = 1,
+        .pSetLayouts = &setLayout_,
+        .pushConstantRangeCount = 1,
+        .pPushConstantRanges = &push,
+    };
+    IRIS_VK_TRY(vkCreatePipelineLayout(dev, &plci, nullptr, &layout_));
+    const VkDescriptorPoolSize ps{.type = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, .descriptorCount = 1};
+    const VkDescriptorPoolCreateInfo dpci{
+        .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO, .pNext = nullptr, .flags = 0, .maxSets = 1, .poolSizeCount = 1, .pPoolSizes = &ps};
+    IRIS_VK_TRY(vkCreateDescriptorPool(dev, &dpci, nullptr, &pool_));
+    const VkDescriptorSetAllocateInfo dsai{
+        .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO, .pNext = nullptr, .descriptorPool = pool_, .descriptorSetCount = 1, .pSetLayouts = &setLayout_};
+    IRIS_VK_TRY(vkAllocateDescriptorSets(dev, &dsai, &set_));
+    const VkDescriptorImageInfo ii{.sampler = sampler_, .imageView = atlasView_, .imageLayout = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
+    const VkWriteDescriptorSet w{
+        .sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET,
+        .pNext = nullptr,
+        .dstSet = set_,
+        .dstBinding = 0,
+        .dstArrayElement = 0,
+        .descriptorCount = 1,
+        .descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
+        .pImageInfo = &ii,
+        .pBufferInfo = nullptr,
+        .pTexelBufferView = nullptr,
+    };
+    vkUpdateDescriptorSets(dev, 1, &w, 0, nullptr);
+    return {};
+}
+
+Expected<VkPipeline> OverlayPipeline::pipelineFor(VkFormat format) {
+    if (auto it = pipelines_.find(int(format)); it != pipelines_.end()) return it->second;
+    const VkVertexInputAttributeDescription attrs[3] = {
+        {.location = 0, .binding = 0, .format = VK_FORMAT_R32G32B32A32_SFLOAT, .offset = offsetof(OverlayInstance, rect)},
+        {.location = 1, .binding = 0, .format = VK_FORMAT_R32G32B32A32_SFLOAT, .offset = offsetof(OverlayInstance, colour)},
+        {.location = 2, .binding = 0, .format = VK_FORMAT_R32G32B32A32_SFLOAT, .offset = offsetof(OverlayInstance, glyph)},
+    };
+    Expected<VkPipeline> p = vk::createInstancedQuadPipeline(device_.device(), layout_, vert_, frag_,
+                                                             sizeof(OverlayInstance), attrs, 3, format);
+    if (p) pipelines_[int(format)] = *p;
+    return p;
+}
+
+void OverlayPipeline::recordUploads(VkCommandBuffer cmd, VkBuffer staging, const VkBufferImageCopy* regions,
+                                    uint32_t count) {
+    if (atlasReady_ && count == 0) return;
+    const VkImageSubresourceRange range = vk::colorRange(0, 1, 0, 1);
+    // Earlier frames sample the atlas in their fragment shaders: an execution dependency is
+    // enough before overwriting (write-after-read). The first time its contents are undefined.
+    const VkImageMemoryBarrier2 toDst = vk::imageBarrier(
+        atlas_, VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_NONE,
+        VK_PIPELINE_STAGE_2_CLEAR_BIT | VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+        atlasReady_ ? VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL : VK_IMAGE_LAYOUT_UNDEFINED,
+        VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, range);
+    vk::pipelineBarrier(cmd, &toDst, 1);
+    if (!atlasReady_) {
+        const VkClearColorValue zero{};
+        vkCmdClearColorImage(cmd, atlas_, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, &zero, 1, &range);
+        if (count > 0) {
+            const VkImageMemoryBarrier2 clearToCopy = vk::imageBarrier(
+                atlas_, VK_PIPELINE_STAGE_2_CLEAR_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_COPY_BIT,
+                VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
+                range);
+            vk::pipelineBarrier(cmd, &clearToCopy, 1);
+        }
+    }
+    if (count > 0) vkCmdCopyBufferToImage(cmd, staging, atlas_, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, count, regions);
+    const VkImageMemoryBarrier2 toRead = vk::imageBarrier(
+        atlas_, VK_PIPELINE_STAGE_2_CLEAR_BIT | VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+        VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT, VK_ACCESS_2_SHADER_SAMPLED_READ_BIT,
+        VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, range);
+    vk::pipelineBarrier(cmd, &toRead, 1);
+    atlasReady_ = true;
+}
+
+} // namespace iris::gpu

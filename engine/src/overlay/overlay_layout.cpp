@@ -1,0 +1,250 @@
+#include "overlay/overlay_layout.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <optional>
+
+namespace iris::overlay {
+
+namespace {
+
+// d × 10^n, exact for negative n too (1/10 is not 0.1 × 1 in binary, but d / 10^-n rounds right).
+double decimal(int d, int n) { return n >= 0 ? d * std::pow(10.0, n) : d / std::pow(10.0, -n); }
+
+std::string shortest(double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.10g", v);
+    return buf;
+}
+
+void shift(OverlayDraw& d, int dx, int dy) {
+    d.rect.x += dx;
+    d.rect.y += dy;
+    d.thumbnailRect.x += dx;
+    d.thumbnailRect.y += dy;
+    for (auto* quads : {&d.under, &d.over}) {
+        for (Quad& q : *quads) {
+            q.x0 += dx;
+            q.x1 += dx;
+            q.y0 += dy;
+            q.y1 += dy;
+        }
+    }
+    for (Label& l : d.labels) {
+        l.x += dx;
+        l.baseline += dy;
+    }
+}
+
+Quad quad(const PixelRect& r, const std::array<float, 4>& colour) {
+    return {double(r.x), double(r.y), double(r.x + r.width), double(r.y + r.height), colour};
+}
+
+} // namespace
+
+double niceScaleMicrons(double micronsPerPixel, double maxPixels) {
+    if (!(micronsPerPixel > 0) || !std::isfinite(micronsPerPixel) || !(maxPixels > 0)) return 0;
+    const double maxMicrons = micronsPerPixel * maxPixels;
+    const int n = int(std::floor(std::log10(maxMicrons)));
+    // log10 may land a hair off a power of ten: look one decade either side.
+    for (int k = n + 1; k >= n - 1; --k) {
+        for (int d : {5, 2, 1}) {
+            const double v = decimal(d, k);
+            if (v <= maxMicrons * (1 + 1e-12)) return v;
+        }
+    }
+    return decimal(5, n - 2);
+}
+
+double effectiveObjective(const SlideInfo& slide) {
+    if (slide.objectivePower > 0 && std::isfinite(slide.objectivePower)) return slide.objectivePower;
+    const double mpp = (slide.mppX > 0 && slide.mppY > 0) ? (slide.mppX + slide.mppY) / 2 : std::max(slide.mppX, slide.mppY);
+    return mpp > 0 && std::isfinite(mpp) ? 10.0 / mpp : 0;
+}
+
+std::string scaleLabel(double microns) {
+    if (microns >= 1000) return shortest(microns / 1000) + " mm";
+    return shortest(microns) + " \u00B5m"; // MICRO SIGN
+}
+
+std::string magnificationLabel(double m) {
+    const char* format = m >= 1000 ? "%.0f" : m >= 1 ? "%.1f" : m >= 0.1 ? "%.2f" : "%.3f";
+    char buf[32];
+    std::snprintf(buf, sizeof buf, format, m);
+    return std::string(buf) + "\u00D7"; // MULTIPLICATION SIGN
+}
+
+std::u32string decodeUtf8(const std::string& s) {
+    std::u32string out;
+    for (size_t i = 0; i < s.size();) {
+        const unsigned char c = static_cast<unsigned char>(s[i]);
+        int extra = c < 0x80 ? 0 : (c >> 5) == 0x6 ? 1 : (c >> 4) == 0xE ? 2 : (c >> 3) == 0x1E ? 3 : -1;
+        if (extra < 0 || i + size_t(extra) >= s.size()) {
+            out.push_back(U'\uFFFD');
+            ++i;
+            continue;
+        }
+        char32_t cp = extra == 0 ? c : extra == 1 ? (c & 0x1F) : extra == 2 ? (c & 0x0F) : (c & 0x07);
+        bool valid = true;
+        for (int k = 1; k <= extra; ++k) {
+            const unsigned char cc = static_cast<unsigned char>(s[i + size_t(k)]);
+            if ((cc >> 6) != 0x2) valid = false;
+            cp = (cp << 6) | (cc & 0x3F);
+        }
+        out.push_back(valid ? cp : U'\uFFFD');
+        i += valid ? size_t(extra) + 1 : 1;
+    }
+    return out;
+}
+
+OverlayPlan layoutOverlays(const SlideInfo* slide, const Viewport& vp, const OverlaySettings& s,
+                           const MeasureText& measure, const std::array<float, 3>& background) {
+    OverlayPlan plan;
+    const View& v = vp.view;
+    if (!slide || !s.visibleAny() || vp.width == 0 || vp.height == 0 || slide->width <= 0 || slide->height <= 0 ||
+        !(v.downsample > 0) || !std::isfinite(v.downsample) || !std::isfinite(v.centerX) || !std::isfinite(v.centerY))
+        return plan;
+    const double r = s.devicePixelRatio > 0 && std::isfinite(s.devicePixelRatio) ? s.devicePixelRatio : 1.0;
+    const auto px = [r](double logical) { return int32_t(std::lround(logical * r)); };
+    OverlayLayout& out = plan.layout;
+    std::array<std::optional<OverlayDraw>, kOverlayCount> items;
+
+    // Scale bar: label above a bar of a round length, both centred on the plate.
+    if (s.visible[size_t(Overlay::ScaleBar)] && slide->mppX > 0 && std::isfinite(slide->mppX)) {
+        const double micronsPerPixel = slide->mppX * v.downsample; // per target (device) pixel
+        const double microns = niceScaleMicrons(micronsPerPixel * r, Metrics::kBarMax);
+        if (microns > 0) {
+            const double barPixels = microns / micronsPerPixel;
+            const double barLogical = barPixels / r;
+            const std::string label = scaleLabel(microns);
+            const TextMetrics tm = measure(label);
+            const int textW = tm.ok ? int(std::ceil(tm.width)) : 0;
+            const int ascent = tm.ok ? int(std::ceil(tm.ascent)) : 0;
+            const int lineH = tm.ok ? ascent + int(std::ceil(tm.descent)) + Metrics::kBarLabelGap : 0;
+            const int contentW = std::max(int(std::ceil(barLogical - 1e-9)), textW);
+            const int w = contentW + 2 * Metrics::kPad, h = lineH + Metrics::kBarHeight + 2 * Metrics::kPad;
+            OverlayDraw d;
+            d.which = Overlay::ScaleBar;
+            d.rect = {0, 0, px(w), px(h)};
+            d.under.push_back(quad(d.rect, kPlateColour));
+            const double barX = px(Metrics::kPad + std::floor((contentW - barLogical) / 2));
+            d.over.push_back(Quad{barX, double(px(Metrics::kPad + lineH)), barX + barPixels,
+                                  double(px(Metrics::kPad + lineH + Metrics::kBarHeight)), kBarColour});
+            if (tm.ok) d.labels.push_back(Label{label, px(Metrics::kPad + (contentW - textW) / 2), px(Metrics::kPad + ascent)});
+            out.scaleBarMicrons = microns;
+            out.scaleBarPixels = barPixels;
+            out.scaleBarLabel = label;
+            items[size_t(Overlay::ScaleBar)] = std::move(d);
+        }
+    }
+
+    // Magnification readout: a label on a plate; nothing to show without a font.
+    const double objective = effectiveObjective(*slide);
+    if (s.visible[size_t(Overlay::Magnification)] && objective > 0) {
+        const double level0 = slide->levels.empty() ? 1.0 : slide->levels.front().downsample;
+        const double m = objective * level0 / v.downsample;
+        const std::string label = magnificationLabel(m);
+        const TextMetrics tm = measure(label);
+        if (tm.ok) {
+            const int ascent = int(std::ceil(tm.ascent));
+            const int w = int(std::ceil(tm.width)) + 2 * Metrics::kPad;
+            const int h = ascent + int(std::ceil(tm.descent)) + 2 * Metrics::kPad;
+            OverlayDraw d;
+            d.which = Overlay::Magnification;
+            d.rect = {0, 0, px(w), px(h)};
+            d.under.push_back(quad(d.rect, kPlateColour));
+            d.labels.push_back(Label{label, px(Metrics::kPad), px(Metrics::kPad + ascent)});
+            out.magnification = m;
+            out.magnificationLabel = label;
+            items[size_t(Overlay::Magnification)] = std::move(d);
+        }
+    }
+
+    // Overview: the whole slide at one downsample (its longer side fills the box), on the
+    // background colour, inside a plate. The outline is added once the box is placed.
+    double thumbDownsample = 0;
+    if (s.visible[size_t(Overlay::Overview)]) {
+        const double boxW = std::min(Metrics::kOverviewMax, Metrics::kOverviewFraction * vp.width / r);
+        const double boxH = std::min(Metrics::kOverviewMax, Metrics::kOverviewFraction * vp.height / r);
+        if (boxW >= Metrics::kOverviewMinSide && boxH >= Metrics::kOverviewMinSide) {
+            const double maxW = std::floor(boxW * r), maxH = std::floor(boxH * r);
+            const double W = double(slide->width), H = double(slide->height);
+            thumbDownsample = std::max(W / maxW, H / maxH);
+            const int imgW = std::max(1, int(std::ceil(W / thumbDownsample - 1e-6)));
+            const int imgH = std::max(1, int(std::ceil(H / thumbDownsample - 1e-6)));
+            const int pad = px(Metrics::kOverviewPad);
+            OverlayDraw d;
+            d.which = Overlay::Overview;
+            d.rect = {0, 0, imgW + 2 * pad, imgH + 2 * pad};
+            d.thumbnail = true;
+            d.thumbnailRect = {pad, pad, imgW, imgH};
+            d.thumbnailView.view = View{imgW * thumbDownsample / 2, imgH * thumbDownsample / 2, thumbDownsample};
+            d.thumbnailView.width = uint32_t(imgW);
+            d.thumbnailView.height = uint32_t(imgH);
+            d.under.push_back(quad(d.rect, kPlateColour));
+            d.under.push_back(quad(d.thumbnailRect, {background[0], background[1], background[2], 1.0f}));
+            items[size_t(Overlay::Overview)] = std::move(d);
+        }
+    }
+
+    // Placement: per corner, in the order of Overlay, from the corner inwards (downwards from
+    // a top corner, upwards from a bottom one). An overlay that does not fit is left out.
+    const int32_t margin = px(Metrics::kMargin), gap = px(Metrics::kGap);
+    const int32_t W = int32_t(vp.width), H = int32_t(vp.height);
+    std::array<int32_t, 4> offset{margin, margin, margin, margin};
+    for (size_t i = 0; i < items.size(); ++i) {
+        if (!items[i]) continue;
+        OverlayDraw& d = *items[i];
+        const Corner c = s.corner[i];
+        const bool left = c == Corner::TopLeft || c == Corner::BottomLeft;
+        const bool top = c == Corner::TopLeft || c == Corner::TopRight;
+        int32_t& o = offset[size_t(c)];
+        const int32_t x = left ? margin : W - margin - d.rect.width;
+        const int32_t y = top ? o : H - o - d.rect.height;
+        if (x < 0 || y < 0 || x + d.rect.width > W || y + d.rect.height > H) continue;
+        o += d.rect.height + gap;
+        shift(d, x, y);
+        out.rects[i] = d.rect;
+        if (!d.labels.empty()) out.text = true;
+        if (d.which == Overlay::Overview) {
+            const PixelRect& img = d.thumbnailRect;
+            out.overviewImage = img;
+            out.overviewDownsample = thumbDownsample;
+            // The view's field in target pixels, then the part of it on the slide, outlined.
+            const double fx0 = img.x + (v.centerX - vp.width * 0.5 * v.downsample) / thumbDownsample;
+            const double fy0 = img.y + (v.centerY - vp.height * 0.5 * v.downsample) / thumbDownsample;
+            const double fx1 = img.x + (v.centerX + vp.width * 0.5 * v.downsample) / thumbDownsample;
+            const double fy1 = img.y + (v.centerY + vp.height * 0.5 * v.downsample) / thumbDownsample;
+            out.overviewField = {fx0, fy0, fx1, fy1};
+            const double sx1 = img.x + double(slide->width) / thumbDownsample;
+            const double sy1 = img.y + double(slide->height) / thumbDownsample;
+            const double cx0 = std::max(fx0, double(img.x)), cx1 = std::min(fx1, sx1);
+            const double cy0 = std::max(fy0, double(img.y)), cy1 = std::min(fy1, sy1);
+            if (cx0 < cx1 && cy0 < cy1) {
+                const int32_t minSide = std::min({px(Metrics::kFieldMin), img.width, img.height});
+                const auto span = [minSide](double a, double b, int32_t lo, int32_t hi) {
+                    int32_t i0 = int32_t(std::lround(a)), i1 = int32_t(std::lround(b));
+                    if (i1 - i0 < minSide) {
+                        i0 = int32_t(std::lround((a + b) / 2 - minSide / 2.0));
+                        i1 = i0 + minSide;
+                    }
+                    if (i0 < lo) i1 += lo - i0, i0 = lo;
+                    if (i1 > hi) i0 -= i1 - hi, i1 = hi;
+                    return std::pair{i0, i1};
+                };
+                const auto [x0, x1] = span(cx0, cx1, img.x, img.x + img.width);
+                const auto [y0, y1] = span(cy0, cy1, img.y, img.y + img.height);
+                const int32_t t = std::max(1, std::min({px(Metrics::kFieldLine), (x1 - x0) / 2, (y1 - y0) / 2}));
+                d.over.push_back(quad({x0, y0, x1 - x0, t}, kFieldColour));
+                d.over.push_back(quad({x0, y1 - t, x1 - x0, t}, kFieldColour));
+                d.over.push_back(quad({x0, y0 + t, t, y1 - y0 - 2 * t}, kFieldColour));
+                d.over.push_back(quad({x1 - t, y0 + t, t, y1 - y0 - 2 * t}, kFieldColour));
+            }
+        }
+        plan.draws.push_back(std::move(d));
+    }
+    return plan;
+}
+
+} // namespace iris::overlay

@@ -1,0 +1,22 @@
+// What the API publishes about overlays (a member of the Snapshot every engine thread
+// copies): which are on, where, the host's device pixel ratio and the loaded font.
+#pragma once
+
+#include <array>
+#include <memory>
+
+#include "iris/types.h"
+#include "overlay/font.h"
+
+namespace iris::overlay {
+
+struct OverlaySettings {
+    std::array<bool, kOverlayCount> visible{};
+    std::array<Corner, kOverlayCount> corner{Corner::BottomLeft, Corner::TopLeft, Corner::TopRight};
+    double devicePixelRatio = 1;
+    std::shared_ptr<const FontData> font; // null: no usable font, labels are not drawn
+
+    bool visibleAny() const { return visible[0] || visible[1] || visible[2]; }
+};
+
+} // namespace iris::overlay

@@ -18,6 +18,8 @@
 // Failure artefacts go to $IRIS_TEST_OUT/failures (IRIS_TEST_SAVE_FRAMES=1: always).
 #include <QtTest>
 
+#include <cstdio>
+
 #include <atomic>
 #include <cmath>
 #include <cstdlib>
@@ -66,8 +68,10 @@ const char* name(Corner c) {
 }
 
 std::string str(const PixelRect& r) {
-    return "[" + std::to_string(r.x) + ", " + std::to_string(r.y) + " " + std::to_string(r.width) + "x" +
-           std::to_string(r.height) + "]";
+    // (snprintf, not operator+ chains: GCC 12's -Wrestrict misfires on those at -O2)
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "[%d, %d %dx%d]", int(r.x), int(r.y), int(r.width), int(r.height));
+    return buf;
 }
 
 bool same(const uint8_t* p, std::array<uint8_t, 3> c) { return p[0] == c[0] && p[1] == c[1] && p[2] == c[2]; }

@@ -6,9 +6,11 @@
 // optional block of the format (ICC profile, annotations with groups, clinical metadata),
 // PNG and JPEG associated images with clashing and empty titles, NULL tiles, two entries
 // sharing a stream, entries longer than 1.0's (a newer minor version), both readings of
-// X/Y_EXTENT, progressive, greyscale and 4:4:4 JPEG tiles, AVIF tiles. Layout from
-// shared/formats/iris-file-extension.md; each file is checked by opening it with the
-// reader (ife::parse, then every tile) before it is written.
+// X/Y_EXTENT, progressive, greyscale and 4:4:4 JPEG tiles, AVIF tiles; and a sound
+// structure around streams that cannot be decoded (wrong size, truncated, headers claiming
+// huge images), and an encrypted file. Layout from shared/formats/iris-file-extension.md;
+// each file is checked by opening it with the reader (ife::parse, then every tile and
+// image) before it is written.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -21,6 +23,7 @@
 
 #include <png.h>
 #include <turbojpeg.h>
+#include <zlib.h>
 
 #include "slide/iris_file.h"
 
@@ -127,6 +130,32 @@ Bytes pngImage(int w, int h, int seed) {
     return v;
 }
 
+// A JPEG whose SOF claims width × height (its data stays the small image's).
+Bytes claimJpegSize(Bytes v, uint16_t width, uint16_t height) {
+    for (size_t i = 2; i + 9 < v.size(); ++i) {
+        if (v[i] == 0xFF && (v[i + 1] == 0xC0 || v[i + 1] == 0xC2)) {
+            v[i + 5] = uint8_t(height >> 8);
+            v[i + 6] = uint8_t(height);
+            v[i + 7] = uint8_t(width >> 8);
+            v[i + 8] = uint8_t(width);
+            return v;
+        }
+    }
+    die("no SOF marker");
+}
+
+// A PNG whose IHDR claims width × height, with its CRC made right again.
+Bytes claimPngSize(Bytes v, uint32_t width, uint32_t height) {
+    if (v.size() < 33 || std::memcmp(&v[12], "IHDR", 4) != 0) die("no IHDR");
+    for (int i = 0; i < 4; ++i) {
+        v[16 + size_t(i)] = uint8_t(width >> (24 - 8 * i));
+        v[20 + size_t(i)] = uint8_t(height >> (24 - 8 * i));
+    }
+    const uLong crc = crc32(0, &v[12], 17);
+    for (int i = 0; i < 4; ++i) v[29 + size_t(i)] = uint8_t(crc >> (24 - 8 * i));
+    return v;
+}
+
 // ---- files -------------------------------------------------------------------------------
 
 struct LayerSpec {
@@ -136,9 +165,10 @@ struct LayerSpec {
 
 struct AssociatedSpec {
     std::string title;
-    uint8_t encoding; // 1 PNG, 2 JPEG
+    uint8_t encoding; // 1 PNG, 2 JPEG (3 AVIF and others: a few bytes, never decoded)
     int width, height;
-    uint16_t orientation; // f16
+    uint16_t orientation = 0; // f16
+    bool huge = false;        // its header claims 8192 × 8192 pixels
 };
 
 struct FileSpec {
@@ -160,6 +190,8 @@ struct FileSpec {
     Bytes icc;
     int annotations = 0; // with a group of them
     bool clinical = false;
+    bool cipher = false;     // encrypted: parse() refuses it (UnsupportedFormat)
+    bool badStreams = false; // tiles 0-2 and the images may fail to decode (not parse)
 };
 
 Bytes write(const FileSpec& s) {
@@ -190,6 +222,13 @@ Bytes write(const FileSpec& s) {
         Bytes t;
         if (s.encoding == iris::ife::kEncodingAvif) {
             t = {0, 0, 0, 0x1c, 'f', 't', 'y', 'p', 'a', 'v', 'i', 'f'}; // never decoded
+        } else if (s.badStreams && i == 0) {
+            t = jpeg(128, 128, 1, s.subsamp, s.quality); // not 256 × 256
+        } else if (s.badStreams && i == 1) {
+            t = jpeg(256, 256, 0, s.subsamp, s.quality);
+            t.resize(t.size() / 2); // premature end of data
+        } else if (s.badStreams && i == 2) {
+            t = {0xFF, 0xD8, 0xFF, 0xE0, 0, 2, 0xFF, 0xD9}; // no frame
         } else {
             t = jpeg(256, 256, int(i % 5), s.subsamp, s.quality, s.jpegFlags);
         }
@@ -209,10 +248,11 @@ Bytes write(const FileSpec& s) {
         w.put(size, 3);
         w.zeros(s.extra);
     }
+    const uint64_t cipher = s.cipher ? w.block(CIPHER) : kNull;
     const uint64_t table = w.block(TILE_TABLE);
     w.put(s.encoding, 1);
     w.put(2, 1); // R8G8B8
-    w.put(kNull, 8);
+    w.put(cipher, 8);
     w.put(offsets, 8);
     w.put(extents, 8);
     w.put(s.xExtent, 4);
@@ -245,8 +285,16 @@ Bytes write(const FileSpec& s) {
         std::vector<uint64_t> at;
         for (size_t i = 0; i < s.images.size(); ++i) {
             const AssociatedSpec& a = s.images[i];
-            const Bytes data = a.encoding == iris::ife::kImagePng ? pngImage(a.width, a.height, int(i))
-                                                                  : jpeg(a.width, a.height, int(i), TJSAMP_420, 30);
+            Bytes data;
+            if (a.encoding == iris::ife::kImagePng) {
+                data = pngImage(a.width, a.height, int(i));
+                if (a.huge) data = claimPngSize(data, 8192, 8192);
+            } else if (a.encoding == iris::ife::kImageJpeg) {
+                data = jpeg(a.width, a.height, int(i), TJSAMP_420, 30);
+                if (a.huge) data = claimJpegSize(data, 8192, 8192);
+            } else {
+                data = {0, 0, 0, 0x1c, 'f', 't', 'y', 'p', 'a', 'v', 'i', 'f'};
+            }
             at.push_back(w.block(IMAGE_BYTES));
             w.put(a.title.size(), 2);
             w.put(data.size(), 4);
@@ -330,10 +378,15 @@ Bytes write(const FileSpec& s) {
     return w.b;
 }
 
-// The reader must open the file and decode every tile and image (AVIF refused per tile).
+// The reader must open the file and decode every tile and image (AVIF refused per tile),
+// or refuse it as the spec says.
 void check(const FileSpec& s, const Bytes& b) {
     using namespace iris;
     Expected<ife::Layout> L = ife::parse(b.data(), b.size(), s.name);
+    if (s.cipher) {
+        if (L || L.error().status() != Status::UnsupportedFormat) die(s.name + ": an encrypted file was not refused");
+        return;
+    }
     if (!L) die(s.name + ": " + L.error().message());
     const SlideInfo info = ife::slideInfo(b.data(), *L, s.name);
     Bytes tile(kTileBytes);
@@ -342,13 +395,16 @@ void check(const FileSpec& s, const Bytes& b) {
             for (int64_t tx = 0; tx < info.levels[size_t(level)].tilesX; ++tx) {
                 const Result r = ife::readTile(b.data(), *L, s.name, level, tx, ty, tile.data());
                 const bool avif = s.encoding == ife::kEncodingAvif;
-                if (avif ? r.status() != Status::UnsupportedFormat : !r.ok()) die(s.name + ": " + r.message());
+                if (s.badStreams ? r.status() == Status::InvalidArgument
+                                 : avif ? r.status() != Status::UnsupportedFormat : !r.ok()) {
+                    die(s.name + ": " + r.message());
+                }
             }
         }
     }
     for (const std::string& name : info.associatedImages) {
         Expected<Image> img = ife::readAssociatedImage(b.data(), *L, s.name, name, 1u << 20);
-        if (!img) die(s.name + ": " + img.error().message());
+        if (!img && !s.badStreams) die(s.name + ": " + img.error().message());
     }
 }
 
@@ -426,6 +482,29 @@ std::vector<FileSpec> specs() {
         s.xExtent = 400;
         s.yExtent = 200;
         s.attributes = {{"k", "v"}};
+        v.push_back(s);
+    }
+    {
+        // Structurally sound, but tiles and images that cannot be decoded: a 128 × 128
+        // tile, a truncated one, one without a frame; images claiming 8192 × 8192 pixels,
+        // AVIF and an unknown encoding.
+        FileSpec s;
+        s.name = "gen-v1.1-bad-streams.iris";
+        s.layers = {{2, 2, 1}};
+        s.xExtent = 512;
+        s.yExtent = 300;
+        s.badStreams = true;
+        s.images = {{"label", 2, 32, 16, 0, true}, {"macro", 1, 16, 16, 0, true}, {"avif", 3, 8, 8}, {"odd", 7, 8, 8}};
+        v.push_back(s);
+    }
+    {
+        // Encrypted tiles (a CIPHER block): refused.
+        FileSpec s;
+        s.name = "gen-v1.1-cipher.iris";
+        s.layers = {{1, 1, 1}};
+        s.xExtent = 100;
+        s.yExtent = 100;
+        s.cipher = true;
         v.push_back(s);
     }
     return v;

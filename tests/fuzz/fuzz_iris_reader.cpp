@@ -118,17 +118,23 @@ void checkInfo(const ife::Layout& L, const SlideInfo& info) {
 }
 
 void readTiles(const uint8_t* data, const ife::Layout& L, const SlideInfo& info) {
-    // Exactly one tile: ASan reports a write past it by our code (libjpeg-turbo itself is
-    // not instrumented).
-    std::vector<uint8_t> tile(kTileBytes);
+    // One tile and a guard band: libjpeg-turbo is not instrumented, so ASan would not see
+    // it write past the tile; the band does.
+    constexpr size_t kGuard = 4096;
+    std::vector<uint8_t> buffer(kTileBytes + kGuard, 0xA5);
+    uint8_t* const tile = buffer.data();
+    auto guardIntact = [&] {
+        return std::all_of(buffer.begin() + kTileBytes, buffer.end(), [](uint8_t b) { return b == 0xA5; });
+    };
     int reads = 0;
     // Coarsest level first (the fewest tiles), each row-major, until the budget is spent.
     for (int level = int(info.levels.size()) - 1; level >= 0 && reads < kMaxTileReads; --level) {
         const LevelInfo& li = info.levels[size_t(level)];
         for (int64_t ty = 0; ty < li.tilesY && reads < kMaxTileReads; ++ty) {
             for (int64_t tx = 0; tx < li.tilesX && reads < kMaxTileReads; ++tx, ++reads) {
-                const Result r = ife::readTile(data, L, kName, level, tx, ty, tile.data());
+                const Result r = ife::readTile(data, L, kName, level, tx, ty, tile);
                 PROMISE(r.ok() || isReadError(r));
+                PROMISE(guardIntact());
                 if (verbose() && !r.ok()) std::fprintf(stderr, "  %s\n", r.message().c_str());
             }
         }
@@ -136,11 +142,11 @@ void readTiles(const uint8_t* data, const ife::Layout& L, const SlideInfo& info)
     // Requests outside the grid are refused before anything is read.
     const int levels = int(info.levels.size());
     const LevelInfo& finest = info.levels.front();
-    PROMISE(ife::readTile(data, L, kName, -1, 0, 0, tile.data()).status() == Status::InvalidArgument);
-    PROMISE(ife::readTile(data, L, kName, levels, 0, 0, tile.data()).status() == Status::InvalidArgument);
-    PROMISE(ife::readTile(data, L, kName, 0, finest.tilesX, 0, tile.data()).status() == Status::InvalidArgument);
-    PROMISE(ife::readTile(data, L, kName, 0, 0, finest.tilesY, tile.data()).status() == Status::InvalidArgument);
-    PROMISE(ife::readTile(data, L, kName, 0, -1, 0, tile.data()).status() == Status::InvalidArgument);
+    PROMISE(ife::readTile(data, L, kName, -1, 0, 0, tile).status() == Status::InvalidArgument);
+    PROMISE(ife::readTile(data, L, kName, levels, 0, 0, tile).status() == Status::InvalidArgument);
+    PROMISE(ife::readTile(data, L, kName, 0, finest.tilesX, 0, tile).status() == Status::InvalidArgument);
+    PROMISE(ife::readTile(data, L, kName, 0, 0, finest.tilesY, tile).status() == Status::InvalidArgument);
+    PROMISE(ife::readTile(data, L, kName, 0, -1, 0, tile).status() == Status::InvalidArgument);
 }
 
 void readImages(const uint8_t* data, const ife::Layout& L, const SlideInfo& info) {

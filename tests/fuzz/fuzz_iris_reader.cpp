@@ -10,8 +10,9 @@
 //                               tiles, and requests outside the grid;
 //   ife::readAssociatedImage()  IrisFileSource::readAssociatedImage(): JPEG / PNG decode.
 // Besides the sanitizers, it checks what parse() promises the rest of the engine (every
-// stream inside the buffer, the engine's tile grid equal to the file's, …) and aborts
-// when a promise is broken.
+// stream inside the buffer, the engine's tile grid equal to the file's, …) and that a
+// stream that failed to decode leaves the thread's JPEG decoder usable, and aborts when a
+// promise is broken.
 //
 // Mutations that change the length of a file first break its FILE_SIZE field; so that they
 // still reach the blocks behind the header, an input whose FILE_SIZE is wrong is also read
@@ -25,7 +26,10 @@
 #include <unordered_set>
 #include <vector>
 
+#include <turbojpeg.h>
+
 #include "slide/iris_file.h"
+#include "slide/jpeg_decode.h"
 
 namespace {
 
@@ -49,6 +53,36 @@ bool verbose() {
     do {                                        \
         if (!(cond)) broken(#cond, __LINE__);   \
     } while (0)
+
+// Set when a tile or image of this input failed to decode.
+bool g_decodeFailed = false;
+
+// A valid 16×16 JPEG, made once.
+const std::vector<uint8_t>& referenceJpeg() {
+    static const std::vector<uint8_t> jpeg = [] {
+        std::vector<uint8_t> px(16 * 16 * 3);
+        for (size_t i = 0; i < px.size(); ++i) px[i] = uint8_t(i * 7);
+        tjhandle tj = tjInitCompress();
+        unsigned char* out = nullptr;
+        unsigned long size = 0;
+        if (!tj || tjCompress2(tj, px.data(), 16, 0, 16, TJPF_RGB, &out, &size, TJSAMP_420, 75, 0) != 0) std::abort();
+        std::vector<uint8_t> v(out, out + size);
+        tjFree(out);
+        tjDestroy(tj);
+        return v;
+    }();
+    return jpeg;
+}
+
+// Loader threads decode tile after tile with one decompressor each: a stream that failed
+// must not make the next, valid one fail.
+void checkDecoderUsable() {
+    const std::vector<uint8_t>& jpeg = referenceJpeg();
+    std::vector<uint8_t> px(16 * 16 * 4);
+    const Result r = decodeJpegRgba(jpeg.data(), jpeg.size(), 16, 16, px.data(), 16 * 4);
+    if (!r.ok()) std::fprintf(stderr, "a valid JPEG after a failed one: %s\n", r.message().c_str());
+    PROMISE(r.ok());
+}
 
 bool isReadError(const Result& r) {
     return r.status() == Status::CorruptData || r.status() == Status::UnsupportedFormat;
@@ -134,6 +168,7 @@ void readTiles(const uint8_t* data, const ife::Layout& L, const SlideInfo& info)
             for (int64_t tx = 0; tx < li.tilesX && reads < kMaxTileReads; ++tx, ++reads) {
                 const Result r = ife::readTile(data, L, kName, level, tx, ty, tile);
                 PROMISE(r.ok() || isReadError(r));
+                if (r.status() == Status::CorruptData) g_decodeFailed = true;
                 PROMISE(guardIntact());
                 if (verbose() && !r.ok()) std::fprintf(stderr, "  %s\n", r.message().c_str());
             }
@@ -159,6 +194,7 @@ void readImages(const uint8_t* data, const ife::Layout& L, const SlideInfo& info
             PROMISE(img->rgba.size() == size_t(img->width) * img->height * 4);
         } else {
             PROMISE(isReadError(img.error()));
+            if (img.error().status() == Status::CorruptData) g_decodeFailed = true;
             if (verbose()) std::fprintf(stderr, "  %s\n", img.error().message().c_str());
         }
     }
@@ -195,11 +231,13 @@ void readFile(const uint8_t* data, uint64_t size) {
 } // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+    g_decodeFailed = false;
     readFile(data, size);
     if (size >= 14 && std::memcmp(data, "sirI", 4) == 0 && loadLE(data + 6, 8) != size) {
         std::vector<uint8_t> fixed(data, data + size); // exactly `size` bytes, as the input
         for (int i = 0; i < 8; ++i) fixed[6 + size_t(i)] = uint8_t(uint64_t(size) >> (8 * i));
         readFile(fixed.data(), size);
     }
+    if (g_decodeFailed) checkDecoderUsable();
     return 0;
 }

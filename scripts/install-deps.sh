@@ -10,6 +10,7 @@ PACKAGES=(
   libopenslide-dev openslide-tools libturbojpeg0-dev libtiff-dev libopenjp2-7-dev libpng-dev
   libfreetype-dev libfontconfig-dev fonts-dejavu-core
   xvfb xauth gnuplot-nox
+  clang libclang-rt-dev llvm
 )
 
 missing=()

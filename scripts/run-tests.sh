@@ -5,7 +5,11 @@
 #   2. the AddressSanitizer + UBSan build (asan preset): the suites labelled "asan"
 #      (open/close/reopen cycles, bad input, the API storm), where LeakSanitizer reports leaks;
 #   3. the ThreadSanitizer build (tsan preset, engine only): the suites labelled "tsan"
-#      (the lock-free tile map under concurrent pin/reclaim, the API storm).
+#      (the lock-free tile map under concurrent pin/reclaim, the API storm);
+#   4. the fuzz build (fuzz preset: clang, libFuzzer, ASan + UBSan, the .iris reader only):
+#      the seed corpus and the committed regression inputs replayed (CTest label "fuzz"),
+#      then IRIS_FUZZ_SECONDS (120) of fuzzing; any crash, leak, timeout or sanitizer report
+#      fails (see tests/fuzz/README.md).
 # Exits non-zero if anything fails.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -34,3 +38,26 @@ cmake --preset tsan >/dev/null
 cmake --build --preset tsan -j "$JOBS" --target iris-sample tst_tile_map tst_storm
 echo "== tsan tests"
 ctest --preset tsan -L tsan -j 1
+
+echo "== fuzz build"
+cmake --preset fuzz >/dev/null
+cmake --build --preset fuzz -j "$JOBS"
+echo "== fuzz tests"
+# fuzz.seeds writes the seed corpus to build/fuzz/tests/fuzz/seeds (fuzz_iris_seeds,
+# iris-encode of the dev build above, the small shared fixtures); the replay runs it and
+# tests/fuzz/regressions through the target once.
+ctest --preset fuzz -L fuzz -j 1
+FUZZ_SECONDS="${IRIS_FUZZ_SECONDS:-120}"
+echo "== fuzzing the .iris reader (${FUZZ_SECONDS} s)"
+FUZZ=build/fuzz
+mkdir -p "$FUZZ/corpus" "$FUZZ/artifacts"
+# corpus/ (kept between runs of this build tree) takes what the run finds new.
+if ! "$FUZZ/bin/fuzz_iris_reader" -max_total_time="$FUZZ_SECONDS" -timeout=10 -rss_limit_mb=2048 \
+    -dict=tests/fuzz/iris.dict -artifact_prefix="$FUZZ/artifacts/" -print_final_stats=1 \
+    "$FUZZ/corpus" "$FUZZ/tests/fuzz/seeds" tests/fuzz/regressions/iris_reader >"$FUZZ/fuzz.log" 2>&1; then
+  tail -n 100 "$FUZZ/fuzz.log"
+  echo "fuzz_iris_reader failed (log: $FUZZ/fuzz.log). The input that did it is in $FUZZ/artifacts/;"
+  echo "reproduce with: $FUZZ/bin/fuzz_iris_reader $FUZZ/artifacts/FILE"
+  exit 1
+fi
+grep -E "INITED|DONE|^Done|stat::" "$FUZZ/fuzz.log" || true

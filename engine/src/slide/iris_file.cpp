@@ -713,14 +713,14 @@ SlideInfo makeInfo(const std::string& path, const ife::Layout& L) {
     return info;
 }
 
-Expected<Image> decodePng(const uint8_t* data, size_t size) {
+Expected<Image> decodePng(const uint8_t* data, size_t size, uint64_t maxPixels) {
     png_image png;
     std::memset(&png, 0, sizeof png);
     png.version = PNG_IMAGE_VERSION;
     if (!png_image_begin_read_from_memory(&png, data, size)) {
         return Result(Status::CorruptData, std::string("not a valid PNG (") + png.message + ")");
     }
-    if (uint64_t(png.width) * png.height > kMaxImagePixels) {
+    if (uint64_t(png.width) * png.height > maxPixels) {
         png_image_free(&png);
         return Result(Status::CorruptData, "the PNG claims " + num(png.width) + "x" + num(png.height) + " pixels");
     }
@@ -788,12 +788,7 @@ Expected<std::unique_ptr<SlideSource>> IrisFileSource::open(const std::string& p
         ::munmap(const_cast<uint8_t*>(map->data), size_t(map->size));
         return layout.error();
     }
-    SlideInfo info = makeInfo(path, *layout);
-    if (layout->hasIcc && layout->iccSize > 0) {
-        // parse() checked that the profile's bytes lie inside the file.
-        info.iccProfile.assign(map->data + layout->iccOffset, map->data + layout->iccOffset + layout->iccSize);
-    }
-    fillLevelPhysics(info);
+    SlideInfo info = ife::slideInfo(map->data, *layout, path);
     return std::unique_ptr<SlideSource>(
         new IrisFileSource(map->data, map->size, name, std::move(layout.value()), std::move(info)));
 }
@@ -806,54 +801,78 @@ IrisFileSource::~IrisFileSource() {
     ::munmap(const_cast<uint8_t*>(map_), size_t(size_));
 }
 
-Result IrisFileSource::readTile(int level, int64_t tx, int64_t ty, uint8_t* dst) {
-    if (level < 0 || size_t(level) >= info_.levels.size()) return Result(Status::InvalidArgument, "no such level");
-    const LevelInfo& li = info_.levels[size_t(level)];
-    if (tx < 0 || ty < 0 || tx >= li.tilesX || ty >= li.tilesY) return Result(Status::InvalidArgument, "no such tile");
-    const size_t layer = layout_.layers.size() - 1 - size_t(level);
-    const ife::TileStream s = ife::tileStream(map_, layout_, layer, uint32_t(tx), uint32_t(ty));
+namespace ife {
+
+SlideInfo slideInfo(const uint8_t* data, const Layout& layout, const std::string& path) {
+    SlideInfo info = makeInfo(path, layout);
+    if (layout.hasIcc && layout.iccSize > 0) {
+        // parse() checked that the profile's bytes lie inside the file.
+        info.iccProfile.assign(data + layout.iccOffset, data + layout.iccOffset + layout.iccSize);
+    }
+    fillLevelPhysics(info);
+    return info;
+}
+
+Result readTile(const uint8_t* data, const Layout& layout, const std::string& name, int level, int64_t tx, int64_t ty,
+                uint8_t* dst) {
+    if (level < 0 || size_t(level) >= layout.layers.size()) return Result(Status::InvalidArgument, "no such level");
+    const size_t layer = layout.layers.size() - 1 - size_t(level);
+    const Layer& l = layout.layers[layer]; // its tile grid is the engine level's (makeInfo)
+    if (tx < 0 || ty < 0 || tx >= l.xTiles || ty >= l.yTiles) return Result(Status::InvalidArgument, "no such tile");
+    const TileStream s = tileStream(data, layout, layer, uint32_t(tx), uint32_t(ty));
     if (s.size == 0) {
         std::memset(dst, 0, kTileBytes); // no data: transparent (premultiplied zero)
         return {};
     }
     auto where = [&] {
         return "tile (" + num(uint64_t(tx)) + ", " + num(uint64_t(ty)) + ") of level " + num(uint64_t(level)) +
-               " (layer " + num(layer) + ", " + num(s.size) + " bytes at byte " + num(s.offset) + ") of '" + fileName_ +
+               " (layer " + num(layer) + ", " + num(s.size) + " bytes at byte " + num(s.offset) + ") of '" + name +
                "'";
     };
-    if (layout_.encoding == ife::kEncodingAvif) {
+    if (layout.encoding == kEncodingAvif) {
         return Result(Status::UnsupportedFormat,
                       "Cannot decode " + where() + ": AVIF-encoded tiles are not supported in this build");
     }
-    if (Result r = decodeJpegRgba(map_ + s.offset, s.size, kTileSize, kTileSize, dst, size_t(kTileSize) * 4); !r.ok()) {
+    if (Result r = decodeJpegRgba(data + s.offset, s.size, kTileSize, kTileSize, dst, size_t(kTileSize) * 4); !r.ok()) {
         return Result(r.status(), "Cannot decode " + where() + ": " + r.message());
     }
-    const int w = int(std::min<int64_t>(kTileSize, li.width - tx * kTileSize));
-    const int h = int(std::min<int64_t>(kTileSize, li.height - ty * kTileSize));
+    const int w = int(std::min<int64_t>(kTileSize, l.width - tx * kTileSize));
+    const int h = int(std::min<int64_t>(kTileSize, l.height - ty * kTileSize));
     if (w < kTileSize || h < kTileSize) padTileEdges(dst, w, h);
     return {};
 }
 
-Expected<Image> IrisFileSource::readAssociatedImage(const std::string& name) {
-    const auto it = std::find_if(layout_.images.begin(), layout_.images.end(),
-                                 [&](const ife::AssociatedImage& i) { return i.name == name; });
-    if (it == layout_.images.end()) {
-        return Result(Status::InvalidArgument, "The slide has no associated image '" + name + "'");
+Expected<Image> readAssociatedImage(const uint8_t* data, const Layout& layout, const std::string& name,
+                                    const std::string& image, uint64_t maxPixels) {
+    const auto it = std::find_if(layout.images.begin(), layout.images.end(),
+                                 [&](const AssociatedImage& i) { return i.name == image; });
+    if (it == layout.images.end()) {
+        return Result(Status::InvalidArgument, "The slide has no associated image '" + image + "'");
     }
-    const uint8_t* data = map_ + it->offset;
-    const std::string what = "Cannot decode associated image '" + name + "' of '" + fileName_ + "': ";
+    const uint8_t* bytes = data + it->offset;
+    const std::string what = "Cannot decode associated image '" + image + "' of '" + name + "': ";
     switch (it->encoding) {
-    case ife::kImageJpeg:
-    case ife::kImagePng: break;
-    case ife::kImageAvif:
+    case kImageJpeg:
+    case kImagePng: break;
+    case kImageAvif:
         return Result(Status::UnsupportedFormat, what + "AVIF-encoded images are not supported in this build");
     default:
         return Result(Status::UnsupportedFormat, what + "its image encoding " + num(it->encoding) + " is unknown");
     }
-    Expected<Image> img = it->encoding == ife::kImageJpeg ? decodeJpegImage(data, it->size, kMaxImagePixels)
-                                                          : decodePng(data, it->size);
+    Expected<Image> img = it->encoding == kImageJpeg ? decodeJpegImage(bytes, it->size, maxPixels)
+                                                     : decodePng(bytes, it->size, maxPixels);
     if (!img) return Result(img.error().status(), what + img.error().message());
     return img;
+}
+
+} // namespace ife
+
+Result IrisFileSource::readTile(int level, int64_t tx, int64_t ty, uint8_t* dst) {
+    return ife::readTile(map_, layout_, fileName_, level, tx, ty, dst);
+}
+
+Expected<Image> IrisFileSource::readAssociatedImage(const std::string& name) {
+    return ife::readAssociatedImage(map_, layout_, fileName_, name, kMaxImagePixels);
 }
 
 } // namespace iris

@@ -159,6 +159,22 @@ Expected<Layout> parse(const uint8_t* data, uint64_t size, const std::string& na
 // parse() of the same bytes, and x, y must lie inside the layer.
 TileStream tileStream(const uint8_t* data, const Layout& layout, size_t layer, uint32_t x, uint32_t y);
 
+// What IrisFileSource does with a parsed file, as pure functions of the bytes parse() read
+// and its layout (IrisFileSource calls them on its mapping; tests/fuzz calls them directly).
+// `name` is the file name the messages use, as for parse().
+//
+// The SlideInfo open() returns: the engine's levels (finest first), mpp and magnification,
+// the properties (the reader's own "iris.*" entries, then the attributes), the associated
+// images' names and the ICC profile. `path` becomes SlideInfo::path.
+SlideInfo slideInfo(const uint8_t* data, const Layout& layout, const std::string& path);
+// SlideSource::readTile: tile (tx, ty) of engine level `level` decoded into dst (kTileBytes).
+Result readTile(const uint8_t* data, const Layout& layout, const std::string& name, int level, int64_t tx, int64_t ty,
+                uint8_t* dst);
+// SlideSource::readAssociatedImage; an image of more than maxPixels pixels is refused
+// (CorruptData) before any memory is allocated for its pixels.
+Expected<Image> readAssociatedImage(const uint8_t* data, const Layout& layout, const std::string& name,
+                                    const std::string& image, uint64_t maxPixels);
+
 } // namespace ife
 
 class IrisFileSource final : public SlideSource {

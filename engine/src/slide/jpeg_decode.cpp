@@ -11,6 +11,11 @@ namespace {
 
 // One decompressor per thread: TurboJPEG handles are not thread-safe, and making one per
 // call costs more than decoding a small tile.
+//
+// After a failed call the thread starts over with a new one: TurboJPEG 2.1 leaves a handle
+// in the middle of a header when tjDecompressHeader3() fails, and every later call on it
+// then fails with the same error, so one corrupt tile made every tile after it on that
+// loader thread fail (found by tests/fuzz).
 class Decompressor {
 public:
     Decompressor() : handle_(tjInitDecompress()) {}
@@ -20,14 +25,18 @@ public:
     Decompressor(const Decompressor&) = delete;
     Decompressor& operator=(const Decompressor&) = delete;
     tjhandle get() const { return handle_; }
+    void renew() {
+        if (handle_) tjDestroy(handle_);
+        handle_ = tjInitDecompress();
+    }
 
 private:
     tjhandle handle_;
 };
 
-tjhandle threadDecompressor() {
+Decompressor& threadDecompressor() {
     thread_local Decompressor d;
-    return d.get();
+    return d;
 }
 
 Result noDecompressor() {
@@ -50,11 +59,14 @@ bool sizeFits(size_t size) {
 
 Expected<JpegDimensions> jpegDimensions(const uint8_t* data, size_t size) {
     if (!sizeFits(size)) return Result(Status::CorruptData, "the JPEG stream is empty");
-    tjhandle tj = threadDecompressor();
+    Decompressor& d = threadDecompressor();
+    tjhandle tj = d.get();
     if (!tj) return noDecompressor();
     int w = 0, h = 0, subsamp = 0, colorspace = 0;
     if (tjDecompressHeader3(tj, data, static_cast<unsigned long>(size), &w, &h, &subsamp, &colorspace) != 0) {
-        return Result(Status::CorruptData, std::string("not a valid JPEG header (") + tjGetErrorStr2(tj) + ")");
+        Result r(Status::CorruptData, std::string("not a valid JPEG header (") + tjGetErrorStr2(tj) + ")");
+        d.renew();
+        return r;
     }
     if (w <= 0 || h <= 0) return Result(Status::CorruptData, "the JPEG header gives no image size");
     return JpegDimensions{w, h};
@@ -71,10 +83,13 @@ Result decodeJpegRgba(const uint8_t* data, size_t size, int width, int height, u
     if (pitch > size_t(std::numeric_limits<int>::max()) || pitch < size_t(width) * 4) {
         return Result(Status::InvalidArgument, "bad row pitch for the JPEG decode");
     }
-    tjhandle tj = threadDecompressor();
+    Decompressor& d = threadDecompressor();
+    tjhandle tj = d.get();
     if (tjDecompress2(tj, data, static_cast<unsigned long>(size), dst, width, int(pitch), height, TJPF_RGBA, kFlags) !=
         0) {
-        return Result(Status::CorruptData, std::string("the JPEG data is corrupt (") + tjGetErrorStr2(tj) + ")");
+        Result r(Status::CorruptData, std::string("the JPEG data is corrupt (") + tjGetErrorStr2(tj) + ")");
+        d.renew();
+        return r;
     }
     return {};
 }

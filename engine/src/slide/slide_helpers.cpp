@@ -1,0 +1,40 @@
+// The helpers every SlideSource shares (declared in slide_source.h), apart from the format
+// table in slide_source.cpp so that one reader can be built on its own (tests/fuzz).
+#include <cstring>
+
+#include "slide/slide_source.h"
+
+namespace iris {
+
+void fillTileGrid(LevelInfo& level) {
+    level.tilesX = (level.width + kTileSize - 1) / kTileSize;
+    level.tilesY = (level.height + kTileSize - 1) / kTileSize;
+}
+
+void fillLevelPhysics(SlideInfo& info) {
+    for (LevelInfo& l : info.levels) {
+        l.mppX = info.mppX > 0 ? info.mppX * l.downsample : 0;
+        l.mppY = info.mppY > 0 ? info.mppY * l.downsample : 0;
+        l.magnification = info.objectivePower > 0 ? info.objectivePower / l.downsample : 0;
+    }
+}
+
+void padTileEdges(uint8_t* rgba, int validWidth, int validHeight) {
+    if (validWidth <= 0 || validHeight <= 0) {
+        std::memset(rgba, 0, kTileBytes);
+        return;
+    }
+    const size_t stride = size_t(kTileSize) * 4;
+    if (validWidth < kTileSize) {
+        for (int y = 0; y < validHeight; ++y) {
+            uint8_t* row = rgba + y * stride;
+            uint32_t last;
+            std::memcpy(&last, row + (validWidth - 1) * 4, 4);
+            for (int x = validWidth; x < kTileSize; ++x) std::memcpy(row + x * 4, &last, 4);
+        }
+    }
+    for (int y = validHeight; y < kTileSize; ++y)
+        std::memcpy(rgba + y * stride, rgba + (validHeight - 1) * stride, stride);
+}
+
+} // namespace iris

@@ -68,7 +68,11 @@ struct Engine::Impl {
         const double ay0 = a.centerY - h / 2 * a.downsample, ay1 = a.centerY + h / 2 * a.downsample;
         const double bx0 = b.centerX - w / 2 * b.downsample, bx1 = b.centerX + w / 2 * b.downsample;
         const double by0 = b.centerY - h / 2 * b.downsample, by1 = b.centerY + h / 2 * b.downsample;
-        const bool overlap = ax0 < bx1 && bx0 < ax1 && ay0 < by1 && by0 < ay1;
+        // Fields that only touch (a walk of adjacent fields) share no pixel, even when their
+        // edges, computed from different centres, differ by a rounding error: overlaps below
+        // a thousandth of a screen pixel do not count.
+        const double eps = 1e-3 * std::max(a.downsample, b.downsample);
+        const bool overlap = ax0 + eps < bx1 && bx0 + eps < ax1 && ay0 + eps < by1 && by0 + eps < ay1;
         if (overlap) return;
         const LevelChoice c = chooseLevels(s.slide->info, b.downsample);
         bool resident = true;

@@ -686,8 +686,15 @@ private slots:
 
     // ---- iris-encode ------------------------------------------------------------------
 
+    // iris-encode beside this test (a build's bin/ folder, or a copy of it on another
+    // machine), else where the build put it.
+    static QString encoderExe() {
+        const QString beside = QCoreApplication::applicationDirPath() + QStringLiteral("/iris-encode");
+        return QFileInfo::exists(beside) ? beside : QStringLiteral(IRIS_ENCODE_EXE);
+    }
+
     void cli() {
-        const QString exe = QStringLiteral(IRIS_ENCODE_EXE);
+        const QString exe = encoderExe();
         QVERIFY(QFileInfo::exists(exe));
         const fs::path dir = outDir("iris-roundtrip");
         auto run = [&](const QStringList& args, QString* out = nullptr, QString* err = nullptr) {
@@ -757,7 +764,7 @@ private slots:
     // its own (unshare), so that no mount outlives the test even if it crashes. Where that is
     // not allowed (no CAP_SYS_ADMIN, no unshare) the case is skipped.
     void diskFull() {
-        const QString exe = QStringLiteral(IRIS_ENCODE_EXE);
+        const QString exe = encoderExe();
         const fs::path mnt = outDir("iris-roundtrip") / "full-disk";
         fs::create_directories(mnt);
         const QString script = QStringLiteral(

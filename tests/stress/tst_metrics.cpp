@@ -52,6 +52,20 @@ void TestMetrics::scriptedMoves() {
     QTest::qWait(200);
     QCOMPARE(e.metrics().fields.size(), size_t(1));
 
+    // A walk of adjacent fields at a downsample that is not a dyadic fraction: the shared edge
+    // comes out of two different centres and differs by a rounding error. Touching fields
+    // share no pixel, so each step is a new field (iris-bench walks exactly like this).
+    // (At ds = 10/3 the right edge of field 20, 20.5·fw + 256·ds, exceeds the left edge of
+    // field 21, 21.5·fw − 256·ds, by 1.2e-10 in doubles; likewise for 21 → 22.)
+    const double ds = 10.0 / 3.0;
+    const double fw = 512 * ds;
+    for (int c = 20; c <= 22; ++c) {
+        const size_t before = e.metrics().fields.size();
+        e.setView({(c + 0.5) * fw, 30000.5, ds});
+        QVERIFY(e.waitForFrame(std::chrono::seconds(60)).ok());
+        if (c > 20) QTRY_COMPARE_WITH_TIMEOUT(e.metrics().fields.size(), before + 1, 5000);
+    }
+
     const iris::EngineMetrics m = e.metrics();
     QVERIFY(m.frames > 0);
     QVERIFY(m.tilesBuffered >= 5);

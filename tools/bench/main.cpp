@@ -176,7 +176,7 @@ SizeResult runSize(const Options& o, uint32_t W, uint32_t H) {
             const iris::View& v = walk[k];
             int level = 0;
             for (size_t l = 0; l < info.levels.size(); ++l)
-                if (info.levels[l].downsample <= ds * (1 + 1e-9)) level = int(l);
+                if (info.levels[l].downsample <= ds * (1 + 1e-6)) level = int(l); // the engine's rule (kLevelTolerance)
             const double lds = info.levels[size_t(level)].downsample;
             fields.push_back({v.centerX - W / 2.0 * ds, v.centerY - H / 2.0 * ds, level, lds,
                               int64_t(std::ceil(W * ds / lds)), int64_t(std::ceil(H * ds / lds))});

@@ -660,9 +660,12 @@ SlideInfo makeInfo(const std::string& path, const ife::Layout& L) {
     info.height = info.levels.front().height;
     const double finestScale = L.layers.back().scale;
     const double mpp = shortestDouble(L.micronsPerPixel);
-    if (std::isfinite(mpp) && mpp > 0) info.mppX = info.mppY = mpp / finestScale;
+    // The file holds mpp and scales as float32, so mpp at full resolution is known to float
+    // precision only: give its shortest decimal at that precision (0.25, not 0.2500000037),
+    // so that magnifications derived from it (10 µm / mpp = 40×) come out exact.
+    if (std::isfinite(mpp) && mpp > 0) info.mppX = info.mppY = shortestDouble(float(mpp / finestScale));
     const double mag = shortestDouble(L.magnification);
-    if (std::isfinite(mag) && mag > 0) info.objectivePower = mag * finestScale;
+    if (std::isfinite(mag) && mag > 0) info.objectivePower = shortestDouble(float(mag * finestScale));
 
     // Properties: the reader's own under "iris.", then the attributes as stored (the
     // reference encoder copies the source's properties, "aperio.MPP", "tiff.…", …). On a

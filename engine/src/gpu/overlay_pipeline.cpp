@@ -72,48 +72,10 @@ Result OverlayPipeline::init(uint32_t atlasSize) {
     };
     IRIS_VK_TRY(vkCreateSampler(dev, &sci, nullptr, &sampler_));
 
-    const VkDescriptorSetLayoutBinding binding{
-        .binding = 0,
-        .descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
-        .descriptorCount = 1,
-        .stageFlags = VK_SHADER_STAGE_FRAGMENT_BIT,
-        .pImmutableSamplers = nullptr,
-    };
-    const VkDescriptorSetLayoutCreateInfo dslci{
-        .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO, .pNext = nullptr, .flags = 0, .bindingCount = 1, .pBindings = &binding};
-    IRIS_VK_TRY(vkCreateDescriptorSetLayout(dev, &dslci, nullptr, &setLayout_));
-    const VkPushConstantRange push{.stageFlags = VK_SHADER_STAGE_VERTEX_BIT, .offset = 0, .size = sizeof(OverlayPush)};
-    const VkPipelineLayoutCreateInfo plci{
-        .sType = VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO,
-        .pNext = nullptr,
-        .flags = 0,
-        .setLayoutCount = 1,
-        .pSetLayouts = &setLayout_,
-        .pushConstantRangeCount = 1,
-        .pPushConstantRanges = &push,
-    };
-    IRIS_VK_TRY(vkCreatePipelineLayout(dev, &plci, nullptr, &layout_));
-    const VkDescriptorPoolSize ps{.type = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, .descriptorCount = 1};
-    const VkDescriptorPoolCreateInfo dpci{
-        .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO, .pNext = nullptr, .flags = 0, .maxSets = 1, .poolSizeCount = 1, .pPoolSizes = &ps};
-    IRIS_VK_TRY(vkCreateDescriptorPool(dev, &dpci, nullptr, &pool_));
-    const VkDescriptorSetAllocateInfo dsai{
-        .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO, .pNext = nullptr, .descriptorPool = pool_, .descriptorSetCount = 1, .pSetLayouts = &setLayout_};
-    IRIS_VK_TRY(vkAllocateDescriptorSets(dev, &dsai, &set_));
-    const VkDescriptorImageInfo ii{.sampler = sampler_, .imageView = atlasView_, .imageLayout = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL};
-    const VkWriteDescriptorSet w{
-        .sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET,
-        .pNext = nullptr,
-        .dstSet = set_,
-        .dstBinding = 0,
-        .dstArrayElement = 0,
-        .descriptorCount = 1,
-        .descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
-        .pImageInfo = &ii,
-        .pBufferInfo = nullptr,
-        .pTexelBufferView = nullptr,
-    };
-    vkUpdateDescriptorSets(dev, 1, &w, 0, nullptr);
+    if (Result r = vk::createSampledImageSet(dev, sizeof(OverlayPush), sampler_, atlasView_, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                                             setLayout_, layout_, pool_, set_);
+        !r.ok())
+        return r;
     return {};
 }
 

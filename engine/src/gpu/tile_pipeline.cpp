@@ -24,49 +24,10 @@ Result TilePipeline::init() {
     if (Result r = vk::createShaderModule(dev, tile_vert_spv, sizeof(tile_vert_spv), vert_); !r.ok()) return r;
     if (Result r = vk::createShaderModule(dev, tile_frag_spv, sizeof(tile_frag_spv), frag_); !r.ok()) return r;
 
-    const VkDescriptorSetLayoutBinding binding{
-        .binding = 0,
-        .descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
-        .descriptorCount = 1,
-        .stageFlags = VK_SHADER_STAGE_FRAGMENT_BIT,
-        .pImmutableSamplers = nullptr,
-    };
-    const VkDescriptorSetLayoutCreateInfo dslci{
-        .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO, .pNext = nullptr, .flags = 0, .bindingCount = 1, .pBindings = &binding};
-    IRIS_VK_TRY(vkCreateDescriptorSetLayout(dev, &dslci, nullptr, &setLayout_));
-    const VkPushConstantRange push{.stageFlags = VK_SHADER_STAGE_VERTEX_BIT, .offset = 0, .size = sizeof(TilePush)};
-    const VkPipelineLayoutCreateInfo plci{
-        .sType = VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO,
-        .pNext = nullptr,
-        .flags = 0,
-        .setLayoutCount = 1,
-        .pSetLayouts = &setLayout_,
-        .pushConstantRangeCount = 1,
-        .pPushConstantRanges = &push,
-    };
-    IRIS_VK_TRY(vkCreatePipelineLayout(dev, &plci, nullptr, &layout_));
-
-    const VkDescriptorPoolSize ps{.type = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, .descriptorCount = 1};
-    const VkDescriptorPoolCreateInfo dpci{
-        .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO, .pNext = nullptr, .flags = 0, .maxSets = 1, .poolSizeCount = 1, .pPoolSizes = &ps};
-    IRIS_VK_TRY(vkCreateDescriptorPool(dev, &dpci, nullptr, &pool_));
-    const VkDescriptorSetAllocateInfo dsai{
-        .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO, .pNext = nullptr, .descriptorPool = pool_, .descriptorSetCount = 1, .pSetLayouts = &setLayout_};
-    IRIS_VK_TRY(vkAllocateDescriptorSets(dev, &dsai, &set_));
-    const VkDescriptorImageInfo ii{.sampler = atlas_.sampler(), .imageView = atlas_.view(), .imageLayout = VK_IMAGE_LAYOUT_GENERAL};
-    const VkWriteDescriptorSet w{
-        .sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET,
-        .pNext = nullptr,
-        .dstSet = set_,
-        .dstBinding = 0,
-        .dstArrayElement = 0,
-        .descriptorCount = 1,
-        .descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
-        .pImageInfo = &ii,
-        .pBufferInfo = nullptr,
-        .pTexelBufferView = nullptr,
-    };
-    vkUpdateDescriptorSets(dev, 1, &w, 0, nullptr);
+    if (Result r = vk::createSampledImageSet(dev, sizeof(TilePush), atlas_.sampler(), atlas_.view(), VK_IMAGE_LAYOUT_GENERAL,
+                                             setLayout_, layout_, pool_, set_);
+        !r.ok())
+        return r;
     return {};
 }
 

@@ -42,6 +42,16 @@ uint32_t findMemoryType(VkPhysicalDevice pd, uint32_t typeBits, VkMemoryProperty
     return fallback;
 }
 
+namespace {
+VkResult allocateDeviceLocal(VkPhysicalDevice pd, VkDevice dev, const VkMemoryRequirements& req, VkDeviceMemory& memory) {
+    const uint32_t type = findMemoryType(pd, req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
+    if (type == UINT32_MAX) return VK_ERROR_OUT_OF_DEVICE_MEMORY;
+    const VkMemoryAllocateInfo mai{
+        .sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO, .pNext = nullptr, .allocationSize = req.size, .memoryTypeIndex = type};
+    return vkAllocateMemory(dev, &mai, nullptr, &memory);
+}
+} // namespace
+
 VkResult createDeviceImage(VkPhysicalDevice pd, VkDevice dev, const VkImageCreateInfo& info, VkImage& image,
                            VkDeviceMemory& memory) {
     image = VK_NULL_HANDLE;
@@ -50,10 +60,7 @@ VkResult createDeviceImage(VkPhysicalDevice pd, VkDevice dev, const VkImageCreat
     if (vr != VK_SUCCESS) return vr;
     VkMemoryRequirements req;
     vkGetImageMemoryRequirements(dev, image, &req);
-    const uint32_t type = findMemoryType(pd, req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
-    const VkMemoryAllocateInfo mai{
-        .sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO, .pNext = nullptr, .allocationSize = req.size, .memoryTypeIndex = type};
-    vr = type == UINT32_MAX ? VK_ERROR_OUT_OF_DEVICE_MEMORY : vkAllocateMemory(dev, &mai, nullptr, &memory);
+    vr = allocateDeviceLocal(pd, dev, req, memory);
     if (vr == VK_SUCCESS) vr = vkBindImageMemory(dev, image, memory, 0);
     if (vr != VK_SUCCESS) {
         if (memory) vkFreeMemory(dev, memory, nullptr);
@@ -80,10 +87,7 @@ VkResult createDeviceBuffer(VkPhysicalDevice pd, VkDevice dev, VkDeviceSize size
     if (vr != VK_SUCCESS) return vr;
     VkMemoryRequirements req;
     vkGetBufferMemoryRequirements(dev, buffer, &req);
-    const uint32_t type = findMemoryType(pd, req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
-    const VkMemoryAllocateInfo mai{
-        .sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO, .pNext = nullptr, .allocationSize = req.size, .memoryTypeIndex = type};
-    vr = type == UINT32_MAX ? VK_ERROR_OUT_OF_DEVICE_MEMORY : vkAllocateMemory(dev, &mai, nullptr, &memory);
+    vr = allocateDeviceLocal(pd, dev, req, memory);
     if (vr == VK_SUCCESS) vr = vkBindBufferMemory(dev, buffer, memory, 0);
     if (vr != VK_SUCCESS) {
         if (memory) vkFreeMemory(dev, memory, nullptr);
@@ -265,6 +269,54 @@ Expected<VkPipeline> createInstancedQuadPipeline(VkDevice dev, VkPipelineLayout 
     VkPipeline p = VK_NULL_HANDLE;
     IRIS_VK_TRY(vkCreateGraphicsPipelines(dev, VK_NULL_HANDLE, 1, &gci, nullptr, &p));
     return p;
+}
+
+Result createSampledImageSet(VkDevice dev, uint32_t pushBytes, VkSampler sampler, VkImageView view,
+                             VkImageLayout imageLayout, VkDescriptorSetLayout& setLayout,
+                             VkPipelineLayout& pipelineLayout, VkDescriptorPool& pool, VkDescriptorSet& set) {
+    const VkDescriptorSetLayoutBinding binding{
+        .binding = 0,
+        .descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
+        .descriptorCount = 1,
+        .stageFlags = VK_SHADER_STAGE_FRAGMENT_BIT,
+        .pImmutableSamplers = nullptr,
+    };
+    const VkDescriptorSetLayoutCreateInfo dslci{
+        .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO, .pNext = nullptr, .flags = 0, .bindingCount = 1, .pBindings = &binding};
+    IRIS_VK_TRY(vkCreateDescriptorSetLayout(dev, &dslci, nullptr, &setLayout));
+    const VkPushConstantRange push{.stageFlags = VK_SHADER_STAGE_VERTEX_BIT, .offset = 0, .size = pushBytes};
+    const VkPipelineLayoutCreateInfo plci{
+        .sType = VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO,
+        .pNext = nullptr,
+        .flags = 0,
+        .setLayoutCount = 1,
+        .pSetLayouts = &setLayout,
+        .pushConstantRangeCount = 1,
+        .pPushConstantRanges = &push,
+    };
+    IRIS_VK_TRY(vkCreatePipelineLayout(dev, &plci, nullptr, &pipelineLayout));
+    const VkDescriptorPoolSize ps{.type = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, .descriptorCount = 1};
+    const VkDescriptorPoolCreateInfo dpci{
+        .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO, .pNext = nullptr, .flags = 0, .maxSets = 1, .poolSizeCount = 1, .pPoolSizes = &ps};
+    IRIS_VK_TRY(vkCreateDescriptorPool(dev, &dpci, nullptr, &pool));
+    const VkDescriptorSetAllocateInfo dsai{
+        .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO, .pNext = nullptr, .descriptorPool = pool, .descriptorSetCount = 1, .pSetLayouts = &setLayout};
+    IRIS_VK_TRY(vkAllocateDescriptorSets(dev, &dsai, &set));
+    const VkDescriptorImageInfo ii{.sampler = sampler, .imageView = view, .imageLayout = imageLayout};
+    const VkWriteDescriptorSet w{
+        .sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET,
+        .pNext = nullptr,
+        .dstSet = set,
+        .dstBinding = 0,
+        .dstArrayElement = 0,
+        .descriptorCount = 1,
+        .descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
+        .pImageInfo = &ii,
+        .pBufferInfo = nullptr,
+        .pTexelBufferView = nullptr,
+    };
+    vkUpdateDescriptorSets(dev, 1, &w, 0, nullptr);
+    return {};
 }
 
 } // namespace iris::vk

@@ -128,6 +128,14 @@ Result createImageView(VkDevice dev, VkImage image, VkImageViewType type, VkForm
 // A shader module from SPIR-V words (the generated iris_shaders headers).
 Result createShaderModule(VkDevice dev, const uint32_t* code, size_t bytes, VkShaderModule& out);
 
+// The descriptor state of a pipeline that samples one image in its fragment shader (binding 0,
+// a combined image sampler) and takes `pushBytes` of vertex push constants: the set layout,
+// the pipeline layout, a pool of one set and that set, written with (sampler, view, layout).
+// On failure what was made stays in the out-parameters for the caller's destructor.
+Result createSampledImageSet(VkDevice dev, uint32_t pushBytes, VkSampler sampler, VkImageView view,
+                             VkImageLayout imageLayout, VkDescriptorSetLayout& setLayout,
+                             VkPipelineLayout& pipelineLayout, VkDescriptorPool& pool, VkDescriptorSet& set);
+
 // A graphics pipeline that draws one quad per instance (a 4-vertex triangle strip whose
 // corners the vertex shader makes from gl_VertexIndex) into one colour attachment of
 // `format` (dynamic rendering), blending premultiplied "over" (ONE, ONE_MINUS_SRC_ALPHA).

@@ -28,48 +28,14 @@ Result OverlayPipeline::init(uint32_t atlasSize) {
     if (Result r = vk::createShaderModule(dev, overlay_frag_spv, sizeof(overlay_frag_spv), frag_); !r.ok()) return r;
 
     constexpr VkFormat kFormat = VK_FORMAT_R8_UNORM; // sampled R8 is mandatory in Vulkan
-    const VkImageCreateInfo ici{
-        .sType = VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO,
-        .pNext = nullptr,
-        .flags = 0,
-        .imageType = VK_IMAGE_TYPE_2D,
-        .format = kFormat,
-        .extent = {atlasSize, atlasSize, 1},
-        .mipLevels = 1,
-        .arrayLayers = 1,
-        .samples = VK_SAMPLE_COUNT_1_BIT,
-        .tiling = VK_IMAGE_TILING_OPTIMAL,
-        .usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
-        .sharingMode = VK_SHARING_MODE_EXCLUSIVE,
-        .queueFamilyIndexCount = 0,
-        .pQueueFamilyIndices = nullptr,
-        .initialLayout = VK_IMAGE_LAYOUT_UNDEFINED,
-    };
+    const VkImageCreateInfo ici =
+        vk::image2D(kFormat, atlasSize, atlasSize, 1, 1, VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT);
     IRIS_VK_TRY(vk::createDeviceImage(device_.physical(), dev, ici, atlas_, atlasMemory_));
     if (Result r = vk::createImageView(dev, atlas_, VK_IMAGE_VIEW_TYPE_2D, kFormat, vk::colorRange(0, 1, 0, 1), atlasView_);
         !r.ok())
         return r;
     // The shader uses texelFetch; a sampler is still part of a combined image sampler.
-    const VkSamplerCreateInfo sci{
-        .sType = VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO,
-        .pNext = nullptr,
-        .flags = 0,
-        .magFilter = VK_FILTER_NEAREST,
-        .minFilter = VK_FILTER_NEAREST,
-        .mipmapMode = VK_SAMPLER_MIPMAP_MODE_NEAREST,
-        .addressModeU = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
-        .addressModeV = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
-        .addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
-        .mipLodBias = 0,
-        .anisotropyEnable = VK_FALSE,
-        .maxAnisotropy = 1,
-        .compareEnable = VK_FALSE,
-        .compareOp = VK_COMPARE_OP_ALWAYS,
-        .minLod = 0,
-        .maxLod = 0,
-        .borderColor = VK_BORDER_COLOR_FLOAT_TRANSPARENT_BLACK,
-        .unnormalizedCoordinates = VK_FALSE,
-    };
+    const VkSamplerCreateInfo sci = vk::clampSampler(VK_FILTER_NEAREST, 0);
     IRIS_VK_TRY(vkCreateSampler(dev, &sci, nullptr, &sampler_));
 
     if (Result r = vk::createSampledImageSet(dev, sizeof(OverlayPush), sampler_, atlasView_, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,

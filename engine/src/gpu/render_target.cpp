@@ -17,23 +17,8 @@ Result OffscreenTarget::init(uint32_t width, uint32_t height) {
     VkDevice dev = device_.device();
     width_ = width;
     height_ = height;
-    const VkImageCreateInfo ici{
-        .sType = VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO,
-        .pNext = nullptr,
-        .flags = 0,
-        .imageType = VK_IMAGE_TYPE_2D,
-        .format = kFormat,
-        .extent = {width, height, 1},
-        .mipLevels = 1,
-        .arrayLayers = 1,
-        .samples = VK_SAMPLE_COUNT_1_BIT,
-        .tiling = VK_IMAGE_TILING_OPTIMAL,
-        .usage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
-        .sharingMode = VK_SHARING_MODE_EXCLUSIVE,
-        .queueFamilyIndexCount = 0,
-        .pQueueFamilyIndices = nullptr,
-        .initialLayout = VK_IMAGE_LAYOUT_UNDEFINED,
-    };
+    const VkImageCreateInfo ici = vk::image2D(kFormat, width, height, 1, 1,
+                                              VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT);
     IRIS_VK_TRY(vk::createDeviceImage(device_.physical(), dev, ici, image_, memory_));
     if (Result r = vk::createImageView(dev, image_, VK_IMAGE_VIEW_TYPE_2D, kFormat, vk::colorRange(0, 1, 0, 1), view_); !r.ok()) return r;
     return vk::createMappedBuffer(device_.physical(), dev, VkDeviceSize(width) * height * 4,

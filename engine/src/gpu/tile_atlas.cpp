@@ -45,23 +45,9 @@ Result TileAtlas::init(uint64_t vramBudgetBytes) {
     VkResult vr = VK_ERROR_OUT_OF_DEVICE_MEMORY;
     // Halve the slot count until the allocation succeeds (a budget larger than the device).
     for (; n >= 64; n /= 2) {
-        const VkImageCreateInfo ici{
-            .sType = VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO,
-            .pNext = nullptr,
-            .flags = 0,
-            .imageType = VK_IMAGE_TYPE_2D,
-            .format = kFormat,
-            .extent = {uint32_t(kTileSize), uint32_t(kTileSize), 1},
-            .mipLevels = kTileMipLevels,
-            .arrayLayers = uint32_t(n),
-            .samples = VK_SAMPLE_COUNT_1_BIT,
-            .tiling = VK_IMAGE_TILING_OPTIMAL,
-            .usage = VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_STORAGE_BIT,
-            .sharingMode = VK_SHARING_MODE_EXCLUSIVE,
-            .queueFamilyIndexCount = 0,
-            .pQueueFamilyIndices = nullptr,
-            .initialLayout = VK_IMAGE_LAYOUT_UNDEFINED,
-        };
+        const VkImageCreateInfo ici =
+            vk::image2D(kFormat, uint32_t(kTileSize), uint32_t(kTileSize), kTileMipLevels, uint32_t(n),
+                        VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_STORAGE_BIT);
         vr = vk::createDeviceImage(device_.physical(), dev, ici, image_, memory_);
         if (vr == VK_SUCCESS) break;
     }
@@ -75,26 +61,7 @@ Result TileAtlas::init(uint64_t vramBudgetBytes) {
             return r;
     }
 
-    const VkSamplerCreateInfo sci{
-        .sType = VK_STRUCTURE_TYPE_SAMPLER_CREATE_INFO,
-        .pNext = nullptr,
-        .flags = 0,
-        .magFilter = VK_FILTER_LINEAR,
-        .minFilter = VK_FILTER_LINEAR,
-        .mipmapMode = VK_SAMPLER_MIPMAP_MODE_LINEAR,
-        .addressModeU = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
-        .addressModeV = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
-        .addressModeW = VK_SAMPLER_ADDRESS_MODE_CLAMP_TO_EDGE,
-        .mipLodBias = 0,
-        .anisotropyEnable = VK_FALSE,
-        .maxAnisotropy = 1,
-        .compareEnable = VK_FALSE,
-        .compareOp = VK_COMPARE_OP_ALWAYS,
-        .minLod = 0,
-        .maxLod = float(kTileMipLevels - 1),
-        .borderColor = VK_BORDER_COLOR_FLOAT_TRANSPARENT_BLACK,
-        .unnormalizedCoordinates = VK_FALSE,
-    };
+    const VkSamplerCreateInfo sci = vk::clampSampler(VK_FILTER_LINEAR, float(kTileMipLevels - 1));
     IRIS_VK_TRY(vkCreateSampler(dev, &sci, nullptr, &sampler_));
 
     // One-time transition of every layer to GENERAL, where the image stays.

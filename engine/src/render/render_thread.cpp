@@ -460,32 +460,27 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
         .pStencilAttachment = nullptr,
     };
     vkCmdBeginRendering(cmd, &ri);
-    if (count > 0) {
+    // Tile quads [first, first + n) of this frame's instance buffer. The overview's thumbnail
+    // is drawn the same way inside the overlay pass, under the scissor that clips it.
+    const auto drawTiles = [&](uint32_t first, uint32_t n) {
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, *pipe);
         const VkViewport viewport{0, 0, float(extent.width), float(extent.height), 0, 1};
-        const VkRect2D scissor{{0, 0}, extent};
         vkCmdSetViewport(cmd, 0, 1, &viewport);
-        vkCmdSetScissor(cmd, 0, 1, &scissor);
         VkDescriptorSet set = pipeline_.descriptorSet();
         vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline_.layout(), 0, 1, &set, 0, nullptr);
         const gpu::TilePush push{{float(extent.width), float(extent.height)}};
         vkCmdPushConstants(cmd, pipeline_.layout(), VK_SHADER_STAGE_VERTEX_BIT, 0, sizeof(push), &push);
         const VkDeviceSize offset = 0;
         vkCmdBindVertexBuffers(cmd, 0, 1, &f.instances.buffer, &offset);
-        vkCmdDraw(cmd, 4, count, 0, 0);
+        vkCmdDraw(cmd, 4, n, 0, first);
+    };
+    if (count > 0) {
+        const VkRect2D scissor{{0, 0}, extent};
+        vkCmdSetScissor(cmd, 0, 1, &scissor);
+        drawTiles(0, count);
     }
     const Result drawn = overlays_.recordDraws(cmd, slotIndex, overlay, format, extent, [&](const overlay::OverlayDraw&) {
-        if (thumbCount == 0) return;
-        const VkViewport viewport{0, 0, float(extent.width), float(extent.height), 0, 1};
-        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, *pipe);
-        vkCmdSetViewport(cmd, 0, 1, &viewport);
-        VkDescriptorSet set = pipeline_.descriptorSet();
-        vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline_.layout(), 0, 1, &set, 0, nullptr);
-        const gpu::TilePush push{{float(extent.width), float(extent.height)}};
-        vkCmdPushConstants(cmd, pipeline_.layout(), VK_SHADER_STAGE_VERTEX_BIT, 0, sizeof(push), &push);
-        const VkDeviceSize offset = 0;
-        vkCmdBindVertexBuffers(cmd, 0, 1, &f.instances.buffer, &offset);
-        vkCmdDraw(cmd, 4, thumbCount, 0, thumbFirst);
+        if (thumbCount > 0) drawTiles(thumbFirst, thumbCount);
     });
     if (!drawn.ok()) { // the frame goes on without its overlays
         shared_.setError(drawn);

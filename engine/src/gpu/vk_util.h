@@ -49,17 +49,19 @@ inline VkImageMemoryBarrier2 imageBarrier(VkImage image, VkPipelineStageFlags2 s
     };
 }
 
-inline void pipelineBarrier(VkCommandBuffer cmd, const VkImageMemoryBarrier2* barriers, uint32_t count) {
+// One vkCmdPipelineBarrier2 over image and buffer barriers.
+inline void pipelineBarrier(VkCommandBuffer cmd, const VkImageMemoryBarrier2* images, uint32_t imageCount,
+                            const VkBufferMemoryBarrier2* buffers = nullptr, uint32_t bufferCount = 0) {
     const VkDependencyInfo dep{
         .sType = VK_STRUCTURE_TYPE_DEPENDENCY_INFO,
         .pNext = nullptr,
         .dependencyFlags = 0,
         .memoryBarrierCount = 0,
         .pMemoryBarriers = nullptr,
-        .bufferMemoryBarrierCount = 0,
-        .pBufferMemoryBarriers = nullptr,
-        .imageMemoryBarrierCount = count,
-        .pImageMemoryBarriers = barriers,
+        .bufferMemoryBarrierCount = bufferCount,
+        .pBufferMemoryBarriers = buffers,
+        .imageMemoryBarrierCount = imageCount,
+        .pImageMemoryBarriers = images,
     };
     vkCmdPipelineBarrier2(cmd, &dep);
 }
@@ -153,18 +155,7 @@ inline VkSubmitInfo2 submitInfo(const VkCommandBufferSubmitInfo* cmd, const VkSe
 }
 
 inline void pipelineBarrier(VkCommandBuffer cmd, const VkBufferMemoryBarrier2& barrier) {
-    const VkDependencyInfo dep{
-        .sType = VK_STRUCTURE_TYPE_DEPENDENCY_INFO,
-        .pNext = nullptr,
-        .dependencyFlags = 0,
-        .memoryBarrierCount = 0,
-        .pMemoryBarriers = nullptr,
-        .bufferMemoryBarrierCount = 1,
-        .pBufferMemoryBarriers = &barrier,
-        .imageMemoryBarrierCount = 0,
-        .pImageMemoryBarriers = nullptr,
-    };
-    vkCmdPipelineBarrier2(cmd, &dep);
+    pipelineBarrier(cmd, nullptr, 0, &barrier, 1);
 }
 
 // A colour view of `range` of an image.

@@ -102,9 +102,16 @@ void SlidePropertiesDock::showSlide(const IrisSlideInfo &info)
     m_levels->clear();
     for (int i = 0; i < info.levels.size(); ++i) {
         const IrisSlideLevel &level = info.levels[i];
-        auto *item = new QTreeWidgetItem(m_levels, {QString::number(i), pixels(level.width, level.height),
+        const QString name = level.synthetic ? tr("%1 (computed)").arg(i) : QString::number(i);
+        auto *item = new QTreeWidgetItem(m_levels, {name, pixels(level.width, level.height),
                                                     QString::number(level.downsample, 'g', 6)});
         item->setTextAlignment(2, Qt::AlignRight);
+        if (level.synthetic) {
+            const QString why = tr("Not stored in the file: the viewer computes this level from the "
+                                   "coarsest stored one, so that a thumbnail of the whole slide stays loaded.");
+            for (int column = 0; column < 3; ++column)
+                item->setToolTip(column, why);
+        }
     }
     m_levels->resizeColumnToContents(0);
     m_levels->resizeColumnToContents(1);

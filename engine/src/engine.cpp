@@ -17,6 +17,7 @@
 #include "gpu/tile_pipeline.h"
 #include "overlay/font.h"
 #include "render/render_thread.h"
+#include "slide/pyramid_source.h"
 #include "view/view_model.h"
 
 namespace iris {
@@ -27,6 +28,9 @@ struct Engine::Impl {
           cache(c.ramBudgetBytes) {}
 
     ~Impl() {
+        // A loader computing a synthetic tile stops at its next stored tile instead of
+        // finishing (it can take seconds on a large slide without reduced levels).
+        if (const Snapshot s = shared.snapshot(); s.slide) s.slide->source->abandon();
         shared.stopping.store(true, std::memory_order_release);
         shared.bump();
         loaders.reset();
@@ -219,28 +223,34 @@ Result Engine::open(const std::string& path) {
         return src.error();
     }
     auto slide = std::make_shared<OpenSlide>();
-    slide->source = std::shared_ptr<SlideSource>(std::move(src.value()));
+    // Levels the file lacks (a coarsest level too large to keep resident) are computed.
+    slide->source = std::shared_ptr<SlideSource>(PyramidSource::complete(std::move(src.value())));
     slide->info = slide->source->info();
     impl_->generation = (impl_->generation + 1) & 0xFFFF;
     if (impl_->generation == 0) impl_->generation = 1;
     slide->generation = impl_->generation;
     impl_->cache.dropOtherGenerations(slide->generation);
     impl_->shared.clearErrorForSlide(slide->generation);
+    std::shared_ptr<const OpenSlide> previous;
     impl_->shared.update([&](Snapshot& s) {
+        previous = std::move(s.slide);
         s.slide = slide;
         s.fieldId = 0;
         s.viewport.view = iris::fitView(slide->info, s.viewport.width, s.viewport.height);
     });
+    if (previous) previous->source->abandon();
     impl_->log.info("opened " + path + " (" + slide->info.vendor + ", " + std::to_string(slide->info.width) + "x" +
                     std::to_string(slide->info.height) + ", " + std::to_string(slide->info.levels.size()) + " levels)");
     return {};
 }
 
 void Engine::close() {
+    std::shared_ptr<const OpenSlide> previous;
     impl_->shared.update([&](Snapshot& s) {
-        s.slide.reset();
+        previous = std::move(s.slide);
         s.fieldId = 0;
     });
+    if (previous) previous->source->abandon();
 }
 
 std::optional<SlideInfo> Engine::slideInfo() const {

@@ -21,6 +21,7 @@ private slots:
     void concurrentPinAndReclaim();
     void priorityOrder();
     void levelChoice();
+    void syntheticBaseAfterVisible();
 };
 
 void TestTileMap::insertLookupActivate() {
@@ -191,6 +192,40 @@ void TestTileMap::levelChoice() {
     QCOMPARE(iris::chooseLevels(info, 100).hr, 2);
     QCOMPARE(iris::chooseLevels(info, 100).lr, -1);
     QCOMPARE(iris::chooseLevels(info, 100).base, 2);
+}
+
+void TestTileMap::syntheticBaseAfterVisible() {
+    // A one-level 8192² slide (1024 tiles) and the synthetic levels the engine adds to it
+    // (slide/pyramid_source.h): 4096² (256 tiles, kept whole) at downsample 2.
+    iris::SlideInfo info;
+    info.width = info.height = 8192;
+    for (auto [w, d] : {std::pair{8192, 1.0}, {4096, 2.0}}) {
+        iris::LevelInfo l{w, w, d, 0, 0};
+        l.tilesX = l.tilesY = (w + 255) / 256;
+        l.synthetic = d > 1;
+        info.levels.push_back(l);
+    }
+    // Zoomed in on the stored level: its visible tiles (one synthetic read each) come before
+    // the synthetic base (four stored reads per tile), which is still asked for whole.
+    iris::Viewport vp{{4096, 4096, 1.0}, 512, 512};
+    auto region = iris::bufferRegion(info, 1, vp, 1);
+    QVERIFY(!region.empty());
+    QCOMPARE(region.front().role, iris::TileRole::LRVisible);
+    size_t lastVisible = 0, firstBase = region.size(), base = 0;
+    for (size_t i = 0; i < region.size(); ++i) {
+        if (region[i].role == iris::TileRole::HRVisible) lastVisible = i;
+        if (region[i].role == iris::TileRole::Base) {
+            firstBase = std::min(firstBase, i);
+            ++base;
+        }
+    }
+    QVERIFY(lastVisible < firstBase);
+    QCOMPARE(base, size_t(256) - 4); // all of it but the 2 × 2 tiles already asked for as LR visible
+    // Zoomed out onto the synthetic level itself: it is HR, and nothing waits for it.
+    vp.view.downsample = 8;
+    region = iris::bufferRegion(info, 1, vp, 1);
+    QCOMPARE(region.front().role, iris::TileRole::Base);
+    QCOMPARE(region.front().level, 1);
 }
 
 QTEST_GUILESS_MAIN(TestTileMap)

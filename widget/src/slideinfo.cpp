@@ -25,7 +25,7 @@ IrisSlideInfo toSlideInfo(const iris::SlideInfo &info)
     out.height = info.height;
     out.levels.reserve(qsizetype(info.levels.size()));
     for (const iris::LevelInfo &level : info.levels)
-        out.levels.append(IrisSlideLevel{level.width, level.height, level.downsample});
+        out.levels.append(IrisSlideLevel{level.width, level.height, level.downsample, level.synthetic});
     out.mppX = info.mppX;
     out.mppY = info.mppY;
     out.objectivePower = info.objectivePower;

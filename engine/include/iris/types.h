@@ -94,6 +94,10 @@ struct LevelInfo {
     double mppX = 0;       // microns per pixel of this level (slide mpp × downsample); 0 when unknown
     double mppY = 0;
     double magnification = 0; // objective power at this level (slide power ÷ downsample); 0 when unknown
+    // Not stored in the file: the engine computes it (an area average of the coarsest stored
+    // level) because the stored pyramid stops while its coarsest level is still too large to
+    // keep resident — a slide without reduced levels, for example. See docs/ARCHITECTURE.md.
+    bool synthetic = false;
 };
 
 struct SlideInfo {

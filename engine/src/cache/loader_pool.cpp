@@ -58,7 +58,12 @@ void LoaderPool::decode(const Snapshot& snap, const TileRef& t) {
     std::unique_ptr<uint8_t[]> buf = cache_.acquireBuffer();
     const Result r = snap.slide->source->readTile(t.level, t.tx, t.ty, buf.get());
     const bool failed = !r.ok();
-    if (failed) {
+    if (r.status() == Status::Cancelled) {
+        // The slide was let go of (SlideSource::abandon) while this tile was being read: no
+        // error to report, and nobody wants the tile. It is published as failed so that its
+        // claim ends; its generation is no longer drawn.
+        fillFailedTilePlaceholder(buf.get());
+    } else if (failed) {
         shared_.setSlideError(snap.slide->generation, r);
         log_.error(r.message());
         fillFailedTilePlaceholder(buf.get());

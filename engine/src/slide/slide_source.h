@@ -27,6 +27,10 @@ public:
     // last valid column and row, so that mip levels do not darken at slide edges.
     virtual Result readTile(int level, int64_t tx, int64_t ty, uint8_t* dst) = 0;
     virtual Expected<Image> readAssociatedImage(const std::string& name) = 0;
+    // The engine has let go of this slide (another was opened, it was closed, the engine is
+    // going away). A read that takes long (a synthetic level's tile: many stored tiles) may
+    // stop early and return Status::Cancelled; a one-tile read just finishes.
+    virtual void abandon() {}
 };
 
 // Opens `path` with the first format that recognises it, after checking that the path is

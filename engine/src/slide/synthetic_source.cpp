@@ -13,12 +13,18 @@ constexpr int64_t kMaxSide = int64_t(1) << 28;
 bool SyntheticSource::detect(const std::string& path) { return path.rfind(kPrefix, 0) == 0; }
 
 Expected<std::unique_ptr<SlideSource>> SyntheticSource::open(const std::string& path) {
-    long long w = 0, h = 0;
-    char tail = 0;
-    if (std::sscanf(path.c_str() + 10, "%lldx%lld%c", &w, &h, &tail) != 2 || w < 1 || h < 1 || w > kMaxSide ||
-        h > kMaxSide) {
-        return Result(Status::InvalidArgument, "'" + path + "': a synthetic slide is 'synthetic:WIDTHxHEIGHT' with sides from 1 to " +
-                                                   std::to_string(kMaxSide));
+    long long w = 0, h = 0, maxLevels = 0;
+    int used = -1, usedWithLevels = -1;
+    const char* spec = path.c_str() + 10;
+    const size_t specLength = path.size() - 10;
+    bool ok = std::sscanf(spec, "%lldx%lld%n", &w, &h, &used) == 2 && used >= 0 && size_t(used) == specLength;
+    if (!ok) {
+        ok = std::sscanf(spec, "%lldx%lld:%lld%n", &w, &h, &maxLevels, &usedWithLevels) == 3 &&
+             usedWithLevels >= 0 && size_t(usedWithLevels) == specLength && maxLevels >= 1;
+    }
+    if (!ok || w < 1 || h < 1 || w > kMaxSide || h > kMaxSide) {
+        return Result(Status::InvalidArgument, "'" + path + "': a synthetic slide is 'synthetic:WIDTHxHEIGHT[:LEVELS]' with sides "
+                                                   "from 1 to " + std::to_string(kMaxSide) + " and at least one level");
     }
     SlideInfo info;
     info.path = path;
@@ -34,7 +40,7 @@ Expected<std::unique_ptr<SlideSource>> SyntheticSource::open(const std::string& 
         l.downsample = double(int64_t(1) << k);
         fillTileGrid(l);
         info.levels.push_back(l);
-        if (std::max(l.width, l.height) <= 512 || k >= 40) break;
+        if (std::max(l.width, l.height) <= 512 || k >= 40 || (maxLevels > 0 && k + 1 >= maxLevels)) break;
     }
     info.properties = {{"openslide.vendor", "synthetic"}, {"synthetic.size", std::to_string(w) + "x" + std::to_string(h)}};
     fillLevelPhysics(info);

@@ -1,5 +1,7 @@
 // A procedural slide of any size, for tests and benchmarks that need slides no file could
-// hold (for example 200000×200000 pixels). Path syntax: "synthetic:WIDTHxHEIGHT".
+// hold (for example 200000×200000 pixels). Path syntax: "synthetic:WIDTHxHEIGHT", or
+// "synthetic:WIDTHxHEIGHT:LEVELS" to store at most LEVELS levels (":1" is a slide without
+// reduced levels, for the engine's synthetic levels; see pyramid_source.h).
 //
 // Pixels are a pure function of level-0 coordinates (a colour ramp, a 256-px checker and a
 // fine diagonal pattern), so a test can compute any expected pixel; level k shows the level-0

@@ -75,12 +75,19 @@ std::vector<TileRef> bufferRegion(const SlideInfo& info, uint32_t gen, const Vie
     std::unordered_set<uint64_t> seen;
     const LevelChoice c = chooseLevels(info, vp.view.downsample);
     const LevelInfo& base = info.levels[size_t(c.base)];
-    if (base.tilesX * base.tilesY <= kMaxResidentBaseTiles) {
-        appendRange(out, seen, base, c.base, gen, TileRange{0, 0, base.tilesX - 1, base.tilesY - 1}, nullptr, vp,
-                    TileRole::Base);
-    } else {
-        appendRange(out, seen, base, c.base, gen, visibleTiles(base, vp, 0), nullptr, vp, TileRole::Base);
-    }
+    const auto appendBase = [&] {
+        if (base.tilesX * base.tilesY <= kMaxResidentBaseTiles) {
+            appendRange(out, seen, base, c.base, gen, TileRange{0, 0, base.tilesX - 1, base.tilesY - 1}, nullptr, vp,
+                        TileRole::Base);
+        } else {
+            appendRange(out, seen, base, c.base, gen, visibleTiles(base, vp, 0), nullptr, vp, TileRole::Base);
+        }
+    };
+    // A stored base costs one tile read per tile and comes first: the screen is never empty.
+    // A synthetic base (pyramid_source.h) costs 4^k stored tiles per tile; while the view
+    // draws stored levels, their visible tiles come first and the base right after them.
+    const bool baseAfterVisible = base.synthetic && !info.levels[size_t(c.hr)].synthetic;
+    if (!baseAfterVisible) appendBase();
     const TileRange hrVis = visibleTiles(info.levels[size_t(c.hr)], vp, 0);
     TileRange lrVis;
     if (c.lr >= 0) {
@@ -88,6 +95,7 @@ std::vector<TileRef> bufferRegion(const SlideInfo& info, uint32_t gen, const Vie
         appendRange(out, seen, info.levels[size_t(c.lr)], c.lr, gen, lrVis, nullptr, vp, TileRole::LRVisible);
     }
     appendRange(out, seen, info.levels[size_t(c.hr)], c.hr, gen, hrVis, nullptr, vp, TileRole::HRVisible);
+    if (baseAfterVisible) appendBase();
     if (perimeter > 0) {
         if (c.lr >= 0) {
             appendRange(out, seen, info.levels[size_t(c.lr)], c.lr, gen,

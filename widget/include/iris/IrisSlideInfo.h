@@ -11,20 +11,25 @@
 #include "iris/IrisWidgetGlobal.h"
 
 // One pyramid level. Sizes are pixels of that level; downsample is level-0 pixels per
-// pixel of the level (1 for level 0).
+// pixel of the level (1 for level 0). A synthetic level is not stored in the file: the
+// engine computes it from the coarsest stored level, for slides whose stored pyramid stops
+// at a level too large to keep resident (a slide without reduced levels, for example).
 struct IRIS_WIDGET_EXPORT IrisSlideLevel {
     Q_GADGET
     Q_PROPERTY(qint64 width MEMBER width)
     Q_PROPERTY(qint64 height MEMBER height)
     Q_PROPERTY(double downsample MEMBER downsample)
+    Q_PROPERTY(bool synthetic MEMBER synthetic)
 public:
     qint64 width = 0;
     qint64 height = 0;
     double downsample = 1;
+    bool synthetic = false;
 
     friend bool operator==(const IrisSlideLevel &a, const IrisSlideLevel &b)
     {
-        return a.width == b.width && a.height == b.height && a.downsample == b.downsample;
+        return a.width == b.width && a.height == b.height && a.downsample == b.downsample
+            && a.synthetic == b.synthetic;
     }
 };
 

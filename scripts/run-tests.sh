@@ -28,14 +28,14 @@ echo "== asan build"
 cmake --preset asan >/dev/null
 # Only what the "asan" suites run (and their fixtures), to keep CI short.
 cmake --build --preset asan -j "$JOBS" --target iris_no_dlclose iris-sample tst_bad_input tst_lifecycle tst_tile_map tst_storm \
-  tst_iris_reader tst_irisslideview tst_quit_midzoom tst_overlay
+  tst_iris_reader tst_irisslideview tst_quit_midzoom tst_overlay tst_pyramid
 echo "== asan tests"
 # (the sanitizer options and the LeakSanitizer suppressions come from tests/CMakeLists.txt)
 xvfb-run -a -s "-screen 0 1920x1080x24" ctest --preset asan -L asan -j 1
 
 echo "== tsan build"
 cmake --preset tsan >/dev/null
-cmake --build --preset tsan -j "$JOBS" --target iris-sample tst_tile_map tst_storm
+cmake --build --preset tsan -j "$JOBS" --target iris-sample tst_tile_map tst_storm tst_pyramid
 echo "== tsan tests"
 ctest --preset tsan -L tsan -j 1
 

@@ -162,7 +162,9 @@ private slots:
         }
         if (const auto sample = sampleSlidePath()) {
             QVERIFY(e_->open(sample->string()).ok());
-            for (const iris::LevelInfo& l : e_->slideInfo()->levels) QVERIFY(!l.synthetic);
+            const auto sampleInfo = e_->slideInfo(); // (a range-for over a temporary's member dangles)
+            QVERIFY(sampleInfo.has_value());
+            for (const iris::LevelInfo& l : sampleInfo->levels) QVERIFY(!l.synthetic);
         }
 
         // 4097 × 4096: 17 × 16 = 272 tiles > 256, so one level at 2× (2049 × 2048, 9 × 8 tiles).

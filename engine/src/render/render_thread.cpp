@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <algorithm>
+#include <cstdlib>
 #include <cstring>
 #include <vector>
 
@@ -21,7 +22,42 @@ float clearUnorm(float v) {
 RenderThread::RenderThread(SharedState& shared, gpu::Device& device, gpu::TileAtlas& atlas, gpu::TilePipeline& pipeline,
                            Handover& handover, const UploadCounters& counters, const Log& log)
     : shared_(shared), device_(device), atlas_(atlas), pipeline_(pipeline), handover_(handover), counters_(counters),
-      log_(log), overlays_(device, log) {}
+      log_(log), overlays_(device, log) {
+    if (const char* env = std::getenv("IRIS_DRAW_COVERED"); env && std::strcmp(env, "1") == 0) {
+        drawCovered_ = true;
+        log_.info("IRIS_DRAW_COVERED=1: coarse tiles are drawn also under resident finer tiles");
+    }
+}
+
+bool RenderThread::coveredBy(const LevelInfo& coarse, int64_t tx, int64_t ty, const LevelInfo& fine,
+                             const LevelDraw& drawn, const Viewport& vp) {
+    // In level-0 units: the coarse tile, clipped to the target's field.
+    const double ds = vp.view.downsample;
+    const double vx0 = vp.view.centerX - vp.width * 0.5 * ds, vy0 = vp.view.centerY - vp.height * 0.5 * ds;
+    double x0 = std::max(double(tx * kTileSize) * coarse.downsample, vx0);
+    double y0 = std::max(double(ty * kTileSize) * coarse.downsample, vy0);
+    double x1 = std::min(double(std::min<int64_t>((tx + 1) * kTileSize, coarse.width)) * coarse.downsample,
+                         vx0 + vp.width * ds);
+    double y1 = std::min(double(std::min<int64_t>((ty + 1) * kTileSize, coarse.height)) * coarse.downsample,
+                         vy0 + vp.height * ds);
+    // One target pixel of margin: the two levels' tile edges are placed by different
+    // expressions, so an edge they share in exact arithmetic may round to different pixels.
+    // With the margin, coarse tiles along the slide's edges (where the levels' extents differ
+    // by rounding anyway) are always drawn.
+    x0 -= ds, y0 -= ds, x1 += ds, y1 += ds;
+    if (x0 < 0 || y0 < 0 || x1 > double(fine.width) * fine.downsample || y1 > double(fine.height) * fine.downsample)
+        return false;
+    const double span = double(kTileSize) * fine.downsample;
+    const int64_t fx0 = int64_t(std::floor(x0 / span)), fx1 = int64_t(std::floor(x1 / span));
+    const int64_t fy0 = int64_t(std::floor(y0 / span)), fy1 = int64_t(std::floor(y1 / span));
+    const TileRange& r = drawn.range;
+    if (r.empty() || fx0 < r.x0 || fy0 < r.y0 || fx1 > r.x1 || fy1 > r.y1) return false;
+    const int64_t w = r.x1 - r.x0 + 1;
+    for (int64_t y = fy0; y <= fy1; ++y)
+        for (int64_t x = fx0; x <= fx1; ++x)
+            if (!drawn.pinned[size_t((y - r.y0) * w + (x - r.x0))]) return false;
+    return true;
+}
 
 RenderThread::~RenderThread() {
     stop();
@@ -341,10 +377,22 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
                     if (atlas_.map().statusOf(TileKey::make(snap.slide->generation, c.lr, tx, ty)) != gpu::TileMap::Status::Active)
                         progress.lrComplete = false;
         }
-        for (int li : order) {
+        // Finest first, so that a coarser tile lying wholly under finer tiles this frame has
+        // pinned is left out: drawn over anyway, it would only cost fill (3× overdraw on a CPU
+        // device). The instances go into the buffer coarsest first (painter's order).
+        uint32_t budget = kMaxInstances;
+        for (int oi = 2; oi >= 0; --oi) {
+            LevelDraw& d = draws_[size_t(oi)];
+            d.level = order[oi];
+            d.instances.clear();
+            d.range = TileRange{};
+            d.pinned.clear();
+            const int li = order[oi];
             if (li < 0) continue;
             const LevelInfo& level = info.levels[size_t(li)];
             const TileRange range = visibleTiles(level, vp, 0);
+            d.range = range;
+            d.pinned.assign(size_t(range.count()), 0);
             const bool isHr = li == c.hr;
             const bool isLr = li == c.lr;
             if (isHr) progress.hrTiles = uint32_t(range.count());
@@ -353,21 +401,39 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
             for (int64_t ty = range.y0; ty <= range.y1; ++ty) {
                 for (int64_t tx = range.x0; tx <= range.x1; ++tx) {
                     const uint64_t key = TileKey::make(snap.slide->generation, li, tx, ty);
-                    const int layer = count < kMaxInstances ? atlas_.map().pin(key, serial) : -1;
+                    bool covered = false;
+                    for (int fi = oi + 1; fi <= 2 && !covered && !drawCovered_; ++fi) {
+                        const LevelDraw& finer = draws_[size_t(fi)];
+                        if (finer.level >= 0)
+                            covered = coveredBy(level, tx, ty, info.levels[size_t(finer.level)], finer, vp);
+                    }
+                    if (covered) {
+                        // Not drawn, but LR-TeFOV still asks whether it is resident.
+                        if (isLr && atlas_.map().statusOf(key) != gpu::TileMap::Status::Active) progress.lrComplete = false;
+                        continue;
+                    }
+                    const int layer = budget > 0 ? atlas_.map().pin(key, serial) : -1;
                     if (layer < 0) {
                         if (isHr) complete = false;
                         if (isLr) progress.lrComplete = false;
                         continue;
                     }
+                    --budget;
                     f.pinned.push_back(layer);
+                    d.pinned[size_t((ty - range.y0) * (range.x1 - range.x0 + 1) + (tx - range.x0))] = 1;
                     const TilePlacement p = placeTile(level, vp, tx, ty);
-                    inst[count++] = gpu::TileInstance{
+                    d.instances.push_back(gpu::TileInstance{
                         .rect = {float(p.x0), float(p.y0), float(p.x1), float(p.y1)},
                         .texel = {float(p.validW), float(p.validH), float(layer), float(lod)},
                         .scale = float(p.texelsPerPixel),
-                    };
+                    });
                 }
             }
+        }
+        for (const LevelDraw& d : draws_) {
+            if (d.instances.empty()) continue;
+            std::memcpy(inst + count, d.instances.data(), d.instances.size() * sizeof(gpu::TileInstance));
+            count += uint32_t(d.instances.size());
         }
     }
     progress.hrComplete = complete;

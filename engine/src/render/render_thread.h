@@ -82,6 +82,19 @@ private:
         uint32_t lrTiles = 0, hrTiles = 0;
     };
     void trackField(const Snapshot& snap, const FieldProgress& p);
+    // One drawn level of a frame: its visible range, which of those tiles this frame pinned
+    // (row-major over the range) and their instances. Reused from frame to frame.
+    struct LevelDraw {
+        int level = -1;
+        TileRange range;
+        std::vector<uint8_t> pinned;
+        std::vector<gpu::TileInstance> instances;
+    };
+    // Whether the visible part of tile (tx, ty) of `coarse`, grown by one target pixel, lies
+    // under tiles of `fine` that this frame pinned: then the coarse tile is drawn over
+    // completely and is left out.
+    static bool coveredBy(const LevelInfo& coarse, int64_t tx, int64_t ty, const LevelInfo& fine, const LevelDraw& drawn,
+                          const Viewport& vp);
     void finishField(bool superseded);
 
     SharedState& shared_;
@@ -107,6 +120,11 @@ private:
     std::vector<FieldStats> unpublished_;
     mutable std::mutex metricsMutex_;
     EngineMetrics metrics_;
+
+    std::array<LevelDraw, 3> draws_{}; // base, LR, HR (render thread only)
+    // IRIS_DRAW_COVERED=1: draw coarse tiles even where resident finer tiles cover them (the
+    // engine before culling; for A/B measurements and the culling test).
+    bool drawCovered_ = false;
 
     std::array<FrameSlot, kFramesInFlight> frames_{};
     uint64_t serial_ = 0;

@@ -189,4 +189,15 @@ private:
 // Converts OpenSlide's premultiplied ARGB (native-endian uint32) to straight-alpha RGBA.
 void argbPremultipliedToRgba(const uint32_t* src, uint8_t* dst, std::size_t n);
 
+// The level-0 pixel (x, y) of a "synthetic:" slide, written independently of the engine's
+// SyntheticSource::pixel (engine/src/slide/synthetic_source.cpp) so that tests can compute any
+// expected pixel: a colour ramp, a 256-px checker and a fine diagonal pattern, opaque.
+inline void syntheticPixel(int64_t x, int64_t y, uint8_t* p) {
+    const bool checker = ((x >> 8) + (y >> 8)) & 1;
+    p[0] = uint8_t((x * 255) / 4096 % 256);
+    p[1] = uint8_t((y * 255) / 4096 % 256);
+    p[2] = uint8_t(checker ? 200 : 60) ^ uint8_t(((x + y) & 7) << 2);
+    p[3] = 255;
+}
+
 } // namespace iristest

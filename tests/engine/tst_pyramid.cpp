@@ -33,15 +33,6 @@ using namespace std::chrono_literals;
 
 namespace {
 
-// The synthetic slide's level-0 pixel (engine/src/slide/synthetic_source.cpp).
-void syntheticPixel(int64_t x, int64_t y, uint8_t* p) {
-    const bool checker = ((x >> 8) + (y >> 8)) & 1;
-    p[0] = uint8_t((x * 255) / 4096 % 256);
-    p[1] = uint8_t((y * 255) / 4096 % 256);
-    p[2] = uint8_t(checker ? 200 : 60) ^ uint8_t(((x + y) & 7) << 2);
-    p[3] = 255;
-}
-
 // Pixel (i, j) of the level that averages 2^k × 2^k blocks of a W × H level 0: the rounded
 // mean of the block's pixels inside the slide.
 void blockAverage(int64_t i, int64_t j, int k, int64_t w, int64_t h, uint8_t* out) {

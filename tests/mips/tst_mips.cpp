@@ -32,15 +32,6 @@ constexpr uint32_t kFrame = 256;
 constexpr int kTile = 256;
 using Tile = std::vector<uint8_t>; // 256×256 RGBA8
 
-// The synthetic slide's level-0 pixel (engine/src/slide/synthetic_source.cpp).
-void syntheticPixel(int64_t x, int64_t y, uint8_t* p) {
-    const bool checker = ((x >> 8) + (y >> 8)) & 1;
-    p[0] = uint8_t((x * 255) / 4096 % 256);
-    p[1] = uint8_t((y * 255) / 4096 % 256);
-    p[2] = uint8_t(checker ? 200 : 60) ^ uint8_t(((x + y) & 7) << 2);
-    p[3] = 255;
-}
-
 Tile syntheticTile(int tx, int ty) {
     Tile t(size_t(kTile) * kTile * 4);
     for (int y = 0; y < kTile; ++y)

@@ -41,6 +41,8 @@ check_quartiles(hr_tpt_us 1 10000000)
 check_quartiles(buffer_rate_gbps 0.00001 1000)
 check_quartiles(frame_ms 0.01 60000)
 check_quartiles(fps 0.01 100000)
+# GPU time of frames redrawing a loaded field (timestamp queries; lavapipe has them).
+check_quartiles(settled_frame_gpu_ms 0.0001 60000)
 string(JSON b GET "${j}" baselines)
 foreach(key openslide_fov_ms openslide_mt_fov_ms decode_floor_fov_ms)
   string(JSON med ERROR_VARIABLE err GET "${b}" ${key} median)

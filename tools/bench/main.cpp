@@ -1,6 +1,7 @@
 // iris-bench: drives the headless engine through moves to entirely new fields of view and
 // reports the paper's measures (TeFOV for the LR and HR layers, time per tile, buffer rate,
-// frame time) beside baselines measured in the same run on the same fields.
+// frame time) beside baselines measured in the same run on the same fields, and the GPU time
+// of settled frames (the last field of each magnification redrawn with nothing to load).
 //
 //   iris-bench SLIDE [--size WxH] [--moves N] [--magnifications LIST] [--source auto|openslide|iris]
 //              [--baseline SLIDE] [--json FILE] [--plots DIR] [--seed N] [--validation]
@@ -61,6 +62,7 @@ struct SizeResult {
     std::string device;
     std::string mipSchedule;
     std::vector<double> lrTefov, hrTefov, lrTpt, hrTpt, rate, frameMs;
+    std::vector<double> settledGpuMs; // GPU time of frames redrawing a loaded field (nothing to upload)
     std::vector<std::string> condition; // per field: magnification label
     std::vector<double> condHr, condTpt;
     BaselineResult osr, osrMt, floor;
@@ -105,10 +107,16 @@ SizeResult runSize(const Options& o, uint32_t W, uint32_t H) {
     const iris::SlideInfo info = *e.slideInfo();
     std::mutex traceMutex;
     const auto start = Clock::now();
+    // While > 0: frames of a settled field are being drawn; the first ones still report the GPU
+    // time of frames recorded before (timestamps are read back a frame slot later).
+    int settledSkip = -1;
     e.setFrameCallback([&](const iris::FrameStats& s) {
         std::lock_guard lock(traceMutex);
-        res.trace.push_back({std::chrono::duration<double, std::milli>(Clock::now() - start).count(), s.intervalMs, s.gpuMs,
-                             s.bufferRateGBps});
+        if (settledSkip < 0) { // the walk's frames; the settled ones are paced by this tool
+            res.trace.push_back({std::chrono::duration<double, std::milli>(Clock::now() - start).count(), s.intervalMs,
+                                 s.gpuMs, s.bufferRateGBps});
+        } else if (settledSkip > 0) --settledSkip;
+        else if (settledSkip == 0 && s.complete && s.gpuMs >= 0) res.settledGpuMs.push_back(s.gpuMs);
     });
     // Magnification → downsample: from the objective power, else from mpp (10 µm/px ≈ 1×),
     // else the list is read as downsamples.
@@ -183,6 +191,19 @@ SizeResult runSize(const Options& o, uint32_t W, uint32_t H) {
             if (progressTty())
                 std::fprintf(stderr, "\riris-bench: %ux%u %s: move %zu/%zu   ", W, H, label.c_str(), k, walk.size() - 1);
         }
+        // Settled frames: the walk's last field once its uploads (perimeter included) are
+        // done, redrawn by quarter-pixel pans that load nothing: the drawing's own GPU cost.
+        std::this_thread::sleep_for(std::chrono::milliseconds(300));
+        {
+            std::lock_guard lock(traceMutex);
+            settledSkip = 3;
+        }
+        for (int i = 0; i < 24; ++i) {
+            e.translate(i % 2 ? -0.25 : 0.25, 0);
+            (void)e.waitForFrame(std::chrono::seconds(5));
+        }
+        std::lock_guard lock(traceMutex);
+        settledSkip = -1;
     }
     if (progressTty()) std::fprintf(stderr, "\n");
     e.setFrameCallback({});
@@ -221,6 +242,7 @@ std::string resultJson(const Options& o, const SizeResult& r) {
       << ",\n  \"hr_tefov_ms\": " << jquart(hr) << ",\n  \"lr_tpt_us\": " << jquart(quartiles(r.lrTpt))
       << ",\n  \"hr_tpt_us\": " << jquart(quartiles(r.hrTpt)) << ",\n  \"buffer_rate_gbps\": " << jquart(quartiles(r.rate))
       << ",\n  \"frame_ms\": " << jquart(fm) << ",\n  \"fps\": " << jquart(quartiles(fps))
+      << ",\n  \"settled_frame_gpu_ms\": " << jquart(quartiles(r.settledGpuMs))
       << ",\n  \"baselines\": {\n    \"openslide_fov_ms\": " << jquart(osr)
       << ",\n    \"openslide_mt_fov_ms\": " << jquart(quartiles(r.osrMt.ms))
       << ",\n    \"decode_floor_fov_ms\": " << jquart(flo) << ",\n    \"notes\": "
@@ -247,6 +269,7 @@ void printTable(const SizeResult& r) {
     row("HR time per tile", r.hrTpt, "us");
     row("buffer rate", r.rate, "GB/s");
     row("frame interval", r.frameMs, "ms");
+    row("settled frame GPU time", r.settledGpuMs, "ms");
     row("baseline: OpenSlide 1 thread", r.osr.ms, "ms");
     row("baseline: OpenSlide all cores", r.osrMt.ms, "ms");
     row("baseline: decode floor", r.floor.ms, "ms");

@@ -12,7 +12,7 @@
 // stored pixels under each of its pixels, read through the wrapped source's readTile: it is
 // computed from the stored level directly (never from another synthetic level), so no
 // rounding accumulates. Its cost is reading 4^k stored tiles; the buffer region asks for a
-// synthetic base after the stored levels' visible tiles (view_model.cpp). Premultiplied
+// synthetic base after the stored levels' visible and perimeter tiles (view_model.cpp). Premultiplied
 // RGBA averages componentwise.
 //
 // Threading: as SlideSource — readTile may run on every loader at once (the per-thread

@@ -84,10 +84,11 @@ std::vector<TileRef> bufferRegion(const SlideInfo& info, uint32_t gen, const Vie
         }
     };
     // A stored base costs one tile read per tile and comes first: the screen is never empty.
-    // A synthetic base (pyramid_source.h) costs 4^k stored tiles per tile; while the view
-    // draws stored levels, their visible tiles come first and the base right after them.
-    const bool baseAfterVisible = base.synthetic && !info.levels[size_t(c.hr)].synthetic;
-    if (!baseAfterVisible) appendBase();
+    // A synthetic base (pyramid_source.h) costs 4^k stored tiles per tile — minutes for a very
+    // large slide without reduced levels — so while the view draws stored levels, their
+    // visible and perimeter tiles come first and the base fills in behind them.
+    const bool baseLast = base.synthetic && !info.levels[size_t(c.hr)].synthetic;
+    if (!baseLast) appendBase();
     const TileRange hrVis = visibleTiles(info.levels[size_t(c.hr)], vp, 0);
     TileRange lrVis;
     if (c.lr >= 0) {
@@ -95,7 +96,6 @@ std::vector<TileRef> bufferRegion(const SlideInfo& info, uint32_t gen, const Vie
         appendRange(out, seen, info.levels[size_t(c.lr)], c.lr, gen, lrVis, nullptr, vp, TileRole::LRVisible);
     }
     appendRange(out, seen, info.levels[size_t(c.hr)], c.hr, gen, hrVis, nullptr, vp, TileRole::HRVisible);
-    if (baseAfterVisible) appendBase();
     if (perimeter > 0) {
         if (c.lr >= 0) {
             appendRange(out, seen, info.levels[size_t(c.lr)], c.lr, gen,
@@ -104,6 +104,7 @@ std::vector<TileRef> bufferRegion(const SlideInfo& info, uint32_t gen, const Vie
         appendRange(out, seen, info.levels[size_t(c.hr)], c.hr, gen,
                     visibleTiles(info.levels[size_t(c.hr)], vp, perimeter), &hrVis, vp, TileRole::HRPerimeter);
     }
+    if (baseLast) appendBase();
     return out;
 }
 

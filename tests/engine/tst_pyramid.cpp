@@ -17,7 +17,9 @@
 //   * a zoomed-out view is drawn from the synthetic levels, so it completes without reading
 //     every level-0 tile into the atlas;
 //   * a synthetic tile that takes long (thousands of stored tiles) stops when the engine lets
-//     go of its slide: the next slide draws, and the engine is destroyed, without waiting.
+//     go of its slide: the next slide draws, and the engine is destroyed, without waiting;
+//   * and while such tiles are computed one loader stays free, so a move to a view drawn from
+//     stored tiles does not wait for them.
 //
 // The slides are "synthetic:WxH:1" (engine/src/slide/synthetic_source.h): procedural pixels,
 // one stored level.
@@ -303,6 +305,27 @@ private slots:
         const auto errors = e.log->takeErrors();
         for (const auto& line : errors) qWarning("engine logged an error: %s", line.c_str());
         QVERIFY2(errors.empty(), "an abandoned read is not an error");
+    }
+
+    // While loaders compute synthetic tiles, one of them stays free: a move to a view drawn from
+    // stored tiles is drawn at once, not after the synthetic tiles in progress (here 65536
+    // stored reads each, tens of seconds).
+    void aMoveDoesNotWaitForSyntheticTiles() {
+        TestEngine e = createTestEngine(); // two loaders
+        QVERIFY2(e, describe(e.error).c_str());
+        QVERIFY(e->bindOffscreen(256, 256).ok());
+        QVERIFY(e->open("synthetic:1000000x1000000:1").ok()); // fitted: drawn from the 2^8 level
+        std::this_thread::sleep_for(500ms);
+        std::string why;
+        const auto t0 = std::chrono::steady_clock::now();
+        auto f = renderView(*e.engine, iris::View{500000.5, 500000.5, 1.0}, 256, 256, 10s, &why);
+        QVERIFY2(f, why.c_str());
+        qInfo("1:1 view drawn %.2f s after the move",
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+        e.engine.reset(); // abandons the synthetic read still going
+        const auto errors = e.log->takeErrors();
+        for (const auto& line : errors) qWarning("engine logged an error: %s", line.c_str());
+        QVERIFY(errors.empty());
     }
 
 private:

@@ -18,6 +18,7 @@ void fillFailedTilePlaceholder(uint8_t* rgba) {
 LoaderPool::LoaderPool(SharedState& shared, TileCache& cache, const Log& log, unsigned threads, int perimeter)
     : shared_(shared), cache_(cache), log_(log), perimeter_(perimeter) {
     if (threads == 0) threads = std::max(1u, std::thread::hardware_concurrency());
+    syntheticCap_ = std::max(1u, threads - 1);
     for (unsigned i = 0; i < threads; ++i) threads_.emplace_back([this] { run(); });
 }
 
@@ -79,21 +80,34 @@ bool LoaderPool::loadOne() {
     for (;;) {
         const size_t i = plan->next.fetch_add(1, std::memory_order_relaxed);
         if (i >= plan->tiles.size()) break;
-        if (!cache_.tryClaim(plan->tiles[i].key)) continue;
-        decode(snap, plan->tiles[i]);
-        return true;
+        if (tryLoad(snap, *plan, plan->tiles[i])) return true;
     }
     // Every tile of the plan has been tried. One the cache gave back since (evicted before it
-    // was uploaded, dropped) is claimable again: scan the region in priority order for it.
+    // was uploaded, dropped), or a synthetic tile left for later, is claimable again: scan the
+    // region in priority order for it.
     const uint64_t epoch = cache_.releaseEpoch();
     if (plan->scannedEpoch.exchange(epoch, std::memory_order_acq_rel) == epoch) return false;
     for (const TileRef& t : plan->tiles) {
-        if (!cache_.tryClaim(t.key)) continue;
-        decode(snap, t);
-        plan->scannedEpoch.store(0, std::memory_order_relaxed); // look again after this one
+        if (!tryLoad(snap, *plan, t)) continue;
+        plan->scannedEpoch.store(Plan::kScanAgain, std::memory_order_relaxed); // look again after this one
         return true;
     }
     return false;
+}
+
+bool LoaderPool::tryLoad(const Snapshot& snap, Plan& plan, const TileRef& t) {
+    const bool synthetic = snap.slide->info.levels[size_t(t.level)].synthetic;
+    if (synthetic && syntheticBusy_.fetch_add(1, std::memory_order_relaxed) >= syntheticCap_) {
+        syntheticBusy_.fetch_sub(1, std::memory_order_relaxed);
+        // Left for later: the loader that finishes its synthetic tile bumps `wake`, and the
+        // next loader past the cursor's end scans the plan again for this one.
+        plan.scannedEpoch.store(Plan::kScanAgain, std::memory_order_relaxed);
+        return false;
+    }
+    const bool claimed = cache_.tryClaim(t.key);
+    if (claimed) decode(snap, t);
+    if (synthetic) syntheticBusy_.fetch_sub(1, std::memory_order_relaxed);
+    return claimed;
 }
 
 } // namespace iris

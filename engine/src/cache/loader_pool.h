@@ -33,18 +33,30 @@ private:
         uint64_t viewSerial = 0;
         std::vector<TileRef> tiles;       // the buffer region, in priority order
         std::atomic<size_t> next{0};      // the first tile no loader has tried yet
+        // The cache's release epoch the last scan of this plan saw; kScanAgain forces the next
+        // loader past the cursor's end to scan (no epoch ever has that value, 0 included).
         std::atomic<uint64_t> scannedEpoch{0};
+        static constexpr uint64_t kScanAgain = ~uint64_t(0);
     };
     void run();
     bool loadOne();
     std::shared_ptr<Plan> planFor(const Snapshot& snap);
     void decode(const Snapshot& snap, const TileRef& t);
+    // Claims tile t for this loader and decodes it; false when someone else has it, or when it
+    // is a synthetic level's tile and syntheticCap_ loaders are already on one (it is then
+    // left for later: plan.scannedEpoch is reset so that a loader scans for it again).
+    bool tryLoad(const Snapshot& snap, Plan& plan, const TileRef& t);
 
     SharedState& shared_;
     TileCache& cache_;
     const Log& log_;
     const int perimeter_;
     std::vector<std::thread> threads_;
+    // A synthetic level's tile reads 4^k stored tiles (seconds on a large slide without reduced
+    // levels). At most syntheticCap_ loaders (all but one, when there are several) work on such
+    // tiles at once, so one is always free to take a new view's tiles at once.
+    unsigned syntheticCap_ = 1;
+    std::atomic<unsigned> syntheticBusy_{0};
     std::mutex planMutex_;         // guards plan_ (held to copy or replace a pointer)
     std::shared_ptr<Plan> plan_;
 };

@@ -170,15 +170,8 @@ void TstDesignerPlugin::uicFormBuildsAndShowsASlide()
     // leaves a band of it above or beside the slide. The complete frame was submitted; its
     // presentation reaches the X server a moment later, so the grab is retried until then.
     QColor corner;
-    const auto cornerIsBackground = [&] {
-        const QImage presented = grabPresented(view);
-        if (presented.size() != view->targetSize())
-            return false;
-        corner = presented.pixelColor(1, 1);
-        return std::abs(corner.red() - 32) <= 2 && std::abs(corner.green() - 48) <= 2
-            && std::abs(corner.blue() - 64) <= 2;
-    };
-    QTRY_VERIFY2_WITH_TIMEOUT(cornerIsBackground(), qPrintable(corner.name()), 5000);
+    QTRY_VERIFY2_WITH_TIMEOUT(presentedPixelIs(view, QPoint(1, 1), QColor(32, 48, 64), 2, &corner),
+                              qPrintable(corner.name()), 5000);
     QCOMPARE(view->validationMessageCount(), quint64(0));
 }
 

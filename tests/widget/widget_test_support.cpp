@@ -94,6 +94,17 @@ QImage grabPresented(IrisSlideView *view)
     return pixmap.toImage().convertToFormat(QImage::Format_RGBA8888);
 }
 
+bool presentedPixelIs(IrisSlideView *view, QPoint at, const QColor &expected, int tolerance, QColor *seen)
+{
+    const QImage presented = grabPresented(view);
+    *seen = QColor();
+    if (presented.size() != view->targetSize() || !presented.rect().contains(at))
+        return false;
+    *seen = presented.pixelColor(at);
+    return std::abs(seen->red() - expected.red()) <= tolerance && std::abs(seen->green() - expected.green()) <= tolerance
+        && std::abs(seen->blue() - expected.blue()) <= tolerance;
+}
+
 QImage renderHeadless(const QString &path, QSize targetSize, QPointF centre, double downsample,
                       const QColor &background, QString *error, const IrisSlideView *overlaysOf)
 {

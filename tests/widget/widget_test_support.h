@@ -53,6 +53,10 @@ private:
 
 // The view's presented pixels in device pixels (RGBA8888), read back from the X server.
 QImage grabPresented(IrisSlideView *view);
+// Whether the presented pixel at `at` (device pixels) is `expected` within ±tolerance per
+// channel; *seen gets the colour found (invalid when the grab failed or had the wrong size).
+// A frame reaches the X server a moment after it was submitted: call it in QTRY_VERIFY.
+bool presentedPixelIs(IrisSlideView *view, QPoint at, const QColor &expected, int tolerance, QColor *seen);
 
 // Renders path headless at the given view into a targetSize offscreen target and returns it
 // (RGBA8888); on failure returns a null image and sets *error. With overlaysOf, the engine

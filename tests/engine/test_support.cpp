@@ -361,6 +361,58 @@ uint64_t countNotOpaque(const iris::Image& img) {
 
 // ---- OpenSlide reference --------------------------------------------------------------
 
+bool writeOneLevelTiff(const fs::path& path, uint32_t width, uint32_t height,
+                       const std::vector<std::pair<uint32_t, uint32_t>>& broken, std::string* error) {
+    const auto fail = [&](const std::string& why) {
+        if (error) *error = path.string() + ": " + why;
+        return false;
+    };
+    TIFF* tif = TIFFOpen(path.c_str(), "w8"); // BigTIFF: no 4 GiB question to ask
+    if (!tif) return fail("TIFFOpen failed");
+    constexpr uint32_t kTile = 256;
+    TIFFSetField(tif, TIFFTAG_IMAGEWIDTH, width);
+    TIFFSetField(tif, TIFFTAG_IMAGELENGTH, height);
+    TIFFSetField(tif, TIFFTAG_TILEWIDTH, kTile);
+    TIFFSetField(tif, TIFFTAG_TILELENGTH, kTile);
+    TIFFSetField(tif, TIFFTAG_BITSPERSAMPLE, 8);
+    TIFFSetField(tif, TIFFTAG_SAMPLESPERPIXEL, 3);
+    TIFFSetField(tif, TIFFTAG_PHOTOMETRIC, PHOTOMETRIC_RGB);
+    TIFFSetField(tif, TIFFTAG_PLANARCONFIG, PLANARCONFIG_CONTIG);
+    TIFFSetField(tif, TIFFTAG_COMPRESSION, COMPRESSION_ADOBE_DEFLATE);
+    std::vector<uint8_t> tile(size_t(kTile) * kTile * 3);
+    // Not a zlib stream: the header check fails (a reserved compression method).
+    const std::vector<uint8_t> garbage(1024, 0x5a);
+    for (uint32_t ty = 0; ty * kTile < height; ++ty) {
+        for (uint32_t tx = 0; tx * kTile < width; ++tx) {
+            const uint32_t index = TIFFComputeTile(tif, tx * kTile, ty * kTile, 0, 0);
+            if (std::find(broken.begin(), broken.end(), std::make_pair(tx, ty)) != broken.end()) {
+                if (TIFFWriteRawTile(tif, index, const_cast<uint8_t*>(garbage.data()), tmsize_t(garbage.size())) < 0) {
+                    TIFFClose(tif);
+                    return fail("TIFFWriteRawTile failed");
+                }
+                continue;
+            }
+            for (uint32_t y = 0; y < kTile; ++y) {
+                for (uint32_t x = 0; x < kTile; ++x) {
+                    uint8_t p[4];
+                    syntheticPixel(int64_t(tx * kTile + x), int64_t(ty * kTile + y), p);
+                    std::memcpy(&tile[(size_t(y) * kTile + x) * 3], p, 3);
+                }
+            }
+            if (TIFFWriteEncodedTile(tif, index, tile.data(), tmsize_t(tile.size())) < 0) {
+                TIFFClose(tif);
+                return fail("TIFFWriteEncodedTile failed");
+            }
+        }
+    }
+    if (!TIFFWriteDirectory(tif)) {
+        TIFFClose(tif);
+        return fail("TIFFWriteDirectory failed");
+    }
+    TIFFClose(tif);
+    return true;
+}
+
 void argbPremultipliedToRgba(const uint32_t* src, uint8_t* dst, std::size_t n) {
     for (std::size_t i = 0; i < n; ++i) {
         const uint32_t p = src[i];

@@ -186,6 +186,12 @@ private:
     fs::path path_;
 };
 
+// Writes a one-directory tiled TIFF (256×256 tiles, 8-bit RGB, deflate) of width × height
+// whose pixel (x, y) is syntheticPixel's RGB. The tiles listed in `broken` (tile column, row)
+// hold bytes that do not inflate: a slide whose reads fail on exactly those tiles.
+bool writeOneLevelTiff(const fs::path& path, uint32_t width, uint32_t height,
+                       const std::vector<std::pair<uint32_t, uint32_t>>& broken, std::string* error);
+
 // Converts OpenSlide's premultiplied ARGB (native-endian uint32) to straight-alpha RGBA.
 void argbPremultipliedToRgba(const uint32_t* src, uint8_t* dst, std::size_t n);
 

@@ -16,6 +16,8 @@
 //     close to an area average of the slide at its downsample;
 //   * a zoomed-out view is drawn from the synthetic levels, so it completes without reading
 //     every level-0 tile into the atlas;
+//   * a stored tile that fails to decode costs a synthetic tile only that tile's area (shown as
+//     the failed-tile placeholder), and the error names the synthetic tile;
 //   * a synthetic tile that takes long (thousands of stored tiles) stops when the engine lets
 //     go of its slide: the next slide draws, and the engine is destroyed, without waiting;
 //   * and while such tiles are computed one loader stays free, so a move to a view drawn from
@@ -275,6 +277,52 @@ private slots:
         qInfo("fitted: %llu tiles buffered", static_cast<unsigned long long>(buffered));
         // The 81 tiles of the 4× level; drawing from level 0 would need all 1296.
         QVERIFY2(buffered >= 81 && buffered < 300, std::to_string(buffered).c_str());
+        e_->close();
+    }
+
+    // A stored tile that cannot be decoded costs a synthetic tile only its own area: the rest
+    // of the synthetic tile is exact, the broken area shows the failed-tile placeholder (grey
+    // and red), and the error is reported with the synthetic tile it touched.
+    void brokenStoredTileCostsOnlyItsArea() {
+        // 18 × 18 stored tiles (too many to keep resident): one synthetic level at 2×, 9 × 9.
+        const fs::path path = testOutDir() / "one-level-broken-tile.tiff";
+        std::string why;
+        QVERIFY2(writeOneLevelTiff(path, 4608, 4608, {{5, 7}}, &why), why.c_str());
+        QVERIFY(e_->open(path.string()).ok());
+        QCOMPARE(e_->slideInfo()->levels.size(), size_t(2));
+        QVERIFY(e_->slideInfo()->levels[1].synthetic);
+
+        // Synthetic tile (2, 3) 1:1: level-1 pixels [512, 768) × [768, 1024). Stored tile
+        // (5, 7) is its bottom-right quarter.
+        auto f = render(viewWithOrigin(512 * 2.0, 768 * 2.0, 2.0, 256, 256), 256, 256);
+        QVERIFY(f);
+        iris::Image ref = makeImage(256, 256);
+        Mask outside(size_t(256) * 256, 1);
+        uint64_t placeholderLike = 0, brokenArea = 0;
+        for (uint32_t y = 0; y < 256; ++y) {
+            for (uint32_t x = 0; x < 256; ++x) {
+                blockAverage(512 + x, 768 + y, 1, 4608, 4608, pixel(ref, x, y));
+                if (x < 128 || y < 128) continue;
+                outside[size_t(y) * 256 + x] = 0;
+                const uint8_t* p = pixel(f->image, x, y);
+                ++brokenArea;
+                if (p[1] == p[2] && p[0] >= p[1] && p[1] >= 40) ++placeholderLike; // grey, red or a mix
+            }
+        }
+        const DiffStats d = compareImages(f->image, ref, &outside);
+        qInfo("outside the broken stored tile: %s; inside, %llu of %llu pixels are the placeholder's",
+              d.summary().c_str(), static_cast<unsigned long long>(placeholderLike),
+              static_cast<unsigned long long>(brokenArea));
+        if (d.differing != 0) qWarning("%s", saveFailureArtefacts("pyramid.broken", f->image, ref, &outside).c_str());
+        QVERIFY2(d.differing == 0, d.summary().c_str());
+        QCOMPARE(placeholderLike, brokenArea);
+
+        const auto errors = e_.log->takeErrors();
+        QVERIFY(!errors.empty());
+        bool named = false;
+        for (const auto& line : errors) named = named || line.find("level 1 tile 2,3 shows 1 of its 4 stored tiles") != std::string::npos;
+        QVERIFY2(named, errors.front().c_str());
+        QVERIFY(!e_->error().ok());
         e_->close();
     }
 

@@ -2,19 +2,6 @@
 
 namespace iris {
 
-void fillFailedTilePlaceholder(uint8_t* rgba) {
-    for (int y = 0; y < kTileSize; ++y) {
-        for (int x = 0; x < kTileSize; ++x) {
-            uint8_t* p = rgba + (size_t(y) * kTileSize + size_t(x)) * 4;
-            const bool stripe = ((x + y) / 8) % 4 == 0;
-            p[0] = stripe ? 200 : 128;
-            p[1] = stripe ? 40 : 128;
-            p[2] = stripe ? 40 : 128;
-            p[3] = 255;
-        }
-    }
-}
-
 LoaderPool::LoaderPool(SharedState& shared, TileCache& cache, const Log& log, unsigned threads, int perimeter)
     : shared_(shared), cache_(cache), log_(log), perimeter_(perimeter) {
     if (threads == 0) threads = std::max(1u, std::thread::hardware_concurrency());
@@ -67,7 +54,7 @@ void LoaderPool::decode(const Snapshot& snap, const TileRef& t) {
     } else if (failed) {
         shared_.setSlideError(snap.slide->generation, r);
         log_.error(r.message());
-        fillFailedTilePlaceholder(buf.get());
+        if (!snap.slide->source->keepsPartialTiles(t.level)) fillFailedTilePlaceholder(buf.get());
     }
     cache_.publish(t.key, std::move(buf), failed);
     shared_.bump(); // the buffer thread may now upload it

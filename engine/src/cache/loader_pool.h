@@ -61,7 +61,4 @@ private:
     std::shared_ptr<Plan> plan_;
 };
 
-// Fills a tile with the visible "could not be decoded" placeholder (grey with red diagonals).
-void fillFailedTilePlaceholder(uint8_t* rgba);
-
 } // namespace iris

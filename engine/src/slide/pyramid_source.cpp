@@ -57,13 +57,20 @@ Result PyramidSource::readTile(int level, int64_t tx, int64_t ty, uint8_t* dst) 
     sums.assign(size_t(kTileSize) * kTileSize * 4, 0);
     if (!stored) stored = std::make_unique<uint8_t[]>(kTileBytes);
 
+    Result firstError;
+    int64_t broken = 0;
     for (int64_t sty = sy0 / kTileSize; sty <= (sy1 - 1) / kTileSize; ++sty) {
         for (int64_t stx = sx0 / kTileSize; stx <= (sx1 - 1) / kTileSize; ++stx) {
             if (abandoned_.load(std::memory_order_relaxed)) {
                 return Result(Status::Cancelled, "the slide was closed while its level " + std::to_string(level) +
                                                      " tile was being computed");
             }
-            if (Result r = inner_->readTile(srcLevel, stx, sty, stored.get()); !r.ok()) return r;
+            if (Result r = inner_->readTile(srcLevel, stx, sty, stored.get()); !r.ok()) {
+                if (r.status() == Status::Cancelled) return r;
+                // A broken stored tile costs this tile only its own area, drawn as the placeholder.
+                if (broken++ == 0) firstError = std::move(r);
+                fillFailedTilePlaceholder(stored.get());
+            }
             const int tw = int(std::min<int64_t>(kTileSize, src.width - stx * kTileSize));
             const int th = int(std::min<int64_t>(kTileSize, src.height - sty * kTileSize));
             for (int y = 0; y < th; ++y) {
@@ -95,7 +102,12 @@ Result PyramidSource::readTile(int level, int64_t tx, int64_t ty, uint8_t* dst) 
         }
     }
     padTileEdges(dst, validW, validH);
-    return {};
+    if (broken == 0) return {};
+    const int64_t storedTiles = ((sx1 - 1) / kTileSize - sx0 / kTileSize + 1) * ((sy1 - 1) / kTileSize - sy0 / kTileSize + 1);
+    return Result(firstError.status(), firstError.message() + " (computed level " + std::to_string(level) + " tile " +
+                                           std::to_string(tx) + "," + std::to_string(ty) + " shows " +
+                                           std::to_string(broken) + " of its " + std::to_string(storedTiles) +
+                                           " stored tiles as unreadable)");
 }
 
 } // namespace iris

@@ -33,7 +33,10 @@ public:
     static std::unique_ptr<SlideSource> complete(std::unique_ptr<SlideSource> inner);
 
     const SlideInfo& info() const override { return info_; }
+    // A stored tile that fails to decode is counted as the failed-tile placeholder: the
+    // synthetic tile is still whole (keepsPartialTiles), and the first error is returned.
     Result readTile(int level, int64_t tx, int64_t ty, uint8_t* dst) override;
+    bool keepsPartialTiles(int level) const override { return level >= stored_ || inner_->keepsPartialTiles(level); }
     Expected<Image> readAssociatedImage(const std::string& name) override { return inner_->readAssociatedImage(name); }
     // Reads in progress stop before their next stored tile (Status::Cancelled), so that a
     // closed slide does not keep the loaders (or the engine's shutdown) for seconds.

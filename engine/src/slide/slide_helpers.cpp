@@ -19,6 +19,19 @@ void fillLevelPhysics(SlideInfo& info) {
     }
 }
 
+void fillFailedTilePlaceholder(uint8_t* rgba) {
+    for (int y = 0; y < kTileSize; ++y) {
+        for (int x = 0; x < kTileSize; ++x) {
+            uint8_t* p = rgba + (size_t(y) * kTileSize + size_t(x)) * 4;
+            const bool stripe = ((x + y) / 8) % 4 == 0;
+            p[0] = stripe ? 200 : 128;
+            p[1] = stripe ? 40 : 128;
+            p[2] = stripe ? 40 : 128;
+            p[3] = 255;
+        }
+    }
+}
+
 void padTileEdges(uint8_t* rgba, int validWidth, int validHeight) {
     if (validWidth <= 0 || validHeight <= 0) {
         std::memset(rgba, 0, kTileBytes);

@@ -25,7 +25,14 @@ public:
     // Decodes tile (tx, ty) of `level` into dst (kTileSize² RGBA8, premultiplied alpha,
     // row stride kTileSize·4). Pixels past the level's edge are filled by repeating the
     // last valid column and row, so that mip levels do not darken at slide edges.
+    // On failure dst holds nothing usable (the loader draws the failed-tile placeholder there),
+    // unless keepsPartialTiles(level) says otherwise.
     virtual Result readTile(int level, int64_t tx, int64_t ty, uint8_t* dst) = 0;
+    // True when a failed readTile of `level` (other than Status::Cancelled) still leaves the
+    // whole tile in dst, with only the parts it could not read drawn as the failed-tile
+    // placeholder: a tile computed from many stored tiles (PyramidSource) loses only the area
+    // of a broken one, not all of it. The error is still reported.
+    virtual bool keepsPartialTiles(int /*level*/) const { return false; }
     virtual Expected<Image> readAssociatedImage(const std::string& name) = 0;
     // The engine has let go of this slide (another was opened, it was closed, the engine is
     // going away). A read that takes long (a synthetic level's tile: many stored tiles) may
@@ -47,5 +54,8 @@ void fillLevelPhysics(SlideInfo& info);
 
 // Repeats the last valid column/row of a partially filled tile into its padding.
 void padTileEdges(uint8_t* rgba, int validWidth, int validHeight);
+
+// Fills a tile with the visible "could not be decoded" placeholder (grey with red diagonals).
+void fillFailedTilePlaceholder(uint8_t* rgba);
 
 } // namespace iris

@@ -1,7 +1,14 @@
 // The metric definitions on a scripted sequence: a move to an entirely new field produces
 // exactly one TeFOV sample with the right tile counts; a revisit and an overlapping move
 // produce none; frame figures are filled in.
+//
+// And frame pacing (on by default on CPU devices, forced on here): while a new field's tiles
+// arrive, a frame that only adds tiles to the view on screen comes at least 2× the previous
+// frame's GPU time after it, except the frames that show the LR and the HR layer whole.
 #include <QtTest>
+
+#include <mutex>
+#include <vector>
 
 #include "iris/engine.h"
 
@@ -9,6 +16,7 @@ class TestMetrics : public QObject {
     Q_OBJECT
 private slots:
     void scriptedMoves();
+    void pacedFrames();
 };
 
 void TestMetrics::scriptedMoves() {
@@ -71,6 +79,62 @@ void TestMetrics::scriptedMoves() {
     QVERIFY(m.tilesBuffered >= 5);
     QVERIFY(m.lastFrame.cpuMs > 0);
     QVERIFY(m.lastFrame.gpuMs >= 0); // lavapipe and NVIDIA both have timestamps
+    QCOMPARE(e.validationMessageCount(), 0u);
+}
+
+void TestMetrics::pacedFrames() {
+    // IRIS_PACE_FRAMES=0 turns pacing off: then this test must fail (it did: every field
+    // had tile-only frames closer together than that).
+    const bool forceOff = qgetenv("IRIS_PACE_FRAMES") == "0";
+    if (!forceOff) qputenv("IRIS_PACE_FRAMES", "1"); // read when the engine is created
+    iris::EngineConfig cfg;
+    cfg.validation = true;
+    cfg.loaderThreads = 2;
+    auto created = iris::Engine::create(cfg);
+    if (!forceOff) qunsetenv("IRIS_PACE_FRAMES");
+    QVERIFY2(created.ok(), created.ok() ? "" : created.error().message().c_str());
+    iris::Engine& e = **created;
+    QVERIFY(e.bindOffscreen(1024, 768).ok());
+    QVERIFY(e.open("synthetic:200000x200000").ok());
+    QVERIFY(e.waitForFrame(std::chrono::seconds(60)).ok());
+
+    std::mutex m;
+    std::vector<iris::FrameStats> frames;
+    e.setFrameCallback([&](const iris::FrameStats& f) {
+        std::lock_guard lock(m);
+        frames.push_back(f);
+    });
+    for (int i = 0; i < 4; ++i) {
+        e.setView({30000.0 + i * 40000.0, 50000.0 + i * 30000.0, 1.0}); // an entirely new field each time
+        QVERIFY(e.waitForFrame(std::chrono::seconds(60)).ok());
+        QTest::qWait(300); // the perimeter's frames
+    }
+    e.setFrameCallback({});
+
+    std::lock_guard lock(m);
+    int checked = 0, early = 0, fields = 0;
+    for (size_t i = 1; i < frames.size(); ++i) {
+        const iris::FrameStats& prev = frames[i - 1];
+        const iris::FrameStats& f = frames[i];
+        const bool sameView = f.view.centerX == prev.view.centerX && f.view.centerY == prev.view.centerY &&
+                              f.view.downsample == prev.view.downsample;
+        if (!sameView) {
+            ++fields;
+            continue;
+        }
+        if (f.complete && !prev.complete) continue; // the frame that shows HR whole
+        if (prev.gpuMs <= 0) continue;
+        ++checked;
+        if (f.intervalMs < 0.95 * 2.0 * prev.gpuMs) {
+            ++early;
+            qInfo("frame %llu: %.2f ms after the previous one, whose predecessor took %.2f ms of GPU time",
+                  static_cast<unsigned long long>(f.serial), f.intervalMs, prev.gpuMs);
+        }
+    }
+    qInfo("%zu frames, %d tile-only frames checked, %d early (at most one a field: the one showing LR whole)",
+          frames.size(), checked, early);
+    QVERIFY(checked > 0);
+    QVERIFY2(early <= fields, (std::to_string(early) + " early frames over " + std::to_string(fields) + " fields").c_str());
     QCOMPARE(e.validationMessageCount(), 0u);
 }
 

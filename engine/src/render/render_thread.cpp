@@ -79,6 +79,8 @@ RenderThread::~RenderThread() {
 
 Result RenderThread::init() {
     VkDevice dev = device_.device();
+    paceFrames_ = device_.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
+    if (const char* env = std::getenv("IRIS_PACE_FRAMES"); env && (*env == '0' || *env == '1')) paceFrames_ = *env == '1';
     if (Result r = overlays_.init(kFramesInFlight); !r.ok()) return r;
     if (Result r = vk::createTimestampPool(device_.physical(), dev, device_.queueFamily(), 2 * kFramesInFlight,
                                            timestamps_, timestampPeriodNs_);
@@ -245,12 +247,23 @@ void RenderThread::run() {
                 log_.error("swapchain: " + r.message());
             }
             renderedWake = UINT64_MAX; // a new swapchain needs a frame
+            drawnViewSerial_ = UINT64_MAX; // and is not paced
         }
         const Snapshot snap = shared_.snapshot();
         const bool canRender = (kind_ == TargetKind::Offscreen && offscreen_) ||
                                (kind_ == TargetKind::Surface && swapchain_ && swapchain_->valid());
         if (!canRender || !snap.visible || seen == renderedWake) {
             shared_.waitChange(seen);
+            continue;
+        }
+        // On a CPU device every frame rasterises on the cores the loaders decode on, and tiles
+        // arrive faster than frames finish: drawing each arrival took more of the CPU than the
+        // decoding. A frame that would only add some tiles to the view already on screen
+        // waits for its turn (a new view, target or setting is drawn at once, as is the
+        // frame that shows a layer whole). It polls: a wake-up it sleeps through is one it
+        // would have drawn anyway.
+        if (paceFrames_ && snap.viewSerial == drawnViewSerial_ && Clock::now() < paceUntil_ && !showsLayerWhole(snap)) {
+            std::this_thread::sleep_until(std::min(paceUntil_, Clock::now() + std::chrono::milliseconds(4)));
             continue;
         }
         if (Result r = renderFrame(snap); !r.ok()) {
@@ -264,7 +277,29 @@ void RenderThread::run() {
             }
         }
         renderedWake = seen;
+        drawnViewSerial_ = snap.viewSerial;
+        if (paceFrames_ && lastGpuMs_ > 0) {
+            paceUntil_ = Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                                            std::chrono::duration<double, std::milli>(kPaceFactor * lastGpuMs_));
+        }
     }
+}
+
+bool RenderThread::showsLayerWhole(const Snapshot& snap) const {
+    if (!snap.slide) return true;
+    const SlideInfo& info = snap.slide->info;
+    const LevelChoice c = chooseLevels(info, snap.viewport.view.downsample);
+    const auto whole = [&](int li) {
+        const TileRange range = visibleTiles(info.levels[size_t(li)], snap.viewport, 0);
+        for (int64_t ty = range.y0; ty <= range.y1; ++ty)
+            for (int64_t tx = range.x0; tx <= range.x1; ++tx)
+                if (atlas_.map().statusOf(TileKey::make(snap.slide->generation, li, tx, ty)) != gpu::TileMap::Status::Active)
+                    return false;
+        return true;
+    };
+    // completeViewSerial_ is written only by this thread (under mutex_, for the API's readers).
+    return (completeViewSerial_ < snap.viewSerial && whole(c.hr)) ||
+           (c.lr >= 0 && lrWholeViewSerial_ != snap.viewSerial && whole(c.lr));
 }
 
 Result RenderThread::waitSlot(FrameSlot& f) {
@@ -437,6 +472,7 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
         }
     }
     progress.hrComplete = complete;
+    if (progress.lrComplete) lrWholeViewSerial_ = snap.viewSerial;
     trackField(snap, progress);
 
     // Overlays, laid out for this target; the overview's thumbnail is the coarsest level's

@@ -96,6 +96,9 @@ private:
     static bool coveredBy(const LevelInfo& coarse, int64_t tx, int64_t ty, const LevelInfo& fine, const LevelDraw& drawn,
                           const Viewport& vp);
     void finishField(bool superseded);
+    // Frame pacing on CPU devices (see run()): whether a frame of `snap` drawn now would show
+    // the view's HR or LR layer whole for the first time. Such a frame is never delayed.
+    bool showsLayerWhole(const Snapshot& snap) const;
 
     SharedState& shared_;
     gpu::Device& device_;
@@ -125,6 +128,15 @@ private:
     // IRIS_DRAW_COVERED=1: draw coarse tiles even where resident finer tiles cover them (the
     // engine before culling; for A/B measurements and the culling test).
     bool drawCovered_ = false;
+    // Frame pacing (CPU devices, where drawing takes the cores the loaders decode on): a frame
+    // that only adds tiles to the view already drawn waits until kPaceFactor × the last
+    // frame's GPU time has passed since the previous one was submitted, unless it shows a
+    // layer whole. IRIS_PACE_FRAMES=0/1 overrides the device-type default (A/B, tests).
+    static constexpr double kPaceFactor = 2.0;
+    bool paceFrames_ = false;
+    uint64_t drawnViewSerial_ = UINT64_MAX;   // the view of the last frame drawn
+    uint64_t lrWholeViewSerial_ = UINT64_MAX; // the view whose LR layer a frame has shown whole
+    std::chrono::steady_clock::time_point paceUntil_{};
 
     std::array<FrameSlot, kFramesInFlight> frames_{};
     uint64_t serial_ = 0;

@@ -39,6 +39,12 @@ void Swapchain::destroyResources() {
     images_.clear();
 }
 
+VkExtent2D Swapchain::surfaceExtent() const {
+    VkSurfaceCapabilitiesKHR caps;
+    if (vkGetPhysicalDeviceSurfaceCapabilitiesKHR(device_.physical(), surface_, &caps) != VK_SUCCESS) return {0, 0};
+    return caps.currentExtent;
+}
+
 Result Swapchain::recreate(uint32_t width, uint32_t height) {
     VkDevice dev = device_.device();
     VkPhysicalDevice pd = device_.physical();

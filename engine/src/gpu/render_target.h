@@ -41,6 +41,9 @@ public:
     VkSwapchainKHR handle() const { return swapchain_; }
     VkFormat format() const { return format_; }
     VkExtent2D extent() const { return extent_; }
+    // The surface's current extent as the window system reports it now ({UINT32_MAX,
+    // UINT32_MAX}: the application chooses; {0, 0} on an error).
+    VkExtent2D surfaceExtent() const;
     VkImage image(uint32_t i) const { return images_[i]; }
     VkImageView view(uint32_t i) const { return views_[i]; }
     VkSemaphore renderDone(uint32_t i) const { return renderDone_[i]; }

@@ -194,6 +194,7 @@ void RenderThread::applyTargetRequest() {
         req = request_;
         request_.pending = false;
     }
+    extentPending_ = false; // a new size: its own patience
     if (!req.resizeOnly && req.kind == TargetKind::Offscreen) readback_ = req.readback;
     if (req.resizeOnly) {
         reqWidth_ = req.width;
@@ -248,12 +249,24 @@ void RenderThread::run() {
             }
             renderedWake = UINT64_MAX; // a new swapchain needs a frame
             drawnViewSerial_ = UINT64_MAX; // and is not paced
+            checkSwapchainExtent();
+        } else if (kind_ == TargetKind::Surface && extentPending_ && swapchain_) {
+            const VkExtent2D e = swapchain_->surfaceExtent();
+            if (e.width == reqWidth_ && e.height == reqHeight_) {
+                swapchainDirty_ = true; // the window has its new size now
+                continue;
+            }
+            checkSwapchainExtent();
         }
         const Snapshot snap = shared_.snapshot();
         const bool canRender = (kind_ == TargetKind::Offscreen && offscreen_) ||
                                (kind_ == TargetKind::Surface && swapchain_ && swapchain_->valid());
         if (!canRender || !snap.visible || seen == renderedWake) {
-            shared_.waitChange(seen);
+            if (extentPending_) {
+                std::this_thread::sleep_for(std::chrono::milliseconds(5)); // poll the surface's size
+            } else {
+                shared_.waitChange(seen);
+            }
             continue;
         }
         // On a CPU device every frame rasterises on the cores the loaders decode on, and tiles
@@ -283,6 +296,26 @@ void RenderThread::run() {
                                             std::chrono::duration<double, std::milli>(kPaceFactor * lastGpuMs_));
         }
     }
+}
+
+void RenderThread::checkSwapchainExtent() {
+    const bool wasPending = extentPending_;
+    extentPending_ = false;
+    if (!swapchain_ || !swapchain_->valid() || reqWidth_ == 0 || reqHeight_ == 0) return;
+    const VkExtent2D e = swapchain_->extent();
+    if (e.width == reqWidth_ && e.height == reqHeight_) return;
+    const auto now = Clock::now();
+    if (!wasPending) {
+        extentGiveUp_ = now + kExtentPatience;
+        log_.info("swapchain made at " + std::to_string(e.width) + "x" + std::to_string(e.height) + ", the host asked for " +
+                  std::to_string(reqWidth_) + "x" + std::to_string(reqHeight_) + ": waiting for the window to follow");
+    }
+    if (now < extentGiveUp_) {
+        extentPending_ = true;
+        return;
+    }
+    log_.warn("the window is " + std::to_string(e.width) + "x" + std::to_string(e.height) + " pixels, not the " +
+              std::to_string(reqWidth_) + "x" + std::to_string(reqHeight_) + " the host asked for; drawing at its size");
 }
 
 bool RenderThread::showsLayerWhole(const Snapshot& snap) const {
@@ -390,9 +423,11 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
     bool complete = false;
     FieldProgress progress;
     // A frame drawn into a target whose size is not the published one (a rebind or resize
-    // not yet applied) shows the right view at the wrong size: it is never "complete".
-    const bool sizeMatches = kind_ != TargetKind::Offscreen ||
-                             (extent.width == snap.viewport.width && extent.height == snap.viewport.height);
+    // not yet applied; a swapchain made before the window system resized the window) shows
+    // the right view at the wrong size: it is never "complete".
+    const bool sizeMatches = kind_ == TargetKind::Offscreen
+                                 ? extent.width == snap.viewport.width && extent.height == snap.viewport.height
+                                 : !extentPending_;
     if (snap.slide) {
         const SlideInfo& info = snap.slide->info;
         const LevelChoice c = chooseLevels(info, vp.view.downsample);

@@ -147,6 +147,15 @@ private:
     std::unique_ptr<gpu::Swapchain> swapchain_;
     VkSurfaceKHR surface_ = VK_NULL_HANDLE;
     bool swapchainDirty_ = false;
+    // The swapchain was made at another size than the host asked for: the window system had
+    // not applied the window's resize yet (X11 reports the window's size at that moment, and
+    // a software WSI may never say that the swapchain went stale). Until the surface reports
+    // the asked-for size (polled, then recreated) or kExtentPatience has passed, frames are
+    // drawn but none is complete.
+    static constexpr std::chrono::milliseconds kExtentPatience{2000};
+    bool extentPending_ = false;
+    std::chrono::steady_clock::time_point extentGiveUp_{};
+    void checkSwapchainExtent();
     bool readback_ = true;
     uint32_t reqWidth_ = 0, reqHeight_ = 0;
 

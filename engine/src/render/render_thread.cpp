@@ -257,6 +257,7 @@ void RenderThread::run() {
                 continue;
             }
             checkSwapchainExtent();
+            if (!extentPending_) renderedWake = UINT64_MAX; // gave up: a frame at this size is complete now
         }
         const Snapshot snap = shared_.snapshot();
         const bool canRender = (kind_ == TargetKind::Offscreen && offscreen_) ||

@@ -323,19 +323,19 @@ void RenderThread::checkSwapchainExtent() {
 
 bool RenderThread::showsLayerWhole(const Snapshot& snap) const {
     if (!snap.slide) return true;
-    const SlideInfo& info = snap.slide->info;
-    const LevelChoice c = chooseLevels(info, snap.viewport.view.downsample);
-    const auto whole = [&](int li) {
-        const TileRange range = visibleTiles(info.levels[size_t(li)], snap.viewport, 0);
-        for (int64_t ty = range.y0; ty <= range.y1; ++ty)
-            for (int64_t tx = range.x0; tx <= range.x1; ++tx)
-                if (atlas_.map().statusOf(TileKey::make(snap.slide->generation, li, tx, ty)) != gpu::TileMap::Status::Active)
-                    return false;
-        return true;
-    };
+    const LevelChoice c = chooseLevels(snap.slide->info, snap.viewport.view.downsample);
     // completeViewSerial_ is written only by this thread (under mutex_, for the API's readers).
-    return (completeViewSerial_ < snap.viewSerial && whole(c.hr)) ||
-           (c.lr >= 0 && lrWholeViewSerial_ != snap.viewSerial && whole(c.lr));
+    return (completeViewSerial_ < snap.viewSerial && allActive(*snap.slide, c.hr, snap.viewport)) ||
+           (c.lr >= 0 && lrWholeViewSerial_ != snap.viewSerial && allActive(*snap.slide, c.lr, snap.viewport));
+}
+
+bool RenderThread::allActive(const OpenSlide& slide, int level, const Viewport& vp) const {
+    const TileRange range = visibleTiles(slide.info.levels[size_t(level)], vp, 0);
+    for (int64_t ty = range.y0; ty <= range.y1; ++ty)
+        for (int64_t tx = range.x0; tx <= range.x1; ++tx)
+            if (atlas_.map().statusOf(TileKey::make(slide.generation, level, tx, ty)) != gpu::TileMap::Status::Active)
+                return false;
+    return true;
 }
 
 Result RenderThread::waitSlot(FrameSlot& f) {
@@ -442,13 +442,8 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
         progress.lrComplete = sizeMatches;
         // LR may have been dropped from the draw order (it is the base level): count it anyway.
         if (c.lr >= 0 && order[1] < 0) {
-            const LevelInfo& level = info.levels[size_t(c.lr)];
-            const TileRange range = visibleTiles(level, vp, 0);
-            progress.lrTiles = uint32_t(range.count());
-            for (int64_t ty = range.y0; ty <= range.y1; ++ty)
-                for (int64_t tx = range.x0; tx <= range.x1; ++tx)
-                    if (atlas_.map().statusOf(TileKey::make(snap.slide->generation, c.lr, tx, ty)) != gpu::TileMap::Status::Active)
-                        progress.lrComplete = false;
+            progress.lrTiles = uint32_t(visibleTiles(info.levels[size_t(c.lr)], vp, 0).count());
+            if (!allActive(*snap.slide, c.lr, vp)) progress.lrComplete = false;
         }
         // Finest first, so that a coarser tile lying wholly under finer tiles this frame has
         // pinned is left out: drawn over anyway, it would only cost fill (3× overdraw on a CPU

@@ -99,6 +99,8 @@ private:
     // Frame pacing on CPU devices (see run()): whether a frame of `snap` drawn now would show
     // the view's HR or LR layer whole for the first time. Such a frame is never delayed.
     bool showsLayerWhole(const Snapshot& snap) const;
+    // Whether every tile of `level` visible in `vp` is ACTIVE in the atlas.
+    bool allActive(const OpenSlide& slide, int level, const Viewport& vp) const;
 
     SharedState& shared_;
     gpu::Device& device_;

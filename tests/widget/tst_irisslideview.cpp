@@ -460,12 +460,19 @@ void TstIrisSlideView::fitShowsWholeSlide()
     QVERIFY(shown.width() >= size.width() - 1 || shown.height() >= size.height() - 1);
 
     // 6000 × 4000 in 480 × 360: bands above and below the slide show the background. The
-    // complete frame was submitted; its presentation reaches the X server a moment later (under
-    // ASan on two busy cores, after the first grab), so wait for it as checkPresentedMatchesHeadless does.
+    // complete frame was submitted; its presentation reaches the X server later. Usually within
+    // milliseconds, but in three CI runs (lavapipe, Xvfb, two busy cores) the window still showed
+    // the zoomed view 5-10 s after a complete frame of the fit view (not understood yet; seen once
+    // here in about 40 runs): wait up to 20 s, and say how long it took when it was not at once.
     QColor band;
     const QPoint topCentre(view->targetSize().width() / 2, 1);
+    QElapsedTimer presentWait;
+    presentWait.start();
     QTRY_VERIFY2_WITH_TIMEOUT(presentedPixelIs(view, topCentre, QColor(40, 90, 160), 2, &band), qPrintable(band.name()),
-                              5000);
+                              20000);
+    if (presentWait.elapsed() > 1000)
+        qWarning("fitShowsWholeSlide: the fit view was presented %lld ms after its complete frame",
+                 static_cast<long long>(presentWait.elapsed()));
     checkPresentedMatchesHeadless(view, m_sample, QStringLiteral("fitShowsWholeSlide"));
 }
 

@@ -2,7 +2,7 @@
 // exactly one TeFOV sample with the right tile counts; a revisit and an overlapping move
 // produce none; frame figures are filled in.
 //
-// And frame pacing (opt-in with IRIS_PACE_FRAMES=1, forced on here): while a new field's tiles
+// And frame pacing (on by default on CPU devices, forced on here): while a new field's tiles
 // arrive, a frame that only adds tiles to the view on screen comes at least 2× the previous
 // frame's GPU time after it, except the frames that show the LR and the HR layer whole.
 #include <QtTest>

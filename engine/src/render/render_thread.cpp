@@ -79,10 +79,8 @@ RenderThread::~RenderThread() {
 
 Result RenderThread::init() {
     VkDevice dev = device_.device();
-    // Opt-in for now, meant for CPU devices (docs/ARCHITECTURE.md, "Pacing on CPU devices"):
-    // with it on by default there, CI twice saw a widget's presented frame lag seconds behind
-    // a complete frame, which is not yet understood.
-    if (const char* env = std::getenv("IRIS_PACE_FRAMES"); env && std::strcmp(env, "1") == 0) paceFrames_ = true;
+    paceFrames_ = device_.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
+    if (const char* env = std::getenv("IRIS_PACE_FRAMES"); env && (*env == '0' || *env == '1')) paceFrames_ = *env == '1';
     if (Result r = overlays_.init(kFramesInFlight); !r.ok()) return r;
     if (Result r = vk::createTimestampPool(device_.physical(), dev, device_.queueFamily(), 2 * kFramesInFlight,
                                            timestamps_, timestampPeriodNs_);

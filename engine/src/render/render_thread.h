@@ -133,7 +133,7 @@ private:
     // Frame pacing (CPU devices, where drawing takes the cores the loaders decode on): a frame
     // that only adds tiles to the view already drawn waits until kPaceFactor × the last
     // frame's GPU time has passed since the previous one was submitted, unless it shows a
-    // layer whole. Opt-in (IRIS_PACE_FRAMES=1) until a CI flake seen with it is understood.
+    // layer whole. IRIS_PACE_FRAMES=0/1 overrides the device-type default (A/B, tests).
     static constexpr double kPaceFactor = 2.0;
     bool paceFrames_ = false;
     uint64_t drawnViewSerial_ = UINT64_MAX;   // the view of the last frame drawn

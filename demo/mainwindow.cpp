@@ -15,6 +15,7 @@
 #include <QtWidgets/QStatusBar>
 
 #include <iris/IrisSlideView.h>
+#include <iris/version.h>
 
 #include "associatedimagesdock.h"
 #include "exportdialog.h"
@@ -234,7 +235,7 @@ void MainWindow::createMenus()
                            tr("<h3>Iris View %1</h3><p>Whole-slide image viewer with a Vulkan engine.</p>"
                               "<p>Renderer: %2</p><p>Drag to pan, wheel or pinch to zoom, double-click to "
                               "zoom in, arrow keys to move one field, 0 to fit, 1–4 for 5×–40×.</p>")
-                               .arg(QStringLiteral(IRIS_VIEW_VERSION),
+                               .arg(QStringLiteral(IRIS_VIEW_VERSION_STRING),
                                     device.isEmpty() ? m_view->rendererError().toHtmlEscaped() : device.toHtmlEscaped()));
     });
     help->addAction(tr("About &Qt"), qApp, &QApplication::aboutQt);

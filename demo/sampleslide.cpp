@@ -7,6 +7,8 @@
 #include <QtCore/QStandardPaths>
 #include <QtCore/QTimer>
 
+#include <iris/version.h>
+
 SampleSlide::SampleSlide(QObject *parent)
     : QObject(parent)
 {
@@ -25,7 +27,7 @@ SampleSlide::~SampleSlide()
 QString SampleSlide::path()
 {
     const QString dir = QStandardPaths::writableLocation(QStandardPaths::CacheLocation);
-    return QDir(dir).filePath(QStringLiteral("sample-%1.tiff").arg(QStringLiteral(IRIS_VIEW_VERSION)));
+    return QDir(dir).filePath(QStringLiteral("sample-%1.tiff").arg(QStringLiteral(IRIS_VIEW_VERSION_STRING)));
 }
 
 QString SampleSlide::generatorProgram()

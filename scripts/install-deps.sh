@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Installs what Iris View needs to build, run and test, from Debian/Ubuntu packages.
 # Idempotent: does nothing (and needs no network) when everything is already installed.
+# `install-deps.sh --list` prints the list, one package a line, and installs nothing:
+# scripts/check-deps.sh checks that everything the build reads comes from this list.
 set -euo pipefail
 
 PACKAGES=(
@@ -11,7 +13,14 @@ PACKAGES=(
   libfreetype-dev libfontconfig-dev fonts-dejavu-core
   xvfb xauth gnuplot-nox
   clang libclang-rt-dev llvm
+  libcli11-dev nlohmann-json3-dev
+  dpkg-dev file help2man desktop-file-utils shared-mime-info
+  python3 strace
 )
+if [ "${1:-}" = "--list" ]; then
+  printf '%s\n' "${PACKAGES[@]}"
+  exit 0
+fi
 
 missing=()
 for p in "${PACKAGES[@]}"; do

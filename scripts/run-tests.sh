@@ -1,5 +1,9 @@
 #!/usr/bin/env bash
 # Installs what is missing, builds, and runs every test:
+#   0. after the debug build, the dependency check (scripts/check-deps.py): every file under /usr
+#      that configuring, building and running read must come from a package that
+#      scripts/install-deps.sh brings in, so that a machine with extra packages cannot hide a
+#      missing one; it runs again over the sanitizer, fuzz and release trees at the end;
 #   1. the debug build (dev preset): every suite, with the Vulkan validation layers on
 #      (lavapipe is the device; widget suites run under Xvfb);
 #   2. the AddressSanitizer + UBSan build (asan preset): the suites labelled "asan"
@@ -9,7 +13,9 @@
 #   4. the fuzz build (fuzz preset: clang, libFuzzer, ASan + UBSan, the .iris reader only):
 #      the seed corpus and the committed regression inputs replayed (CTest label "fuzz"),
 #      then IRIS_FUZZ_SECONDS (120) of fuzzing; any crash, leak, timeout or sanitizer report
-#      fails (see tests/fuzz/README.md).
+#      fails (see tests/fuzz/README.md);
+#   5. the Debian packages (scripts/test-deb.sh): the release build packed by cpack, installed
+#      with apt-get, its programs run, outside projects built against /usr, then purged.
 # Exits non-zero if anything fails.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -21,13 +27,15 @@ JOBS="$(nproc)"
 echo "== dev build"
 cmake --preset dev >/dev/null
 cmake --build --preset dev -j "$JOBS"
+echo "== dependency check"
+scripts/check-deps.py
 echo "== dev tests"
 xvfb-run -a -s "-screen 0 1920x1080x24" ctest --preset dev -j 1
 
 echo "== asan build"
 cmake --preset asan >/dev/null
 # Only what the "asan" suites run (and their fixtures), to keep CI short.
-cmake --build --preset asan -j "$JOBS" --target iris_no_dlclose iris-sample tst_bad_input tst_lifecycle tst_tile_map tst_storm \
+cmake --build --preset asan -j "$JOBS" --target iris_no_dlclose iris-sample tst_bad_input tst_lifecycle tst_tile_map tst_draw_list tst_config tst_storm \
   tst_iris_reader tst_irisslideview tst_quit_midzoom tst_overlay tst_pyramid
 echo "== asan tests"
 # (the sanitizer options and the LeakSanitizer suppressions come from tests/CMakeLists.txt)
@@ -61,3 +69,9 @@ if ! "$FUZZ/bin/fuzz_iris_reader" -max_total_time="$FUZZ_SECONDS" -timeout=10 -r
   exit 1
 fi
 grep -E "INITED|DONE|^Done|stat::" "$FUZZ/fuzz.log" || true
+
+echo "== Debian packages"
+scripts/test-deb.sh
+
+echo "== dependency check of the sanitizer, fuzz and release builds"
+scripts/check-deps.py --preset asan --preset tsan --preset fuzz --preset release --no-runtime

@@ -44,10 +44,10 @@ struct Engine::Impl {
         if (Result r = device.init(config); !r.ok()) return r;
         if (Result r = atlas.init(config.vramBudgetBytes); !r.ok()) return r;
         if (Result r = pipeline.init(); !r.ok()) return r;
-        if (Result r = mips.init(); !r.ok()) return r;
+        if (Result r = mips.init(config.tuning.mipSchedule); !r.ok()) return r;
         log.info(std::string("mip pass: ") + gpu::MipPipeline::scheduleName(mips.schedule()) + " schedule");
         handover = std::make_unique<Handover>(atlas.slotCount());
-        render = std::make_unique<RenderThread>(shared, device, atlas, pipeline, *handover, counters, log);
+        render = std::make_unique<RenderThread>(shared, device, atlas, pipeline, *handover, counters, log, config.tuning);
         if (Result r = render->init(); !r.ok()) return r;
         buffer = std::make_unique<BufferThread>(shared, cache, device, atlas, mips, *handover, counters, log,
                                                 int(config.perimeterTiles));
@@ -211,6 +211,9 @@ void Engine::resize(uint32_t width, uint32_t height) {
 void Engine::setVisible(bool visible) {
     impl_->shared.update([&](Snapshot& s) { s.visible = visible; });
 }
+
+// The render thread draws whenever `wake` moved since its last frame (RenderThread::run).
+void Engine::redraw() { impl_->shared.bump(); }
 
 Result Engine::open(const std::string& path) {
     // The disk work (header parse) runs without holding any engine lock.

@@ -1,6 +1,7 @@
 # Checks an iris-bench JSON file: every key issue 5 names is present, each measure has
-# p25 ≤ median ≤ p75 and plausible values, and the ratios agree with the medians.
-# Usage: cmake -DJSON=file.json -P check_bench_json.cmake
+# p25 ≤ median ≤ p75 and plausible values, and the ratios agree with the medians. With
+# OTHER_SIZES=N, "other_sizes" holds N objects with the same keys as the primary one.
+# Usage: cmake -DJSON=file.json [-DOTHER_SIZES=N] -P check_bench_json.cmake
 file(READ "${JSON}" j)
 foreach(key device size source mip_schedule)
   string(JSON v ERROR_VARIABLE err GET "${j}" ${key})
@@ -8,6 +9,37 @@ foreach(key device size source mip_schedule)
     message(FATAL_ERROR "missing or empty '${key}': ${err}")
   endif()
 endforeach()
+# The keys docs/BENCHMARKS.md documents, with their JSON types (a measure's quartiles are null
+# where the run had no sample, never NaN: CMake would not parse the file).
+function(check_keys object where)
+  foreach(key_type device:STRING size:STRING source:STRING baseline_slide:STRING lr_tefov_ms:OBJECT
+                   hr_tefov_ms:OBJECT lr_tpt_us:OBJECT hr_tpt_us:OBJECT buffer_rate_gbps:OBJECT frame_ms:OBJECT
+                   fps:OBJECT settled_frame_gpu_ms:OBJECT baselines:OBJECT ratios:OBJECT moves:NUMBER
+                   mip_schedule:STRING tuning:OBJECT timeouts:NUMBER untimed_moves:NUMBER notes:STRING)
+    string(REPLACE ":" ";" kt ${key_type})
+    list(GET kt 0 key)
+    list(GET kt 1 want)
+    string(JSON type ERROR_VARIABLE err TYPE "${object}" ${key})
+    if(err OR NOT type STREQUAL want)
+      message(FATAL_ERROR "${where}: '${key}' is ${type}, not ${want} ${err}")
+    endif()
+  endforeach()
+endfunction()
+check_keys("${j}" "the primary size")
+string(JSON others ERROR_VARIABLE err GET "${j}" other_sizes)
+if(OTHER_SIZES)
+  string(JSON n ERROR_VARIABLE err LENGTH "${j}" other_sizes)
+  if(err OR NOT n EQUAL OTHER_SIZES)
+    message(FATAL_ERROR "'other_sizes' holds ${n} objects, not ${OTHER_SIZES} ${err}")
+  endif()
+  math(EXPR last "${n} - 1")
+  foreach(i RANGE ${last})
+    string(JSON other GET "${j}" other_sizes ${i})
+    check_keys("${other}" "other_sizes[${i}]")
+  endforeach()
+elseif(NOT err)
+  message(FATAL_ERROR "unexpected 'other_sizes' for a single size")
+endif()
 function(check_quartiles path min max)
   set(allow_null OFF)
   if(ARGC GREATER 3)

@@ -14,6 +14,8 @@
 
 #include <dlfcn.h>
 
+#include <iris/environment.h>
+
 namespace iristest {
 
 // ---- locations ------------------------------------------------------------------------
@@ -153,6 +155,12 @@ void pinVulkanModules() {
 TestEngine createTestEngine(iris::EngineConfig base) {
     TestEngine t;
     t.log = std::make_shared<LogSink>();
+    auto tuning = iris::tuningFromEnvironment(base.tuning);
+    if (!tuning) {
+        t.error = tuning.error();
+        return t;
+    }
+    base.tuning = std::move(tuning.value());
     auto created = iris::Engine::create(testEngineConfig(t.log, std::move(base)));
     if (created.ok()) {
         t.engine = std::move(created.value());

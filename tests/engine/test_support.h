@@ -76,6 +76,9 @@ struct TestEngine {
 // EngineConfig{validation = true, loaderThreads = 2, background = kBackground, a log callback
 // recording Error lines} plus whatever `base` sets otherwise.
 iris::EngineConfig testEngineConfig(const std::shared_ptr<LogSink>& log, iris::EngineConfig base = {});
+// An engine of testEngineConfig(base), its tuning taken from the IRIS_* environment variables
+// over base.tuning (iris::tuningFromEnvironment: how the GPU runs switch every suite to the
+// single-queue path). A bad variable is reported as the creation error.
 TestEngine createTestEngine(iris::EngineConfig base = {});
 
 // Whether the Khronos validation layer is installed (the engine enables it when it is;

@@ -4,7 +4,7 @@
 // but the fill work:
 //
 //   * a settled frame (every tile loaded) is byte-identical to the same view rendered by an
-//     engine that draws every resident tile (IRIS_DRAW_COVERED=1), at downsamples between
+//     engine that draws every resident tile (EngineTuning::drawCovered), at downsamples between
 //     pyramid levels, at fractional centres, along the slide's edges and at the fitted view,
 //     on the sample slide (JPEG, exact 2× levels), the JPEG 2000 TCGA slide (downsample 2.0005,
 //     so the levels' extents differ by a fraction of a pixel) and a one-level slide with
@@ -53,12 +53,14 @@ class TstCulling : public QObject {
 
 private slots:
     void initTestCase() {
+        // Two engines in one process, set up differently (EngineConfig::tuning); the variable
+        // is cleared so that it cannot turn culling off in the engine under test.
         ::unsetenv("IRIS_DRAW_COVERED");
         culled_ = createTestEngine();
         QVERIFY2(culled_, describe(culled_.error).c_str());
-        ::setenv("IRIS_DRAW_COVERED", "1", 1);
-        all_ = createTestEngine();
-        ::unsetenv("IRIS_DRAW_COVERED");
+        iris::EngineConfig drawAll;
+        drawAll.tuning.drawCovered = true;
+        all_ = createTestEngine(drawAll);
         QVERIFY2(all_, describe(all_.error).c_str());
         QVERIFY(culled_->bindOffscreen(kW, kH).ok());
         QVERIFY(all_->bindOffscreen(kW, kH).ok());

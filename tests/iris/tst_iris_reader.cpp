@@ -37,6 +37,7 @@
 #include <turbojpeg.h>
 
 #include <iris/engine.h>
+#include <iris/environment.h>
 
 #include "iris_test_util.h"
 
@@ -304,6 +305,9 @@ private slots:
             std::lock_guard lock(log->mutex);
             log->errors.emplace_back(line);
         };
+        auto tuning = iris::tuningFromEnvironment();
+        QVERIFY2(tuning.ok(), describe(tuning.error()).c_str());
+        c.tuning = *tuning;
         auto e = iris::Engine::create(c);
         QVERIFY2(e.ok(), describe(e.error()).c_str());
         e_ = std::move(e.value());

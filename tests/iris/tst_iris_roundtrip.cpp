@@ -49,6 +49,7 @@
 
 #include <iris/encoder.h>
 #include <iris/engine.h>
+#include <iris/environment.h>
 
 #include "iris_test_util.h"
 
@@ -168,6 +169,12 @@ class TestIrisRoundtrip : public QObject {
         c.ramBudgetBytes = 256ull << 20;
         c.vramBudgetBytes = 256ull << 20;
         c.background = {1.0f, 1.0f, 1.0f}; // what the encoder composites transparent pixels on
+        auto tuning = iris::tuningFromEnvironment();
+        if (!tuning) {
+            qWarning("%s", describe(tuning.error()).c_str());
+            return nullptr;
+        }
+        c.tuning = *tuning;
         auto e = iris::Engine::create(c);
         if (!e) {
             qWarning("%s", describe(e.error()).c_str());

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "iris/engine.h"
+#include "iris/environment.h"
 
 class TestMetrics : public QObject {
     Q_OBJECT
@@ -25,6 +26,9 @@ void TestMetrics::scriptedMoves() {
     cfg.loaderThreads = 2;
     cfg.perimeterTiles = 0; // the buffered set is then exactly the visible tiles
     cfg.vramBudgetBytes = 64ull << 20;
+    auto tuning = iris::tuningFromEnvironment();
+    QVERIFY2(tuning.ok(), tuning.ok() ? "" : tuning.error().message().c_str());
+    cfg.tuning = *tuning;
     auto created = iris::Engine::create(cfg);
     QVERIFY2(created.ok(), created.ok() ? "" : created.error().message().c_str());
     iris::Engine& e = **created;
@@ -83,15 +87,17 @@ void TestMetrics::scriptedMoves() {
 }
 
 void TestMetrics::pacedFrames() {
-    // IRIS_PACE_FRAMES=0 turns pacing off: then this test must fail (it did: every field
-    // had tile-only frames closer together than that).
-    const bool forceOff = qgetenv("IRIS_PACE_FRAMES") == "0";
-    if (!forceOff) qputenv("IRIS_PACE_FRAMES", "1"); // read when the engine is created
+    // Pacing on whatever the device; IRIS_PACE_FRAMES=0 turns it off, and then this test must
+    // fail (it did: every field had tile-only frames closer together than that).
     iris::EngineConfig cfg;
     cfg.validation = true;
     cfg.loaderThreads = 2;
+    iris::EngineTuning paced;
+    paced.pacing = iris::EngineTuning::Pacing::On;
+    auto tuning = iris::tuningFromEnvironment(paced);
+    QVERIFY2(tuning.ok(), tuning.ok() ? "" : tuning.error().message().c_str());
+    cfg.tuning = *tuning;
     auto created = iris::Engine::create(cfg);
-    if (!forceOff) qunsetenv("IRIS_PACE_FRAMES");
     QVERIFY2(created.ok(), created.ok() ? "" : created.error().message().c_str());
     iris::Engine& e = **created;
     QVERIFY(e.bindOffscreen(1024, 768).ok());

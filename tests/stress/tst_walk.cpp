@@ -11,6 +11,7 @@
 #include <openslide.h>
 
 #include "iris/engine.h"
+#include "iris/environment.h"
 
 namespace {
 
@@ -36,6 +37,9 @@ std::unique_ptr<iris::Engine> makeEngine(uint64_t ram, uint64_t vram) {
     cfg.loaderThreads = 2;
     cfg.ramBudgetBytes = ram;
     cfg.vramBudgetBytes = vram;
+    auto tuning = iris::tuningFromEnvironment();
+    if (!tuning) qFatal("%s", tuning.error().message().c_str());
+    cfg.tuning = *tuning;
     auto e = iris::Engine::create(cfg);
     if (!e) qFatal("engine: %s", e.error().message().c_str());
     return std::move(e.value());

@@ -41,6 +41,7 @@ private:
 
 void TstDesignerPlugin::initTestCase()
 {
+    IrisSlideView::setVulkanValidation(true); // before any view exists
     const QString path = QStringLiteral(IRIS_DESIGNER_PLUGIN_PATH);
     QVERIFY2(QFileInfo::exists(path), qPrintable(path));
     m_loader.setFileName(path);

@@ -1,5 +1,5 @@
 // tst_irisslideview: IrisSlideView on a real X display (Xvfb in CI) with lavapipe and the
-// Vulkan validation layers on (IRIS_VALIDATION=1). Every test ends by checking that the
+// Vulkan validation layers on (IrisSlideView::setVulkanValidation). Every test ends by checking that the
 // layers reported nothing.
 //
 // Input is synthesised on the widget's Vulkan surface window (QTest mouse and key events go
@@ -103,6 +103,7 @@ private Q_SLOTS:
     void arrowKeysMoveOneField();
     void plusMinusAndFitKeys();
     void fitShowsWholeSlide();
+    void uncoveredPixelsArePresentedAgain();
     void magnificationPresets();
     void resizeKeepsCentreAndMagnification();
     void hiddenViewRendersNothing();
@@ -126,7 +127,10 @@ private:
 void TstIrisSlideView::initTestCase()
 {
     QCOMPARE(QGuiApplication::platformName(), QStringLiteral("xcb"));
-    QCOMPARE(qEnvironmentVariable("IRIS_VALIDATION"), QStringLiteral("1"));
+    // The widget never reads IRIS_VALIDATION (the environment does not set it for this suite):
+    // the host turns validation on, before the first view makes the shared instance.
+    QVERIFY(!IrisSlideView::vulkanValidation());
+    IrisSlideView::setVulkanValidation(true);
     m_sample = sampleSlide();
     QVERIFY2(QFileInfo::exists(m_sample), qPrintable(QStringLiteral("no sample slide at '%1' "
                                                                      "(the sample_slide fixture makes it)")
@@ -464,16 +468,94 @@ void TstIrisSlideView::fitShowsWholeSlide()
     // milliseconds, but in three CI runs (lavapipe, Xvfb, two busy cores) the window still showed
     // the zoomed view 5-10 s after a complete frame of the fit view (not understood yet; seen once
     // here in about 40 runs): wait up to 20 s, and say how long it took when it was not at once.
-    QColor band;
+    //
+    // The presented pixel is sampled every 20 ms until it has shown the band for 1 s without a
+    // break (a window that shows the band and then something else again starts over). The
+    // failure message, and the warning when it took long or flipped, is the whole timeline
+    // (ms since the complete frame: colour seen, frames delivered meanwhile), so that a
+    // recurrence says what the window showed when.
     const QPoint topCentre(view->targetSize().width() / 2, 1);
+    const QColor wanted(40, 90, 160);
     QElapsedTimer presentWait;
     presentWait.start();
-    QTRY_VERIFY2_WITH_TIMEOUT(presentedPixelIs(view, topCentre, QColor(40, 90, 160), 2, &band), qPrintable(band.name()),
-                              20000);
-    if (presentWait.elapsed() > 1000)
-        qWarning("fitShowsWholeSlide: the fit view was presented %lld ms after its complete frame",
-                 static_cast<long long>(presentWait.elapsed()));
+    QStringList timeline;
+    qint64 bandSince = -1;
+    bool flippedBack = false;
+    int framesBefore = m_w->frames->frames();
+    QString lastSeen;
+    while (presentWait.elapsed() < 20000) {
+        QColor seen;
+        const bool isBand = presentedPixelIs(view, topCentre, wanted, 2, &seen);
+        const qint64 now = presentWait.elapsed();
+        const int frames = m_w->frames->frames();
+        if (seen.name() != lastSeen || frames != framesBefore) {
+            const auto last = m_w->frames->last();
+            timeline << QStringLiteral("%1 ms: %2 (%3 new frames, last #%4 %5)")
+                            .arg(now)
+                            .arg(seen.isValid() ? seen.name() : QStringLiteral("no grab"))
+                            .arg(frames - framesBefore)
+                            .arg(last ? last->serial : 0)
+                            .arg(last && last->complete ? QStringLiteral("complete") : QStringLiteral("partial"));
+            lastSeen = seen.name();
+            framesBefore = frames;
+        }
+        if (isBand) {
+            if (bandSince < 0)
+                bandSince = now;
+            if (now - bandSince >= 1000)
+                break;
+        } else if (bandSince >= 0) {
+            flippedBack = true;
+            bandSince = -1;
+        }
+        QTest::qWait(20);
+    }
+    const QString story = timeline.join(QStringLiteral("; "));
+    QVERIFY2(bandSince >= 0 && presentWait.elapsed() - bandSince >= 1000, qPrintable(QStringLiteral("the fit view's band at (%1, %2): %3")
+                                                            .arg(topCentre.x())
+                                                            .arg(topCentre.y())
+                                                            .arg(story)));
+    if (bandSince > 1000 || flippedBack)
+        qWarning("fitShowsWholeSlide: the fit view was presented for good %lld ms after its complete frame%s: %s",
+                 static_cast<long long>(bandSince), flippedBack ? " (it showed and then lost the band)" : "",
+                 qPrintable(story));
     checkPresentedMatchesHeadless(view, m_sample, QStringLiteral("fitShowsWholeSlide"));
+}
+
+// Qt makes the surface window without a background, and an X server without a compositor
+// (Xvfb here, many remote and kiosk desktops) leaves in it whatever covered it when the cover
+// goes away: the view must present its frame again on that expose, although nothing changed.
+void TstIrisSlideView::uncoveredPixelsArePresentedAgain()
+{
+    m_w->view->setBackgroundColor(QColor(40, 90, 160));
+    showSample();
+    IrisSlideView *view = m_w->view;
+    const QColor band(40, 90, 160), cover(0, 200, 0);
+    const QPoint at(view->targetSize().width() / 2, 2); // device pixels, in the band above the slide
+    QColor seen;
+    QTRY_VERIFY2(presentedPixelIs(view, at, band, 2, &seen), qPrintable(seen.name()));
+
+    // A frameless top-level window over that spot (logical pixels on the screen).
+    QWidget coverWindow(nullptr, Qt::FramelessWindowHint | Qt::WindowStaysOnTopHint | Qt::X11BypassWindowManagerHint);
+    QPalette palette;
+    palette.setColor(QPalette::Window, cover);
+    coverWindow.setPalette(palette);
+    coverWindow.setAutoFillBackground(true);
+    const double dpr = m_w->dpr();
+    const QPoint logical(int(at.x() / dpr), 0);
+    coverWindow.setGeometry(QRect(view->surfaceWindow()->mapToGlobal(logical) - QPoint(20, 0), QSize(40, 20)));
+    coverWindow.show();
+    QVERIFY(QTest::qWaitForWindowExposed(&coverWindow));
+    // Reading the view's window back gives the screen's pixels there: the cover's colour.
+    if (!QTest::qWaitFor([&] { return presentedPixelIs(view, at, cover, 2, &seen); }, 5000))
+        QSKIP(qPrintable(QStringLiteral("the X server did not show the cover over the view (%1): it composites or "
+                                        "keeps backing store, so nothing is lost").arg(seen.name())));
+    const int framesBefore = m_w->frames->frames();
+    coverWindow.hide();
+    // Without a new present the spot keeps the cover's green for good.
+    QTRY_VERIFY2_WITH_TIMEOUT(presentedPixelIs(view, at, band, 2, &seen), qPrintable(seen.name()), 5000);
+    QVERIFY(m_w->frames->frames() > framesBefore);
+    QCOMPARE(view->validationMessageCount(), quint64(0));
 }
 
 void TstIrisSlideView::magnificationPresets()

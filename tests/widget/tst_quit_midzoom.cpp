@@ -37,6 +37,7 @@ int main(int argc, char *argv[])
         return iriswidgettest::kSkipExitCode;
     }
     const QString slide = iriswidgettest::sampleSlide();
+    IrisSlideView::setVulkanValidation(true);
     int status = 0;
     quint64 validation = 0;
     bool zooming = false;

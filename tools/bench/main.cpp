@@ -7,24 +7,29 @@
 //              [--baseline SLIDE] [--json FILE] [--plots DIR] [--seed N] [--validation]
 //
 // Without --size it runs 2774×1750 (the paper's window) and 1920×1080.
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <random>
-#include <sstream>
 #include <string>
 #include <thread>
 #include <unistd.h>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "baselines.h"
 #include "iris/engine.h"
+#include "iris/environment.h"
+#include "tool_cli.h"
 #include "stats.h"
 
 namespace {
@@ -41,16 +46,41 @@ struct Options {
     std::string json, plots;
     uint64_t seed = 1;
     bool validation = false;
+    iris::EngineTuning tuning; // from the IRIS_* environment variables
 };
 
-int usage(const char* msg) {
-    if (msg) std::fprintf(stderr, "iris-bench: %s\n", msg);
-    std::fprintf(stderr,
-                 "usage: iris-bench SLIDE [--size WxH] [--moves N] [--magnifications LIST] [--source auto|openslide|iris]\n"
-                 "                  [--baseline SLIDE] [--json FILE] [--plots DIR] [--seed N] [--validation]\n"
-                 "  --baseline: the slide the CPU baselines read (default SLIDE); for an .iris file, the\n"
-                 "              slide it was encoded from\n");
-    return 2;
+// --size: "WxH", whole numbers from 64 to 16384.
+std::optional<std::pair<uint32_t, uint32_t>> parseSize(const std::string& s) {
+    uint32_t w = 0, h = 0;
+    const char *p = s.data(), *end = s.data() + s.size();
+    auto r = std::from_chars(p, end, w);
+    if (r.ec != std::errc() || r.ptr == end || *r.ptr != 'x') return std::nullopt;
+    r = std::from_chars(r.ptr + 1, end, h);
+    if (r.ec != std::errc() || r.ptr != end || w < 64 || h < 64 || w > 16384 || h > 16384) return std::nullopt;
+    return std::pair{w, h};
+}
+
+// --magnifications: a comma-separated list of positive numbers.
+std::vector<double> parseList(const std::string& s) {
+    std::vector<double> v;
+    size_t start = 0;
+    while (true) {
+        const size_t comma = s.find(',', start);
+        const std::string item = s.substr(start, comma == std::string::npos ? std::string::npos : comma - start);
+        char* end = nullptr;
+        const double d = std::strtod(item.c_str(), &end);
+        if (end == item.c_str() || *end || !(d > 0) || !std::isfinite(d)) return {};
+        v.push_back(d);
+        if (comma == std::string::npos) return v;
+        start = comma + 1;
+    }
+}
+
+// A number as it appears in labels: six significant digits.
+std::string shortNumber(double v) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%.6g", v);
+    return b;
 }
 
 struct TracePoint {
@@ -81,6 +111,7 @@ SizeResult runSize(const Options& o, uint32_t W, uint32_t H) {
     res.h = H;
     iris::EngineConfig cfg;
     cfg.validation = o.validation;
+    cfg.tuning = o.tuning;
     cfg.perimeterTiles = 1;
     cfg.source = o.source == "openslide" ? iris::SourcePreference::OpenSlide
                  : o.source == "iris"    ? iris::SourcePreference::Iris
@@ -126,7 +157,8 @@ SizeResult runSize(const Options& o, uint32_t W, uint32_t H) {
     const iris::EngineMetrics m0 = e.metrics();
     for (double mag : o.mags) {
         const double ds = objective > 0 ? objective / mag : mag;
-        const std::string label = objective > 0 ? std::to_string(int(std::lround(mag))) + "x" : "ds " + jnum(mag);
+        const std::string label =
+            objective > 0 ? std::to_string(int(std::lround(mag))) + "x" : "ds " + shortNumber(mag);
         const double fw = W * ds, fh = H * ds;
         const int64_t cols = int64_t(double(info.width) / fw), rows = int64_t(double(info.height) / fh);
         if (cols < 1 || rows < 1) {
@@ -231,28 +263,57 @@ SizeResult runSize(const Options& o, uint32_t W, uint32_t H) {
     return res;
 }
 
-std::string resultJson(const Options& o, const SizeResult& r) {
+using Json = nlohmann::ordered_json; // keeps the keys in the order written
+
+// A measure in the JSON: six significant digits (the precision the table and the stored results
+// have), null where undefined: JSON has no NaN or infinity.
+Json jsonNumber(double v) {
+    return std::isfinite(v) ? Json(std::strtod(shortNumber(v).c_str(), nullptr)) : Json(nullptr);
+}
+
+Json jsonQuartiles(const Quartiles& q) {
+    return {{"p25", jsonNumber(q.p25)}, {"median", jsonNumber(q.median)}, {"p75", jsonNumber(q.p75)}};
+}
+
+Json resultJson(const Options& o, const SizeResult& r) {
     const Quartiles hr = quartiles(r.hrTefov), osr = quartiles(r.osr.ms), flo = quartiles(r.floor.ms);
-    const Quartiles fm = quartiles(r.frameMs);
     std::vector<double> fps;
     for (double ms : r.frameMs) fps.push_back(1000.0 / ms);
-    std::ostringstream j;
-    j << "{\n  \"device\": " << jstr(r.device) << ",\n  \"size\": " << jstr(std::to_string(r.w) + "x" + std::to_string(r.h))
-      << ",\n  \"source\": " << jstr(o.source) << ",\n  \"baseline_slide\": " << jstr(o.baseline.empty() ? o.slide : o.baseline) << ",\n  \"lr_tefov_ms\": " << jquart(quartiles(r.lrTefov))
-      << ",\n  \"hr_tefov_ms\": " << jquart(hr) << ",\n  \"lr_tpt_us\": " << jquart(quartiles(r.lrTpt))
-      << ",\n  \"hr_tpt_us\": " << jquart(quartiles(r.hrTpt)) << ",\n  \"buffer_rate_gbps\": " << jquart(quartiles(r.rate))
-      << ",\n  \"frame_ms\": " << jquart(fm) << ",\n  \"fps\": " << jquart(quartiles(fps))
-      << ",\n  \"settled_frame_gpu_ms\": " << jquart(quartiles(r.settledGpuMs))
-      << ",\n  \"baselines\": {\n    \"openslide_fov_ms\": " << jquart(osr)
-      << ",\n    \"openslide_mt_fov_ms\": " << jquart(quartiles(r.osrMt.ms))
-      << ",\n    \"decode_floor_fov_ms\": " << jquart(flo) << ",\n    \"notes\": "
-      << jstr(r.osr.note + (r.floor.note.empty() ? "" : " decode floor: " + r.floor.note)) << "\n  },\n  \"ratios\": {"
-      << "\n    \"hr_tefov_vs_openslide\": " << jnum(hr.median / osr.median)
-      << ",\n    \"hr_tefov_vs_decode_floor\": " << jnum(hr.median / flo.median) << "\n  },\n  \"moves\": " << r.movesDone
-      << ",\n  \"mip_schedule\": " << jstr(r.mipSchedule) << ",\n  \"mip_us_per_tile\": " << jnum(r.mipUsPerTile)
-      << ",\n  \"mip_share_of_hr_tpt\": " << jnum(r.mipUsPerTile / quartiles(r.hrTpt).median)
-      << ",\n  \"timeouts\": " << r.timeouts << ",\n  \"untimed_moves\": " << r.untimed << ",\n  \"notes\": " << jstr(r.notes) << "\n}";
-    return j.str();
+    Json j;
+    j["device"] = r.device;
+    j["size"] = std::to_string(r.w) + "x" + std::to_string(r.h);
+    j["source"] = o.source;
+    j["baseline_slide"] = o.baseline.empty() ? o.slide : o.baseline;
+    j["lr_tefov_ms"] = jsonQuartiles(quartiles(r.lrTefov));
+    j["hr_tefov_ms"] = jsonQuartiles(hr);
+    j["lr_tpt_us"] = jsonQuartiles(quartiles(r.lrTpt));
+    j["hr_tpt_us"] = jsonQuartiles(quartiles(r.hrTpt));
+    j["buffer_rate_gbps"] = jsonQuartiles(quartiles(r.rate));
+    j["frame_ms"] = jsonQuartiles(quartiles(r.frameMs));
+    j["fps"] = jsonQuartiles(quartiles(fps));
+    j["settled_frame_gpu_ms"] = jsonQuartiles(quartiles(r.settledGpuMs));
+    j["baselines"] = {{"openslide_fov_ms", jsonQuartiles(osr)},
+                      {"openslide_mt_fov_ms", jsonQuartiles(quartiles(r.osrMt.ms))},
+                      {"decode_floor_fov_ms", jsonQuartiles(flo)},
+                      {"notes", r.osr.note + (r.floor.note.empty() ? "" : " decode floor: " + r.floor.note)}};
+    j["ratios"] = {{"hr_tefov_vs_openslide", jsonNumber(hr.median / osr.median)},
+                   {"hr_tefov_vs_decode_floor", jsonNumber(hr.median / flo.median)}};
+    j["moves"] = r.movesDone;
+    j["mip_schedule"] = r.mipSchedule;
+    // What IRIS_* asked for (an A/B run's JSON says which side it is).
+    const auto pacing = o.tuning.pacing == iris::EngineTuning::Pacing::On    ? "on"
+                        : o.tuning.pacing == iris::EngineTuning::Pacing::Off ? "off"
+                                                                             : "auto";
+    j["tuning"] = {{"pacing", pacing},
+                   {"draw_covered", o.tuning.drawCovered},
+                   {"single_queue", o.tuning.singleQueue},
+                   {"device_filter", o.tuning.deviceName}};
+    j["mip_us_per_tile"] = jsonNumber(r.mipUsPerTile);
+    j["mip_share_of_hr_tpt"] = jsonNumber(r.mipUsPerTile / quartiles(r.hrTpt).median);
+    j["timeouts"] = r.timeouts;
+    j["untimed_moves"] = r.untimed;
+    j["notes"] = r.notes;
+    return j;
 }
 
 void printTable(const SizeResult& r) {
@@ -297,7 +358,7 @@ bool writePlots(const std::string& dir, const std::vector<SizeResult>& results, 
     for (const SizeResult& r : results) {
         for (size_t i = 0; i < r.condition.size(); ++i) {
             const std::string label = std::to_string(r.w) + "x" + std::to_string(r.h) + " " + r.condition[i];
-            fields << jstr(label) << " " << r.condHr[i] << " " << r.condTpt[i] << "\n";
+            fields << '"' << label << "\" " << r.condHr[i] << " " << r.condTpt[i] << "\n"; // a gnuplot string
         }
     }
     const SizeResult& first = results.front();
@@ -329,75 +390,80 @@ bool writePlots(const std::string& dir, const std::vector<SizeResult>& results, 
     return true;
 }
 
-std::vector<double> parseList(const char* s) {
-    std::vector<double> v;
-    std::stringstream ss(s);
-    std::string item;
-    while (std::getline(ss, item, ',')) {
-        char* end = nullptr;
-        const double d = std::strtod(item.c_str(), &end);
-        if (end == item.c_str() || *end || !(d > 0)) return {};
-        v.push_back(d);
-    }
-    return v;
-}
-
 } // namespace
 
 int main(int argc, char** argv) {
     Options o;
-    for (int i = 1; i < argc; ++i) {
-        const std::string a = argv[i];
-        auto next = [&]() -> const char* { return i + 1 < argc ? argv[++i] : nullptr; };
-        if (a == "--size") {
-            const char* v = next();
-            unsigned w = 0, h = 0;
-            if (!v || std::sscanf(v, "%ux%u", &w, &h) != 2 || w < 64 || h < 64 || w > 16384 || h > 16384)
-                return usage("--size needs WxH between 64 and 16384");
-            o.sizes.emplace_back(w, h);
-        } else if (a == "--moves") {
-            const char* v = next();
-            if (!v || (o.moves = std::atoi(v)) < 1) return usage("--moves needs a positive number");
-        } else if (a == "--magnifications") {
-            const char* v = next();
-            if (!v || (o.mags = parseList(v)).empty()) return usage("--magnifications needs a list such as 40,20,10,5");
-        } else if (a == "--baseline") {
-            const char* v = next();
-            if (!v) return usage("--baseline needs a slide file");
-            o.baseline = v;
-        } else if (a == "--source") {
-            const char* v = next();
-            if (!v || (std::strcmp(v, "auto") && std::strcmp(v, "openslide") && std::strcmp(v, "iris")))
-                return usage("--source is auto, openslide or iris");
-            o.source = v;
-        } else if (a == "--json") {
-            const char* v = next();
-            if (!v) return usage("--json needs a file");
-            o.json = v;
-        } else if (a == "--plots") {
-            const char* v = next();
-            if (!v) return usage("--plots needs a folder");
-            o.plots = v;
-        } else if (a == "--seed") {
-            const char* v = next();
-            if (!v) return usage("--seed needs a number");
-            o.seed = std::strtoull(v, nullptr, 10);
-        } else if (a == "--validation") {
-            o.validation = true;
-        } else if (a == "--help" || a == "-h") {
-            usage(nullptr);
-            return 0;
-        } else if (!a.empty() && a[0] == '-') {
-            return usage(("unknown option " + a).c_str());
-        } else if (o.slide.empty()) {
-            o.slide = a;
-        } else {
-            return usage("one slide at a time");
-        }
+    std::vector<std::string> sizes;
+    std::string mags = "40,20,10,5";
+    CLI::App app{"Benchmark the engine on a slide: the time to an entirely new field of view,\n"
+                 "beside baselines from the same run.\n"
+                 "\n"
+                 "A headless engine walks, at each magnification, a serpentine path of whole\n"
+                 "fields that never revisits one, and reports per field the time until every LR\n"
+                 "and HR tile is drawable (TeFOV), the time per tile, the buffer rate and the\n"
+                 "frame time, then the GPU time of settled frames. Over the same fields it times\n"
+                 "OpenSlide (one thread and all cores) and the JPEG decode floor. It prints a\n"
+                 "table for each window size; docs/BENCHMARKS.md describes the measures and the\n"
+                 "JSON.\n",
+                 "iris-bench"};
+    iris::tools::setUpApp(app, "iris-bench");
+    app.add_option("SLIDE", o.slide, "The slide to benchmark")->required();
+    app.add_option("--size", sizes,
+                   "Window size, whole numbers from 64 to 16384; repeat\n"
+                   "for several (2774x1750 is the paper's window)")
+        ->option_text("WxH")
+        ->allow_extra_args(false) // one size per --size: `--size 640x480 SLIDE` keeps its slide
+        ->check(CLI::Validator(
+            [](std::string& v) {
+                return parseSize(v) ? std::string() : "'" + v + "' is not WxH with whole numbers from 64 to 16384";
+            },
+            ""))
+        ->default_str("2774x1750 and 1920x1080");
+    app.add_option("--moves", o.moves, "Moves to a new field at each magnification")
+        ->option_text("N")
+        ->check(iris::tools::wholeNumber(1, std::numeric_limits<int>::max()));
+    app.add_option("--magnifications", mags,
+                   "Comma-separated magnifications (from the objective\n"
+                   "power, else from mpp; without either, read as\n"
+                   "downsamples)")
+        ->option_text("LIST")
+        ->check(CLI::Validator(
+            [](std::string& v) {
+                return parseList(v).empty() ? "'" + v + "' is not a list of positive numbers such as 40,20,10,5"
+                                            : std::string();
+            },
+            ""));
+    app.add_option("--source", o.source, "Reader of SLIDE: auto, openslide or iris")
+        ->option_text("R")
+        ->check(CLI::IsMember({"auto", "openslide", "iris"}).description(""));
+    app.add_option("--baseline", o.baseline,
+                   "The slide the CPU baselines read; for an .iris file,\n"
+                   "the slide it was encoded from")
+        ->option_text("SLIDE")
+        ->default_str("SLIDE");
+    app.add_option("--json", o.json, "Write the results as JSON to FILE")->option_text("FILE");
+    app.add_option("--plots", o.plots, "Write plot data and a gnuplot script to DIR, and run\ngnuplot")
+        ->option_text("DIR");
+    app.add_option("--seed", o.seed, "Seed of the walks' random starting fields")
+        ->option_text("N")
+        ->check(iris::tools::wholeNumber<uint64_t>(0, std::numeric_limits<uint64_t>::max()));
+    app.add_flag("--validation", o.validation, "Run with the Vulkan validation layer");
+    app.footer("Exit status: 0 done; 1 the engine, slide or an output failed; 2 bad arguments." "\n\nEnvironment (EngineTuning, see iris/environment.h):\n"
+               "  IRIS_PACE_FRAMES=0|1           frame pacing off/on (default: on for CPU devices)\n"
+               "  IRIS_DRAW_COVERED=0|1          draw tiles hidden under finer ones\n"
+               "  IRIS_MIP_SCHEDULE=wide|serial  mip compute schedule (default: by device type)\n"
+               "  IRIS_DEVICE=TEXT               use the Vulkan device whose name contains TEXT\n"
+               "  IRIS_QUEUES=single|auto        every role on the graphics queue");
+    if (const int status = iris::tools::parseArguments(app, argc, argv); status >= 0) return status;
+    if (auto tuning = iris::tuningFromEnvironment(); tuning.ok()) {
+        o.tuning = *tuning;
+    } else {
+        return iris::tools::usageError(app, tuning.error().message());
     }
-    if (o.slide.empty()) return usage("no slide given");
+    for (const std::string& s : sizes) o.sizes.push_back(*parseSize(s)); // each checked above
     if (o.sizes.empty()) o.sizes = {{2774, 1750}, {1920, 1080}};
-    if (o.mags.empty()) o.mags = {40, 20, 10, 5};
+    o.mags = parseList(mags);
 
     std::vector<SizeResult> results;
     for (auto [w, h] : o.sizes) {
@@ -409,16 +475,16 @@ int main(int argc, char** argv) {
         printTable(results.back());
     }
     if (!o.json.empty()) {
-        std::ofstream f(o.json);
-        f << resultJson(o, results[0]);
+        // The primary size's object, plus the same object for every other size.
+        Json j = resultJson(o, results[0]);
         if (results.size() > 1) {
-            // The primary size's object, plus the same object for every other size.
-            f.seekp(-2, std::ios::cur);
-            f << ",\n  \"other_sizes\": [";
-            for (size_t i = 1; i < results.size(); ++i) f << (i > 1 ? ", " : "") << resultJson(o, results[i]);
-            f << "]\n}";
+            j["other_sizes"] = Json::array();
+            for (size_t i = 1; i < results.size(); ++i) j["other_sizes"].push_back(resultJson(o, results[i]));
         }
-        f << "\n";
+        std::ofstream f(o.json);
+        // Replace, don't throw on, bytes that are not UTF-8 (a device name, a file name).
+        f << j.dump(2, ' ', false, Json::error_handler_t::replace) << "\n";
+        f.close();
         if (!f) {
             std::fprintf(stderr, "iris-bench: cannot write %s\n", o.json.c_str());
             return 1;

@@ -1,10 +1,9 @@
-// Quartiles of a sample and small JSON helpers for iris-bench.
+// Quartiles of a sample, for iris-bench.
 #pragma once
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <string>
+#include <cstddef>
 #include <vector>
 
 struct Quartiles {
@@ -23,25 +22,4 @@ inline double percentile(std::vector<double> v, double p) {
 
 inline Quartiles quartiles(const std::vector<double>& v) {
     return {percentile(v, 0.25), percentile(v, 0.5), percentile(v, 0.75), v.size()};
-}
-
-inline std::string jnum(double v) {
-    if (!std::isfinite(v)) return "null";
-    char b[64];
-    std::snprintf(b, sizeof b, "%.6g", v);
-    return b;
-}
-
-inline std::string jquart(const Quartiles& q) {
-    return "{\"p25\": " + jnum(q.p25) + ", \"median\": " + jnum(q.median) + ", \"p75\": " + jnum(q.p75) + "}";
-}
-
-inline std::string jstr(const std::string& s) {
-    std::string o = "\"";
-    for (char c : s) {
-        if (c == '"' || c == '\\') o += '\\';
-        if (c == '\n') { o += "\\n"; continue; }
-        o += c;
-    }
-    return o + "\"";
 }

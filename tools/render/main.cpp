@@ -11,87 +11,93 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <cstring>
+#include <memory>
 #include <string>
+#include <vector>
+
 
 #include "iris/engine.h"
+#include "iris/environment.h"
+#include "tool_cli.h"
 #include "png_write.h"
 
 namespace {
 
-int usage(const char* msg) {
-    if (msg) std::fprintf(stderr, "iris-render: %s\n", msg);
-    std::fprintf(stderr,
-                 "usage: iris-render SLIDE --out FILE.png [--size WxH] [--center X,Y] [--downsample D]\n"
-                 "                   [--enhance on|off] [--timeout S] [--validation] [--verbose]\n");
-    return 2;
-}
-
-bool parseNumber(const char* s, double& out) {
+bool parseNumber(const std::string& s, double& out) {
     char* end = nullptr;
-    out = std::strtod(s, &end);
-    return end != s && *end == '\0' && std::isfinite(out);
+    out = std::strtod(s.c_str(), &end);
+    return end != s.c_str() && *end == '\0' && std::isfinite(out);
 }
 
-bool parsePair(const char* s, char sep, double& a, double& b) {
-    const char* p = std::strchr(s, sep);
-    if (!p) return false;
-    const std::string first(s, p);
-    return parseNumber(first.c_str(), a) && parseNumber(p + 1, b);
+// "AxB" or "A,B": two finite numbers around the separator.
+bool parsePair(const std::string& s, char sep, double& a, double& b) {
+    const size_t p = s.find(sep);
+    return p != std::string::npos && parseNumber(s.substr(0, p), a) && parseNumber(s.substr(p + 1), b);
+}
+
+bool parseSize(const std::string& s, double& w, double& h) {
+    const auto side = [](double v) { return v >= 1 && v <= 16384 && v == std::floor(v); };
+    return parsePair(s, 'x', w, h) && side(w) && side(h);
 }
 
 } // namespace
 
 int main(int argc, char** argv) {
-    std::string slide, out;
-    double w = 1920, h = 1080, cx = 0, cy = 0, ds = 0, timeout = 60;
-    bool haveCenter = false, validation = false, verbose = false, enhance = true;
-    for (int i = 1; i < argc; ++i) {
-        const std::string a = argv[i];
-        auto next = [&]() -> const char* { return i + 1 < argc ? argv[++i] : nullptr; };
-        if (a == "--out") {
-            const char* v = next();
-            if (!v) return usage("--out needs a file");
-            out = v;
-        } else if (a == "--size") {
-            const char* v = next();
-            if (!v || !parsePair(v, 'x', w, h) || w < 1 || h < 1 || w > 16384 || h > 16384 || w != std::floor(w) ||
-                h != std::floor(h))
-                return usage("--size needs WxH, whole numbers from 1 to 16384");
-        } else if (a == "--center") {
-            const char* v = next();
-            if (!v || !parsePair(v, ',', cx, cy)) return usage("--center needs X,Y in level-0 pixels");
-            haveCenter = true;
-        } else if (a == "--downsample") {
-            const char* v = next();
-            if (!v || !parseNumber(v, ds) || ds <= 0) return usage("--downsample needs a positive number");
-        } else if (a == "--enhance") {
-            const char* v = next();
-            if (!v || (std::strcmp(v, "on") && std::strcmp(v, "off"))) return usage("--enhance needs on or off");
-            enhance = std::strcmp(v, "on") == 0;
-        } else if (a == "--timeout") {
-            const char* v = next();
-            if (!v || !parseNumber(v, timeout) || timeout <= 0) return usage("--timeout needs seconds");
-        } else if (a == "--validation") {
-            validation = true;
-        } else if (a == "--verbose" || a == "-v") {
-            verbose = true;
-        } else if (a == "--help" || a == "-h") {
-            usage(nullptr);
-            return 0;
-        } else if (!a.empty() && a[0] == '-') {
-            return usage(("unknown option " + a).c_str());
-        } else if (slide.empty()) {
-            slide = a;
-        } else {
-            return usage("only one slide can be rendered at a time");
-        }
-    }
-    if (slide.empty()) return usage("no slide given");
-    if (out.empty()) return usage("no output given (--out FILE.png)");
+    std::string slide, out, size = "1920x1080", center, enhance = "on";
+    double ds = 0, timeout = 60;
+    bool validation = false, verbose = false;
+    CLI::App app{"Render one frame of a slide headless and write it as PNG.\n"
+                 "\n"
+                 "The frame is written once every visible tile is resident. --center is in\n"
+                 "level-0 pixels and --downsample is level-0 pixels per output pixel, so the\n"
+                 "output's top-left pixel covers level-0 (X - W/2*D, Y - H/2*D). Without them the\n"
+                 "whole slide is fitted into the output.\n",
+                 "iris-render"};
+    iris::tools::setUpApp(app, "iris-render");
+    app.add_option("SLIDE", slide, "The slide: any file Iris View opens, or\nsynthetic:WIDTHxHEIGHT")->required();
+    app.add_option("--out", out, "Output PNG file")->option_text("FILE.png")->required();
+    app.add_option("--size", size, "Output size in pixels, whole numbers from 1 to 16384")
+        ->option_text("WxH")
+        ->check(iris::tools::textCheck([](const std::string& v) { double w = 0, h = 0; return parseSize(v, w, h); },
+                          "WxH with whole numbers from 1 to 16384"));
+    app.add_option("--center", center, "View centre in level-0 pixels")
+        ->option_text("X,Y")
+        ->check(iris::tools::textCheck([](const std::string& v) { double x = 0, y = 0; return parsePair(v, ',', x, y); },
+                          "X,Y in level-0 pixels"))
+        ->default_str("the slide's centre");
+    app.add_option("--downsample", ds, "Level-0 pixels per output pixel")
+        ->option_text("D")
+        ->check(iris::tools::textCheck([](const std::string& v) { double d = 0; return parseNumber(v, d) && d > 0; },
+                          "a positive number"))
+        ->default_str("the whole slide fitted");
+    app.add_option("--enhance", enhance,
+                   "Reduction-enhancement of the mip levels (a sharpened\n"
+                   "area average); off gives the exact area average")
+        ->option_text("on|off")
+        ->check(CLI::IsMember({"on", "off"}).description(""));
+    app.add_option("--timeout", timeout, "Seconds to wait for the complete frame")
+        ->option_text("S")
+        ->check(iris::tools::textCheck([](const std::string& v) { double t = 0; return parseNumber(v, t) && t > 0; },
+                          "a positive number of seconds"));
+    app.add_flag("--validation", validation, "Run with the Vulkan validation layer; fail if it\nreports anything");
+    app.add_flag("-v,--verbose", verbose, "Log every engine message and the frame's timing\nto stderr");
+    app.footer("Exit status: 0 written; 1 the device, the slide or the output failed, the frame\n"
+               "was not complete in time, or validation reported messages; 2 bad arguments." "\n\nEnvironment (EngineTuning, see iris/environment.h):\n"
+               "  IRIS_PACE_FRAMES=0|1           frame pacing off/on (default: on for CPU devices)\n"
+               "  IRIS_DRAW_COVERED=0|1          draw tiles hidden under finer ones\n"
+               "  IRIS_MIP_SCHEDULE=wide|serial  mip compute schedule (default: by device type)\n"
+               "  IRIS_DEVICE=TEXT               use the Vulkan device whose name contains TEXT\n"
+               "  IRIS_QUEUES=single|auto        every role on the graphics queue");
+    if (const int status = iris::tools::parseArguments(app, argc, argv); status >= 0) return status;
+    auto tuning = iris::tuningFromEnvironment();
+    if (!tuning) return iris::tools::usageError(app, tuning.error().message());
+    double w = 0, h = 0, cx = 0, cy = 0;
+    parseSize(size, w, h); // both checked above
+    const bool haveCenter = !center.empty() && parsePair(center, ',', cx, cy);
 
     iris::EngineConfig cfg;
     cfg.validation = validation;
+    cfg.tuning = *tuning;
     cfg.log = [verbose](iris::LogLevel lvl, std::string_view msg) {
         if (verbose || lvl >= iris::LogLevel::Warning)
             std::fprintf(stderr, "iris-render: %.*s\n", int(msg.size()), msg.data());
@@ -102,7 +108,7 @@ int main(int argc, char** argv) {
         return 1;
     }
     iris::Engine& e = **engine;
-    e.setEnhance(enhance);
+    e.setEnhance(enhance == "on");
     if (iris::Result r = e.bindOffscreen(uint32_t(w), uint32_t(h)); !r.ok()) {
         std::fprintf(stderr, "iris-render: %s\n", r.message().c_str());
         return 1;

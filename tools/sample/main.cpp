@@ -2,92 +2,63 @@
 // opens as "generic-tiff").
 //
 //   iris-sample [--out FILE] [--width W --height H] [--seed N] [--quality Q] [--threads N]
+//
+// Exit status: 0 written, 1 the slide could not be written, 2 bad arguments.
 
 #include "sample_slide.h"
+#include "tool_cli.h"
 
 #include <unistd.h>
 
 #include <charconv>
 #include <chrono>
+#include <cstdint>
 #include <cstdio>
-#include <cstring>
+#include <limits>
+#include <memory>
 #include <string>
-#include <string_view>
+#include <vector>
+
 
 namespace {
-
-constexpr const char* kUsage =
-    "usage: iris-sample [--out FILE] [--width W --height H] [--seed N] [--quality Q] [--threads N]\n"
-    "\n"
-    "Writes a procedurally generated H&E-like whole-slide image as a pyramidal tiled-JPEG\n"
-    "TIFF (0.25 um/pixel, OpenSlide vendor generic-tiff). The same options always give a\n"
-    "byte-identical file.\n"
-    "\n"
-    "  --out FILE     output path (default: iris-sample.tiff)\n"
-    "  --width W      level-0 width in pixels, 1..1000000 (default: 50000)\n"
-    "  --height H     level-0 height in pixels, 1..1000000 (default: 40000)\n"
-    "  --seed N       content seed, unsigned 64-bit (default: 1)\n"
-    "  --quality Q    JPEG quality 1..100 (default: 90)\n"
-    "  --threads N    worker threads (default: all cores)\n"
-    "  -h, --help     show this help\n";
-
-template <typename T>
-bool parseNumber(std::string_view text, T& out) {
-  if (text.empty()) return false;
-  const char* end = text.data() + text.size();
-  auto [ptr, ec] = std::from_chars(text.data(), end, out);
-  return ec == std::errc() && ptr == end;
-}
-
-int usageError(const std::string& message) {
-  std::fprintf(stderr, "iris-sample: error: %s\n(run 'iris-sample --help' for usage)\n",
-               message.c_str());
-  return 2;
-}
 
 }  // namespace
 
 int main(int argc, char** argv) {
   iris::sample::Options options;
-  for (int i = 1; i < argc; ++i) {
-    std::string_view arg = argv[i];
-    if (arg == "-h" || arg == "--help") {
-      std::fputs(kUsage, stdout);
-      return 0;
-    }
-    std::string_view name = arg, value;
-    bool haveValue = false;
-    if (const auto eq = arg.find('='); arg.starts_with("--") && eq != std::string_view::npos) {
-      name = arg.substr(0, eq);
-      value = arg.substr(eq + 1);
-      haveValue = true;
-    }
-    const bool known = name == "--out" || name == "--width" || name == "--height" ||
-                       name == "--seed" || name == "--quality" || name == "--threads";
-    if (!known) return usageError("unknown argument '" + std::string(arg) + "'");
-    if (!haveValue) {
-      if (i + 1 >= argc) return usageError("missing value for " + std::string(name));
-      value = argv[++i];
-    }
-    const std::string shown = "'" + std::string(value) + "' for " + std::string(name);
-    if (name == "--out") {
-      if (value.empty()) return usageError("empty path for --out");
-      options.outPath = std::string(value);
-    } else if (name == "--width") {
-      if (!parseNumber(value, options.width)) return usageError("invalid width " + shown);
-    } else if (name == "--height") {
-      if (!parseNumber(value, options.height)) return usageError("invalid height " + shown);
-    } else if (name == "--seed") {
-      if (!parseNumber(value, options.seed)) return usageError("invalid seed " + shown);
-    } else if (name == "--quality") {
-      if (!parseNumber(value, options.quality)) return usageError("invalid quality " + shown);
-    } else if (name == "--threads") {
-      if (!parseNumber(value, options.threads) || options.threads < 1)
-        return usageError("invalid thread count " + shown);
-    }
-  }
+  CLI::App app{"Write a synthetic H&E-like whole-slide image as a pyramidal tiled-JPEG TIFF.\n"
+               "\n"
+               "The slide is 0.25 um/pixel (a 40x scan); OpenSlide opens it as vendor\n"
+               "generic-tiff. The same options always give a byte-identical file, whatever the\n"
+               "thread count.\n",
+               "iris-sample"};
+  iris::tools::setUpApp(app, "iris-sample");
+  app.add_option("--out", options.outPath, "Output file")
+      ->option_text("FILE")
+      ->check([](const std::string& v) {
+        return v.empty() ? std::string("empty path") : std::string();
+      });
+  const auto dimension = iris::tools::wholeNumber<int64_t>(1, iris::sample::kMaxDimension);
+  app.add_option("--width", options.width, "Level-0 width in pixels, 1 to 1000000")
+      ->option_text("W")
+      ->check(dimension);
+  app.add_option("--height", options.height, "Level-0 height in pixels, 1 to 1000000")
+      ->option_text("H")
+      ->check(dimension);
+  app.add_option("--seed", options.seed, "Content seed, an unsigned 64-bit number")
+      ->option_text("N")
+      ->check(iris::tools::wholeNumber<uint64_t>(0));
+  app.add_option("--quality", options.quality, "JPEG quality, 1 to 100")
+      ->option_text("Q")
+      ->check(iris::tools::wholeNumber(1, 100));
+  app.add_option("--threads", options.threads, "Worker threads")
+      ->option_text("N")
+      ->check(iris::tools::wholeNumber(1))
+      ->default_str("all cores");
+  app.footer("Exit status: 0 written, 1 the slide could not be written, 2 bad arguments.");
+  if (const int status = iris::tools::parseArguments(app, argc, argv); status >= 0) return status;
   if (auto check = iris::sample::validateOptions(options); !check.ok)
-    return usageError(check.message);
+    return iris::tools::usageError(app, check.message);
 
   const bool tty = isatty(STDERR_FILENO) != 0;
   const auto start = std::chrono::steady_clock::now();

@@ -9,6 +9,7 @@
 #include "irisslideview_p.h"
 #include "logging_p.h"
 #include "magnification_p.h"
+#include "vulkaninstance_p.h"
 
 using namespace IrisWidget;
 
@@ -393,6 +394,16 @@ QString IrisSlideView::deviceName() const
 {
     Q_D(const IrisSlideView);
     return d->engine() ? QString::fromStdString(d->engine()->device().name) : QString();
+}
+
+void IrisSlideView::setVulkanValidation(bool on)
+{
+    IrisWidget::setValidationRequested(on);
+}
+
+bool IrisSlideView::vulkanValidation()
+{
+    return IrisWidget::validationRequested();
 }
 
 quint64 IrisSlideView::validationMessageCount() const

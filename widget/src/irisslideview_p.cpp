@@ -28,7 +28,6 @@ IrisSlideViewPrivate::IrisSlideViewPrivate(IrisSlideView *q)
     : q_ptr(q)
     , navigator(this)
 {
-    settings.validation = validationRequested();
     background = QColor::fromRgbF(0.96f, 0.96f, 0.96f); // the engine's default
     settings.background = toEngineRgb(background);
 }
@@ -72,6 +71,10 @@ void IrisSlideViewPrivate::init()
     };
     QObject::connect(window, &SurfaceWindow::exposedChanged, &host,
                      [this](bool exposed) { onExposedChanged(exposed); });
+    QObject::connect(window, &SurfaceWindow::contentsLost, &host, [this] {
+        if (host.isBound())
+            engine()->redraw();
+    });
     QObject::connect(window, &SurfaceWindow::targetSizeChanged, &host,
                      [this](QSize size) { onTargetSizeChanged(size); });
     QObject::connect(window, &SurfaceWindow::surfaceAboutToBeDestroyed, &host,
@@ -125,6 +128,9 @@ bool IrisSlideViewPrivate::ensureEngine()
     if (!vulkan)
         return false;
     QString error;
+    // The engine counts validation messages when the shared instance has the layer (it was
+    // made with it when IrisSlideView::setVulkanValidation(true) came first).
+    settings.validation = vulkan->layers().contains(QByteArrayLiteral("VK_LAYER_KHRONOS_validation"));
     if (!host.create(vulkan.get(), settings, &error)) {
         Q_Q(IrisSlideView);
         rendererError = error;

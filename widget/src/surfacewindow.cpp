@@ -1,5 +1,6 @@
 #include "surfacewindow_p.h"
 
+#include <QtGui/QExposeEvent>
 #include <QtGui/QPlatformSurfaceEvent>
 #include <QtGui/QScreen>
 
@@ -72,7 +73,7 @@ bool SurfaceWindow::event(QEvent *event)
     return QWindow::event(event);
 }
 
-void SurfaceWindow::exposeEvent(QExposeEvent *)
+void SurfaceWindow::exposeEvent(QExposeEvent *event)
 {
     // An expose may also follow a change of devicePixelRatio (Qt sends one then).
     const bool exposed = isExposed();
@@ -82,7 +83,24 @@ void SurfaceWindow::exposeEvent(QExposeEvent *)
         m_exposed = exposed;
         qCDebug(lcIrisWidget) << "surface" << (exposed ? "exposed" : "hidden") << targetSize();
         Q_EMIT exposedChanged(exposed);
+    } else if (exposed && !exposedRegion(event).isEmpty()) {
+        // Qt creates the window without a background, so an X server without a compositor
+        // leaves whatever covered the region in it; nothing else will present again while
+        // the view stands still.
+        qCDebug(lcIrisWidget) << "surface contents lost" << exposedRegion(event).boundingRect();
+        Q_EMIT contentsLost();
     }
+}
+
+QRegion SurfaceWindow::exposedRegion(const QExposeEvent *event)
+{
+    // Qt 6 deprecates QExposeEvent::region() in favour of QPaintEvent, which QWindow gets only
+    // where the platform plugin synthesises it; the expose's region is what xcb reports, and
+    // the one signal this window has that the X server dropped its pixels.
+    QT_WARNING_PUSH
+    QT_WARNING_DISABLE_DEPRECATED
+    return event->region();
+    QT_WARNING_POP
 }
 
 void SurfaceWindow::resizeEvent(QResizeEvent *)

@@ -5,6 +5,9 @@
 // thread, in this order over a lifetime:
 //   exposedChanged(true)  – the surface exists and is on screen: bind or resume;
 //   targetSizeChanged     – the size in device pixels changed (resize, screen, scale);
+//   contentsLost          – an expose while on screen: the window system dropped pixels of
+//                           the window (X11 without a compositor, when a window that covered
+//                           it goes away), so the current frame must be presented again;
 //   exposedChanged(false) – hidden or minimised: render nothing;
 //   surfaceAboutToBeDestroyed – release the swapchain now, the VkSurfaceKHR dies next.
 // Input events are handed to inputHandler, which forwards them to the widget.
@@ -13,6 +16,7 @@
 #include <functional>
 
 #include <QtCore/QSize>
+#include <QtGui/QRegion>
 #include <QtGui/QWindow>
 
 namespace IrisWidget {
@@ -32,6 +36,7 @@ public:
 Q_SIGNALS:
     void exposedChanged(bool exposed);
     void targetSizeChanged(QSize deviceSize);
+    void contentsLost();
     void surfaceAboutToBeDestroyed();
 
 protected:
@@ -41,6 +46,7 @@ protected:
 
 private:
     void checkTargetSize();
+    static QRegion exposedRegion(const QExposeEvent *event);
 
     bool m_exposed = false;
     QSize m_lastTargetSize;

@@ -1,5 +1,6 @@
 #include "vulkaninstance_p.h"
 
+#include <atomic>
 #include <mutex>
 
 #include <QtCore/QByteArrayList>
@@ -15,9 +16,18 @@ constexpr auto kValidationLayer = "VK_LAYER_KHRONOS_validation";
 constexpr auto kDebugUtils = "VK_EXT_debug_utils";
 } // namespace
 
+namespace {
+std::atomic<bool> g_validation{false};
+} // namespace
+
+void setValidationRequested(bool on)
+{
+    g_validation.store(on, std::memory_order_relaxed);
+}
+
 bool validationRequested()
 {
-    return qEnvironmentVariableIntValue("IRIS_VALIDATION") == 1;
+    return g_validation.load(std::memory_order_relaxed);
 }
 
 std::shared_ptr<QVulkanInstance> acquireVulkanInstance(QString *error)
@@ -39,7 +49,7 @@ std::shared_ptr<QVulkanInstance> acquireVulkanInstance(QString *error)
             instance->setLayers({kValidationLayer});
             qCInfo(lcIrisWidget) << "Vulkan validation layer enabled";
         } else {
-            qCWarning(lcIrisWidget) << "IRIS_VALIDATION=1 but" << kValidationLayer << "is not installed";
+            qCWarning(lcIrisWidget) << "validation requested but" << kValidationLayer << "is not installed";
         }
         if (instance->supportedExtensions().contains(kDebugUtils))
             instance->setExtensions({kDebugUtils});

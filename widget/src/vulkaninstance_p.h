@@ -11,8 +11,10 @@ QT_END_NAMESPACE
 
 namespace IrisWidget {
 
-// True when IRIS_VALIDATION=1: the instance gets the Khronos validation layer (and
-// VK_EXT_debug_utils, so that the engine can count the layer's messages).
+// IrisSlideView::setVulkanValidation: when on, an instance created afterwards gets the Khronos
+// validation layer (and VK_EXT_debug_utils, so that the engine can count the layer's
+// messages), and so do engines. Any thread.
+void setValidationRequested(bool on);
 bool validationRequested();
 
 // Returns the shared instance (Vulkan 1.3), creating it on first use. It lives as long as

@@ -10,12 +10,41 @@
 
 #include <chrono>
 #include <memory>
+#include <string>
 
 #include <vulkan/vulkan_core.h>
 
 #include "iris/types.h"
 
 namespace iris {
+
+// Switches for debugging, A/B benchmarks and device choice. The defaults are what a viewer
+// wants. The engine never reads the environment, so a host does not inherit behaviour from
+// the shell it was started in and two engines in one process can be set up differently; a
+// tool or test that wants the IRIS_* variables maps them with tuningFromEnvironment()
+// (iris/environment.h).
+struct EngineTuning {
+    enum class Pacing {
+        Auto, // On for CPU devices (lavapipe, llvmpipe), Off for GPUs
+        On,   // while tiles arrive for an unchanged view, draw at most once per 2× the last frame's GPU time
+        Off,  // draw on every arrival
+    };
+    Pacing pacing = Pacing::Auto;
+    // Draw coarser tiles also where resident finer tiles cover them completely (the frame is
+    // the same; it only costs fill). For tests and benchmarks of the culling.
+    bool drawCovered = false;
+    enum class MipSchedule {
+        Auto,   // Serial for CPU devices, Wide otherwise (and Serial where shared memory is short)
+        Wide,   // 16 workgroups per tile
+        Serial, // one workgroup per tile
+    };
+    MipSchedule mipSchedule = MipSchedule::Auto;
+    // Use only a Vulkan device whose name contains this (empty: the best one by type).
+    std::string deviceName;
+    // Every role (draw, mips, uploads) on the graphics queue even where the device has separate
+    // compute and transfer families: to run the single-queue path on any device.
+    bool singleQueue = false;
+};
 
 struct EngineConfig {
     SourcePreference source = SourcePreference::Auto;
@@ -31,6 +60,7 @@ struct EngineConfig {
     VkInstance instance = VK_NULL_HANDLE;
     // Receives log lines from any engine thread; must be thread-safe and quick.
     LogCallback log;
+    EngineTuning tuning;
 };
 
 class IRIS_API Engine {
@@ -58,6 +88,10 @@ public:
     void resize(uint32_t width, uint32_t height);
     // A hidden target renders nothing (a window that is not exposed).
     void setVisible(bool visible);
+    // Draws and presents the current view again although nothing changed: for a window
+    // system that dropped the window's pixels (an X11 expose without a compositor). The view,
+    // its serial and waitForFrame are unaffected.
+    void redraw();
 
     // --- slide ---------------------------------------------------------------------
     // Opens a slide (replacing the current one) and fits it into the target. A path of the

@@ -1,5 +1,6 @@
-// State shared by the API and the engine threads (issue-2 slice: a small mutex guards the
-// published slide and view; engine threads copy a snapshot and work on that).
+// State shared by the API and the engine threads. API calls publish a new immutable Snapshot
+// (slide, view, target size, settings) by pointer swap; engine threads load the current one
+// without a lock and work on that.
 //
 // Wake-ups: every change that another thread may care about (new view, new slide, tile
 // decoded, upload completed, target changed) bumps `wake` and notifies. Engine threads read
@@ -51,16 +52,19 @@ struct UploadCounters {
 
 class SharedState {
 public:
-    Snapshot snapshot() const {
-        std::lock_guard lock(mutex_);
-        return current_;
-    }
+    // The current snapshot, copied. Readers take no lock: the published Snapshot is never
+    // written again, and the atomic shared_ptr keeps it alive while it is copied.
+    Snapshot snapshot() const { return *current_.load(std::memory_order_acquire); }
+    // Applies f to a copy of the current snapshot and publishes the copy. Writers (API calls)
+    // are serialised by updateMutex_, so no update is lost; f runs under it (keep it short).
     template <class F>
     void update(F&& f) {
         {
-            std::lock_guard lock(mutex_);
-            f(current_);
-            ++current_.viewSerial;
+            std::lock_guard lock(updateMutex_);
+            auto next = std::make_shared<Snapshot>(*current_.load(std::memory_order_relaxed));
+            f(*next);
+            ++next->viewSerial;
+            current_.store(std::move(next), std::memory_order_release);
         }
         bump();
     }
@@ -109,8 +113,8 @@ public:
     }
 
 private:
-    mutable std::mutex mutex_;
-    Snapshot current_;
+    std::mutex updateMutex_; // API writers only; engine threads never take it
+    std::atomic<std::shared_ptr<const Snapshot>> current_{std::make_shared<const Snapshot>()};
     std::atomic<uint64_t> wake_{0};
     mutable std::mutex errorMutex_;
     Result error_;

@@ -70,6 +70,7 @@ VKAPI_ATTR VkBool32 VKAPI_CALL Device::debugCallback(VkDebugUtilsMessageSeverity
 }
 
 Result Device::init(const EngineConfig& config) {
+    tuning_ = config.tuning;
     if (Result r = createInstance(config); !r.ok()) return r;
     if (Result r = pickPhysicalDevice(); !r.ok()) return r;
     return createDevice();
@@ -152,7 +153,7 @@ Result Device::pickPhysicalDevice() {
     IRIS_VK_TRY(vkEnumeratePhysicalDevices(instance_, &n, devices.data()));
     int bestScore = -1;
     std::string rejected;
-    const char* forced = std::getenv("IRIS_DEVICE"); // substring of the device name
+    const std::string& forced = tuning_.deviceName; // a part of the device's name; empty: any
     for (VkPhysicalDevice pd : devices) {
         VkPhysicalDeviceProperties p;
         vkGetPhysicalDeviceProperties(pd, &p);
@@ -165,7 +166,10 @@ Result Device::pickPhysicalDevice() {
             rejected += std::string(" ") + p.deviceName + " (needs Vulkan 1.3 with synchronization2, dynamic rendering, timeline semaphores);";
             continue;
         }
-        if (forced && !std::strstr(p.deviceName, forced)) continue;
+        if (!forced.empty() && !std::strstr(p.deviceName, forced.c_str())) {
+            rejected += std::string(" ") + p.deviceName + " (its name does not contain '" + forced + "');";
+            continue;
+        }
         int score = 1;
         if (p.deviceType == VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU) score = 4;
         else if (p.deviceType == VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU) score = 3;
@@ -219,10 +223,9 @@ Result Device::createDevice() {
             hasSwapchain_ = true;
         }
     }
-    // One queue per distinct family among the roles; IRIS_QUEUES=single forces the
+    // One queue per distinct family among the roles; tuning.singleQueue forces the
     // single-queue path on any device (to test both paths on one machine).
-    const char* mode = std::getenv("IRIS_QUEUES");
-    const bool single = mode && std::strcmp(mode, "single") == 0;
+    const bool single = tuning_.singleQueue;
     const uint32_t roleFamily[3] = {families_.graphics, single ? families_.graphics : families_.compute,
                                     single ? families_.graphics : families_.transfer};
     std::vector<uint32_t> distinct;

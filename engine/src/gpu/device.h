@@ -38,7 +38,7 @@ public:
     const std::string& driverName() const { return driver_; }
 
     // Queues. Graphics draws and presents; compute generates mips; transfer uploads. Where
-    // the device has separate compute / transfer families (and IRIS_QUEUES is not "single"),
+    // the device has separate compute / transfer families (and EngineTuning::singleQueue is off),
     // each role has its own VkQueue of its own family; otherwise roles share the graphics
     // queue. A VkQueue must be externally synchronised: every submit/present goes through
     // submit()/present(), under that queue's mutex.
@@ -63,6 +63,7 @@ private:
     Result createDevice();
 
     const Log& log_;
+    EngineTuning tuning_; // the device choice and queue roles (EngineConfig::tuning)
     VkInstance instance_ = VK_NULL_HANDLE;
     bool ownsInstance_ = false;
     VkDebugUtilsMessengerEXT messenger_ = VK_NULL_HANDLE;

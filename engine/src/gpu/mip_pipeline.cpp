@@ -33,15 +33,15 @@ MipPipeline::~MipPipeline() {
     if (module_) vkDestroyShaderModule(dev, module_, nullptr);
 }
 
-Result MipPipeline::init() {
+Result MipPipeline::init(EngineTuning::MipSchedule requested) {
     VkDevice dev = device_.device();
     const VkPhysicalDeviceLimits& limits = device_.properties().limits;
-    schedule_ = device_.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU ? Schedule::Serial : Schedule::Wide;
-    if (const char* env = std::getenv("IRIS_MIP_SCHEDULE")) {
-        const std::string v = env;
-        if (v == "wide") schedule_ = Schedule::Wide;
-        else if (v == "serial") schedule_ = Schedule::Serial;
-        else if (!v.empty()) return Result(Status::InvalidArgument, "IRIS_MIP_SCHEDULE must be wide or serial, not '" + v + "'");
+    switch (requested) {
+    case EngineTuning::MipSchedule::Auto:
+        schedule_ = device_.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU ? Schedule::Serial : Schedule::Wide;
+        break;
+    case EngineTuning::MipSchedule::Wide: schedule_ = Schedule::Wide; break;
+    case EngineTuning::MipSchedule::Serial: schedule_ = Schedule::Serial; break;
     }
     if (schedule_ == Schedule::Wide && limits.maxComputeSharedMemorySize < kSharedBytes) {
         schedule_ = Schedule::Serial; // 13.4 KiB: within Vulkan's 16 KiB minimum

@@ -4,7 +4,7 @@
 //   wide   (shaders/mip_reduce.comp, GPUs): 16 workgroups per tile, one per 64×64 region; the
 //          last region of a tile to finish also makes levels 5–8;
 //   serial (shaders/mip_reduce_serial.comp, CPU devices): one workgroup per tile.
-// The device type picks one; IRIS_MIP_SCHEDULE=wide|serial overrides it (tests run both).
+// The device type picks one; EngineTuning::mipSchedule overrides it (tests run both).
 //
 // Owned by the engine, used only by the buffer thread (record() is not thread-safe).
 #pragma once
@@ -22,7 +22,8 @@ public:
     enum class Schedule { Wide, Serial };
     MipPipeline(Device& device, TileAtlas& atlas) : device_(device), atlas_(atlas) {}
     ~MipPipeline();
-    Result init();
+    // `requested`: EngineConfig::tuning.mipSchedule (Auto picks by device type).
+    Result init(EngineTuning::MipSchedule requested);
     Schedule schedule() const { return schedule_; }
     static const char* scheduleName(Schedule s) { return s == Schedule::Wide ? "wide" : "serial"; }
     // Records the dispatch for `count` atlas layers (count ≤ kMaxTiles); enhance selects the

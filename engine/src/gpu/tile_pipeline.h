@@ -7,15 +7,9 @@
 
 #include "gpu/device.h"
 #include "gpu/tile_atlas.h"
+#include "gpu/tile_instance.h"
 
 namespace iris::gpu {
-
-// Per-instance data; the layout matches shaders/tile.vert.
-struct TileInstance {
-    float rect[4];  // x0, y0, x1, y1 in target pixels
-    float texel[4]; // valid width, valid height, atlas layer, mip LOD
-    float scale;    // texels per target pixel
-};
 
 struct TilePush {
     float targetSize[2];

@@ -2,7 +2,6 @@
 
 #include <cmath>
 #include <algorithm>
-#include <cstdlib>
 #include <cstring>
 #include <vector>
 
@@ -17,46 +16,33 @@ float clearUnorm(float v) {
     const float k = std::round(std::clamp(v, 0.0f, 1.0f) * 255.0f);
     return std::min(1.0f, (k + 0.25f) / 255.0f);
 }
+
+// The draw list's view of the GPU tile map: a pin holds the slot for frame `serial` and is
+// recorded in the frame slot's list, released after the frame's fence.
+class FramePins final : public render::TileResidency {
+public:
+    FramePins(gpu::TileMap& map, uint64_t serial, std::vector<int>* pinned)
+        : map_(map), serial_(serial), pinned_(pinned) {}
+    int pin(uint64_t key) override {
+        const int slot = pinned_ ? map_.pin(key, serial_) : -1;
+        if (slot >= 0) pinned_->push_back(slot);
+        return slot;
+    }
+    bool isActive(uint64_t key) const override { return map_.statusOf(key) == gpu::TileMap::Status::Active; }
+
+private:
+    gpu::TileMap& map_;
+    uint64_t serial_;
+    std::vector<int>* pinned_; // null: lookups only
+};
 } // namespace
 
 RenderThread::RenderThread(SharedState& shared, gpu::Device& device, gpu::TileAtlas& atlas, gpu::TilePipeline& pipeline,
-                           Handover& handover, const UploadCounters& counters, const Log& log)
+                           Handover& handover, const UploadCounters& counters, const Log& log,
+                           const EngineTuning& tuning)
     : shared_(shared), device_(device), atlas_(atlas), pipeline_(pipeline), handover_(handover), counters_(counters),
-      log_(log), overlays_(device, log) {
-    if (const char* env = std::getenv("IRIS_DRAW_COVERED"); env && std::strcmp(env, "1") == 0) {
-        drawCovered_ = true;
-        log_.info("IRIS_DRAW_COVERED=1: coarse tiles are drawn also under resident finer tiles");
-    }
-}
-
-bool RenderThread::coveredBy(const LevelInfo& coarse, int64_t tx, int64_t ty, const LevelInfo& fine,
-                             const LevelDraw& drawn, const Viewport& vp) {
-    // In level-0 units: the coarse tile, clipped to the target's field.
-    const double ds = vp.view.downsample;
-    const double vx0 = vp.view.centerX - vp.width * 0.5 * ds, vy0 = vp.view.centerY - vp.height * 0.5 * ds;
-    double x0 = std::max(double(tx * kTileSize) * coarse.downsample, vx0);
-    double y0 = std::max(double(ty * kTileSize) * coarse.downsample, vy0);
-    double x1 = std::min(double(std::min<int64_t>((tx + 1) * kTileSize, coarse.width)) * coarse.downsample,
-                         vx0 + vp.width * ds);
-    double y1 = std::min(double(std::min<int64_t>((ty + 1) * kTileSize, coarse.height)) * coarse.downsample,
-                         vy0 + vp.height * ds);
-    // One target pixel of margin: the two levels' tile edges are placed by different
-    // expressions, so an edge they share in exact arithmetic may round to different pixels.
-    // With the margin, coarse tiles along the slide's edges (where the levels' extents differ
-    // by rounding anyway) are always drawn.
-    x0 -= ds, y0 -= ds, x1 += ds, y1 += ds;
-    if (x0 < 0 || y0 < 0 || x1 > double(fine.width) * fine.downsample || y1 > double(fine.height) * fine.downsample)
-        return false;
-    const double span = double(kTileSize) * fine.downsample;
-    const int64_t fx0 = int64_t(std::floor(x0 / span)), fx1 = int64_t(std::floor(x1 / span));
-    const int64_t fy0 = int64_t(std::floor(y0 / span)), fy1 = int64_t(std::floor(y1 / span));
-    const TileRange& r = drawn.range;
-    if (r.empty() || fx0 < r.x0 || fy0 < r.y0 || fx1 > r.x1 || fy1 > r.y1) return false;
-    const int64_t w = r.x1 - r.x0 + 1;
-    for (int64_t y = fy0; y <= fy1; ++y)
-        for (int64_t x = fx0; x <= fx1; ++x)
-            if (!drawn.pinned[size_t((y - r.y0) * w + (x - r.x0))]) return false;
-    return true;
+      log_(log), overlays_(device, log), tuning_(tuning) {
+    if (tuning_.drawCovered) log_.info("draw covered: coarse tiles are drawn also under resident finer tiles");
 }
 
 RenderThread::~RenderThread() {
@@ -79,8 +65,12 @@ RenderThread::~RenderThread() {
 
 Result RenderThread::init() {
     VkDevice dev = device_.device();
-    paceFrames_ = device_.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
-    if (const char* env = std::getenv("IRIS_PACE_FRAMES"); env && (*env == '0' || *env == '1')) paceFrames_ = *env == '1';
+    switch (tuning_.pacing) {
+    case EngineTuning::Pacing::Auto: paceFrames_ = device_.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU; break;
+    case EngineTuning::Pacing::On: paceFrames_ = true; break;
+    case EngineTuning::Pacing::Off: paceFrames_ = false; break;
+    }
+    log_.info(std::string("frame pacing: ") + (paceFrames_ ? "on" : "off"));
     if (Result r = overlays_.init(kFramesInFlight); !r.ok()) return r;
     if (Result r = vk::createTimestampPool(device_.physical(), dev, device_.queueFamily(), 2 * kFramesInFlight,
                                            timestamps_, timestampPeriodNs_);
@@ -125,7 +115,8 @@ void RenderThread::requestOffscreen(uint32_t width, uint32_t height, bool readba
     {
         std::lock_guard lock(mutex_);
         request_ = TargetRequest{true, TargetKind::Offscreen, VK_NULL_HANDLE, width, height, false, readback};
-        haveFrame_ = false;
+        requestPending_.store(true, std::memory_order_release);
+        lastFrame_.store(nullptr);
     }
     shared_.bump();
 }
@@ -134,7 +125,8 @@ void RenderThread::requestSurface(VkSurfaceKHR surface, uint32_t width, uint32_t
     {
         std::lock_guard lock(mutex_);
         request_ = TargetRequest{true, TargetKind::Surface, surface, width, height, false};
-        haveFrame_ = false;
+        requestPending_.store(true, std::memory_order_release);
+        lastFrame_.store(nullptr);
     }
     shared_.bump();
 }
@@ -148,6 +140,7 @@ void RenderThread::requestResize(uint32_t width, uint32_t height) {
         } else {
             request_ = TargetRequest{true, TargetKind::None, VK_NULL_HANDLE, width, height, true};
         }
+        requestPending_.store(true, std::memory_order_release);
     }
     shared_.bump();
 }
@@ -156,6 +149,7 @@ void RenderThread::unbindSurface() {
     std::unique_lock lock(mutex_);
     if (!thread_.joinable()) return;
     request_ = TargetRequest{true, TargetKind::None, VK_NULL_HANDLE, 0, 0, false};
+    requestPending_.store(true, std::memory_order_release);
     unbindDone_ = false;
     lock.unlock();
     shared_.bump();
@@ -167,32 +161,36 @@ void RenderThread::unbindSurface() {
 }
 
 void RenderThread::setFrameCallback(std::function<void(const FrameStats&)> cb) {
-    std::lock_guard lock(mutex_);
-    callback_ = std::move(cb);
+    callback_.store(cb ? std::make_shared<const std::function<void(const FrameStats&)>>(std::move(cb)) : nullptr);
 }
 
 Expected<Frame> RenderThread::lastFrame() const {
-    std::lock_guard lock(mutex_);
-    if (!haveFrame_) return Result(Status::NotBound, "No frame has been rendered into an offscreen target yet");
-    return lastFrame_;
+    const std::shared_ptr<const Frame> frame = lastFrame_.load();
+    if (!frame) return Result(Status::NotBound, "No frame has been rendered into an offscreen target yet");
+    return *frame; // copied outside any lock; the render thread has moved on to a new Frame
 }
 
 Result RenderThread::waitForFrame(uint64_t viewSerial, std::chrono::milliseconds timeout) {
     std::unique_lock lock(mutex_);
+    frameWaiters_.fetch_add(1, std::memory_order_seq_cst);
     const bool ok = cv_.wait_for(lock, timeout, [&] {
-        return completeViewSerial_ >= viewSerial || shared_.stopping.load(std::memory_order_acquire);
+        return completeViewSerial_.load(std::memory_order_seq_cst) >= viewSerial ||
+               shared_.stopping.load(std::memory_order_acquire);
     });
+    frameWaiters_.fetch_sub(1, std::memory_order_relaxed);
     if (!ok) return Result(Status::Timeout, "No complete frame of the current view within " + std::to_string(timeout.count()) + " ms");
     return {};
 }
 
 void RenderThread::applyTargetRequest() {
+    if (!requestPending_.load(std::memory_order_acquire)) return; // no lock unless there is a request
     TargetRequest req;
     {
         std::lock_guard lock(mutex_);
         if (!request_.pending) return;
         req = request_;
         request_.pending = false;
+        requestPending_.store(false, std::memory_order_relaxed);
     }
     extentPending_ = false; // a new size: its own patience
     if (!req.resizeOnly && req.kind == TargetKind::Offscreen) readback_ = req.readback;
@@ -323,17 +321,12 @@ bool RenderThread::showsLayerWhole(const Snapshot& snap) const {
     if (!snap.slide) return true;
     const LevelChoice c = chooseLevels(snap.slide->info, snap.viewport.view.downsample);
     // completeViewSerial_ is written only by this thread (under mutex_, for the API's readers).
-    return (completeViewSerial_ < snap.viewSerial && allActive(*snap.slide, c.hr, snap.viewport)) ||
-           (c.lr >= 0 && lrWholeViewSerial_ != snap.viewSerial && allActive(*snap.slide, c.lr, snap.viewport));
-}
-
-bool RenderThread::allActive(const OpenSlide& slide, int level, const Viewport& vp) const {
-    const TileRange range = visibleTiles(slide.info.levels[size_t(level)], vp, 0);
-    for (int64_t ty = range.y0; ty <= range.y1; ++ty)
-        for (int64_t tx = range.x0; tx <= range.x1; ++tx)
-            if (atlas_.map().statusOf(TileKey::make(slide.generation, level, tx, ty)) != gpu::TileMap::Status::Active)
-                return false;
-    return true;
+    const FramePins lookup(atlas_.map(), 0, nullptr);
+    const auto whole = [&](int level) {
+        return render::allResident(snap.slide->info, snap.slide->generation, level, snap.viewport, lookup);
+    };
+    return (completeViewSerial_ < snap.viewSerial && whole(c.hr)) ||
+           (c.lr >= 0 && lrWholeViewSerial_ != snap.viewSerial && whole(c.lr));
 }
 
 Result RenderThread::waitSlot(FrameSlot& f) {
@@ -415,94 +408,32 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
         });
     }
 
-    // Draw list: base, LR, HR, each only where its tiles are ACTIVE.
+    // Draw list: base, LR, HR, each only where its tiles are ACTIVE (render/draw_list).
     Viewport vp = snap.viewport;
     vp.width = extent.width;
     vp.height = extent.height;
     auto* inst = static_cast<gpu::TileInstance*>(f.instances.mapped);
-    uint32_t count = 0;
-    bool complete = false;
-    FieldProgress progress;
+    FramePins pins(atlas_.map(), serial, &f.pinned);
     // A frame drawn into a target whose size is not the published one (a rebind or resize
     // not yet applied; a swapchain made before the window system resized the window) shows
     // the right view at the wrong size: it is never "complete".
     const bool sizeMatches = kind_ == TargetKind::Offscreen
                                  ? extent.width == snap.viewport.width && extent.height == snap.viewport.height
                                  : !extentPending_;
+    FieldProgress progress;
     if (snap.slide) {
-        const SlideInfo& info = snap.slide->info;
-        const LevelChoice c = chooseLevels(info, vp.view.downsample);
-        int order[3] = {c.base, c.lr, c.hr};
-        if (order[1] == order[0]) order[1] = -1;
-        if (order[2] == order[0]) order[0] = -1;
-        complete = sizeMatches;
-        progress.hasLr = c.lr >= 0;
-        progress.lrComplete = sizeMatches;
-        // LR may have been dropped from the draw order (it is the base level): count it anyway.
-        if (c.lr >= 0 && order[1] < 0) {
-            progress.lrTiles = uint32_t(visibleTiles(info.levels[size_t(c.lr)], vp, 0).count());
-            if (!allActive(*snap.slide, c.lr, vp)) progress.lrComplete = false;
-        }
-        // Finest first, so that a coarser tile lying wholly under finer tiles this frame has
-        // pinned is left out: drawn over anyway, it would only cost fill (3× overdraw on a CPU
-        // device). The instances go into the buffer coarsest first (painter's order).
-        uint32_t budget = kMaxInstances;
-        for (int oi = 2; oi >= 0; --oi) {
-            LevelDraw& d = draws_[size_t(oi)];
-            d.level = order[oi];
-            d.instances.clear();
-            d.range = TileRange{};
-            d.pinned.clear();
-            const int li = order[oi];
-            if (li < 0) continue;
-            const LevelInfo& level = info.levels[size_t(li)];
-            const TileRange range = visibleTiles(level, vp, 0);
-            d.range = range;
-            d.pinned.assign(size_t(range.count()), 0);
-            const bool isHr = li == c.hr;
-            const bool isLr = li == c.lr;
-            if (isHr) progress.hrTiles = uint32_t(range.count());
-            if (isLr) progress.lrTiles = uint32_t(range.count());
-            const double lod = std::max(0.0, std::log2(vp.view.downsample / level.downsample));
-            for (int64_t ty = range.y0; ty <= range.y1; ++ty) {
-                for (int64_t tx = range.x0; tx <= range.x1; ++tx) {
-                    const uint64_t key = TileKey::make(snap.slide->generation, li, tx, ty);
-                    bool covered = false;
-                    for (int fi = oi + 1; fi <= 2 && !covered && !drawCovered_; ++fi) {
-                        const LevelDraw& finer = draws_[size_t(fi)];
-                        if (finer.level >= 0)
-                            covered = coveredBy(level, tx, ty, info.levels[size_t(finer.level)], finer, vp);
-                    }
-                    if (covered) {
-                        // Not drawn, but LR-TeFOV still asks whether it is resident.
-                        if (isLr && atlas_.map().statusOf(key) != gpu::TileMap::Status::Active) progress.lrComplete = false;
-                        continue;
-                    }
-                    const int layer = budget > 0 ? atlas_.map().pin(key, serial) : -1;
-                    if (layer < 0) {
-                        if (isHr) complete = false;
-                        if (isLr) progress.lrComplete = false;
-                        continue;
-                    }
-                    --budget;
-                    f.pinned.push_back(layer);
-                    d.pinned[size_t((ty - range.y0) * (range.x1 - range.x0 + 1) + (tx - range.x0))] = 1;
-                    const TilePlacement p = placeTile(level, vp, tx, ty);
-                    d.instances.push_back(gpu::TileInstance{
-                        .rect = {float(p.x0), float(p.y0), float(p.x1), float(p.y1)},
-                        .texel = {float(p.validW), float(p.validH), float(layer), float(lod)},
-                        .scale = float(p.texelsPerPixel),
-                    });
-                }
-            }
-        }
-        for (const LevelDraw& d : draws_) {
-            if (d.instances.empty()) continue;
-            std::memcpy(inst + count, d.instances.data(), d.instances.size() * sizeof(gpu::TileInstance));
-            count += uint32_t(d.instances.size());
-        }
+        const render::DrawOptions options{
+            .drawCovered = tuning_.drawCovered, .sizeMatches = sizeMatches, .maxInstances = kMaxInstances};
+        render::buildDrawList(snap.slide->info, snap.slide->generation, vp, options, pins, drawList_);
+        drawList_.copyInstances(inst);
+        progress = FieldProgress{.hasLr = drawList_.hasLr,
+                                 .lrComplete = drawList_.lrComplete,
+                                 .hrComplete = drawList_.hrComplete,
+                                 .lrTiles = drawList_.lrTiles,
+                                 .hrTiles = drawList_.hrTiles};
     }
-    progress.hrComplete = complete;
+    const uint32_t count = snap.slide ? drawList_.instanceCount() : 0;
+    bool complete = progress.hrComplete;
     if (progress.lrComplete) lrWholeViewSerial_ = snap.viewSerial;
     trackField(snap, progress);
 
@@ -517,34 +448,15 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
         log_.error("overlay font: " + overlay.fontError.message());
     }
     const uint32_t thumbFirst = count;
-    uint32_t thumbCount = 0;
+    thumbnail_.clear();
     for (const overlay::OverlayDraw& d : overlay.plan.draws) {
         if (!d.thumbnail || !snap.slide) continue;
-        const SlideInfo& info = snap.slide->info;
-        const int base = chooseLevels(info, vp.view.downsample).base;
-        const LevelInfo& level = info.levels[size_t(base)];
-        const bool keptWhole = level.tilesX * level.tilesY <= kMaxResidentBaseTiles;
-        const TileRange range = visibleTiles(level, d.thumbnailView, 0);
-        const double lod = std::max(0.0, std::log2(d.thumbnailView.view.downsample / level.downsample));
-        for (int64_t ty = range.y0; ty <= range.y1; ++ty) {
-            for (int64_t tx = range.x0; tx <= range.x1; ++tx) {
-                const uint64_t key = TileKey::make(snap.slide->generation, base, tx, ty);
-                const int layer = thumbFirst + thumbCount < kMaxInstances ? atlas_.map().pin(key, serial) : -1;
-                if (layer < 0) {
-                    if (keptWhole) complete = false;
-                    continue;
-                }
-                f.pinned.push_back(layer);
-                const TilePlacement p = placeTile(level, d.thumbnailView, tx, ty);
-                const double ox = d.thumbnailRect.x, oy = d.thumbnailRect.y;
-                inst[thumbFirst + thumbCount++] = gpu::TileInstance{
-                    .rect = {float(ox + p.x0), float(oy + p.y0), float(ox + p.x1), float(oy + p.y1)},
-                    .texel = {float(p.validW), float(p.validH), float(layer), float(lod)},
-                    .scale = float(p.texelsPerPixel),
-                };
-            }
-        }
+        if (!render::appendThumbnail(snap.slide->info, snap.slide->generation, vp.view.downsample, d.thumbnailView,
+                                     d.thumbnailRect.x, d.thumbnailRect.y, kMaxInstances - count, pins, thumbnail_))
+            complete = false;
     }
+    const uint32_t thumbCount = uint32_t(thumbnail_.size());
+    if (thumbCount > 0) std::memcpy(inst + thumbFirst, thumbnail_.data(), thumbCount * sizeof(gpu::TileInstance));
 
     VkCommandBuffer cmd = f.cmd;
     IRIS_VK_TRY(vkResetCommandBuffer(cmd, 0));
@@ -713,16 +625,17 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
     if (Result r = waitSlot(f); !r.ok()) return r;
     vk::invalidate(dev, offscreen_->readback());
     {
-        std::lock_guard lock(mutex_);
-        lastFrame_.image.width = extent.width;
-        lastFrame_.image.height = extent.height;
-        lastFrame_.image.rgba.resize(size_t(extent.width) * extent.height * 4);
-        std::memcpy(lastFrame_.image.rgba.data(), offscreen_->readback().mapped, lastFrame_.image.rgba.size());
-        lastFrame_.view = vp.view;
-        lastFrame_.serial = serial;
-        lastFrame_.complete = complete;
-        lastFrame_.overlays = overlay.plan.layout;
-        haveFrame_ = true;
+        // A new Frame each time: readers may still be copying the previous one.
+        auto frame = std::make_shared<Frame>();
+        frame->image.width = extent.width;
+        frame->image.height = extent.height;
+        frame->image.rgba.resize(size_t(extent.width) * extent.height * 4);
+        std::memcpy(frame->image.rgba.data(), offscreen_->readback().mapped, frame->image.rgba.size());
+        frame->view = vp.view;
+        frame->serial = serial;
+        frame->complete = complete;
+        frame->overlays = overlay.plan.layout;
+        lastFrame_.store(std::move(frame));
     }
     publishFrame(snap, complete, count, std::chrono::duration<double, std::milli>(Clock::now() - t0).count(),
                  overlay.plan.layout);
@@ -731,28 +644,24 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
 
 void RenderThread::publishFrame(const Snapshot& snap, bool complete, uint32_t tiles, double cpuMs,
                                 const OverlayLayout& overlays) {
-    std::function<void(const FrameStats&)> cb;
     FrameStats stats;
-    {
-        std::lock_guard lock(mutex_);
-        lastOverlays_ = overlays;
-        lastOverlaySlide_ = snap.slide ? snap.slide->source : nullptr;
-        const auto now = Clock::now();
-        stats.serial = serial_;
-        stats.intervalMs = lastFrameTime_.time_since_epoch().count() ? std::chrono::duration<double, std::milli>(now - lastFrameTime_).count() : 0;
-        lastFrameTime_ = now;
-        stats.cpuMs = cpuMs;
-        stats.gpuMs = lastGpuMs_;
-        const uint64_t bytes = counters_.bytes.load(std::memory_order_relaxed);
-        stats.bytesBuffered = bytes - lastBytes_;
-        lastBytes_ = bytes;
-        stats.bufferRateGBps = stats.intervalMs > 0 ? double(stats.bytesBuffered) / (stats.intervalMs * 1e6) : 0;
-        stats.tilesDrawn = tiles;
-        stats.complete = complete;
-        stats.view = snap.viewport.view;
-        if (complete && snap.viewSerial > completeViewSerial_) completeViewSerial_ = snap.viewSerial;
-        cb = callback_;
-    }
+    const auto now = Clock::now();
+    stats.serial = serial_;
+    stats.intervalMs = lastFrameTime_.time_since_epoch().count() ? std::chrono::duration<double, std::milli>(now - lastFrameTime_).count() : 0;
+    lastFrameTime_ = now;
+    stats.cpuMs = cpuMs;
+    stats.gpuMs = lastGpuMs_;
+    const uint64_t bytes = counters_.bytes.load(std::memory_order_relaxed);
+    stats.bytesBuffered = bytes - lastBytes_;
+    lastBytes_ = bytes;
+    stats.bufferRateGBps = stats.intervalMs > 0 ? double(stats.bytesBuffered) / (stats.intervalMs * 1e6) : 0;
+    stats.tilesDrawn = tiles;
+    stats.complete = complete;
+    stats.view = snap.viewport.view;
+    shown_.store(std::make_shared<const Shown>(
+        Shown{overlays, snap.slide ? std::weak_ptr<const SlideSource>(snap.slide->source) : std::weak_ptr<const SlideSource>()}));
+    const bool newlyComplete = complete && snap.viewSerial > completeViewSerial_.load(std::memory_order_relaxed);
+    if (newlyComplete) completeViewSerial_.store(snap.viewSerial, std::memory_order_seq_cst);
     // Publish without ever waiting for a reader: a busy lock leaves the figures for next time.
     if (std::unique_lock lock(metricsMutex_, std::try_to_lock); lock.owns_lock()) {
         metrics_.frames = stats.serial;
@@ -767,14 +676,23 @@ void RenderThread::publishFrame(const Snapshot& snap, bool complete, uint32_t ti
         if (metrics_.fields.size() > kKeep)
             metrics_.fields.erase(metrics_.fields.begin(), metrics_.fields.end() - long(kKeep));
     }
-    cv_.notify_all(); // after the metrics, so a waiter that wakes sees this frame's figures
-    if (cb) cb(stats);
+    // After the metrics, so that a waiter that wakes sees this frame's figures. The lock is
+    // taken only when a thread sleeps in waitForFrame (see frameWaiters_).
+    if (newlyComplete && frameWaiters_.load(std::memory_order_seq_cst) > 0) {
+        { std::lock_guard lock(mutex_); }
+        cv_.notify_all();
+    }
+    if (const auto cb = callback_.load(); cb) (*cb)(stats);
 }
 
 OverlayLayout RenderThread::overlayLayout(std::shared_ptr<const SlideSource>* source) const {
-    std::lock_guard lock(mutex_);
-    if (source) *source = lastOverlaySlide_.lock();
-    return lastOverlays_;
+    const std::shared_ptr<const Shown> shown = shown_.load();
+    if (!shown) {
+        if (source) source->reset();
+        return {};
+    }
+    if (source) *source = shown->slide.lock();
+    return shown->overlays;
 }
 
 EngineMetrics RenderThread::metrics() const {

@@ -20,6 +20,7 @@
 #include "gpu/render_target.h"
 #include "gpu/tile_atlas.h"
 #include "gpu/tile_pipeline.h"
+#include "render/draw_list.h"
 #include "render/overlay_renderer.h"
 
 namespace iris {
@@ -27,7 +28,7 @@ namespace iris {
 class RenderThread {
 public:
     RenderThread(SharedState& shared, gpu::Device& device, gpu::TileAtlas& atlas, gpu::TilePipeline& pipeline,
-                 Handover& handover, const UploadCounters& counters, const Log& log);
+                 Handover& handover, const UploadCounters& counters, const Log& log, const EngineTuning& tuning);
     ~RenderThread();
     Result init();
     void start();
@@ -39,6 +40,8 @@ public:
     void requestResize(uint32_t width, uint32_t height);
     void unbindSurface(); // waits until the swapchain is gone
 
+    // What a frame leaves for the API threads is published by pointer swap: the render thread
+    // never takes a lock to publish it and readers never hold one while they copy it.
     Expected<Frame> lastFrame() const;
     Result waitForFrame(uint64_t viewSerial, std::chrono::milliseconds timeout);
     void setFrameCallback(std::function<void(const FrameStats&)> cb);
@@ -82,25 +85,10 @@ private:
         uint32_t lrTiles = 0, hrTiles = 0;
     };
     void trackField(const Snapshot& snap, const FieldProgress& p);
-    // One drawn level of a frame: its visible range, which of those tiles this frame pinned
-    // (row-major over the range) and their instances. Reused from frame to frame.
-    struct LevelDraw {
-        int level = -1;
-        TileRange range;
-        std::vector<uint8_t> pinned;
-        std::vector<gpu::TileInstance> instances;
-    };
-    // Whether the visible part of tile (tx, ty) of `coarse`, grown by one target pixel, lies
-    // under tiles of `fine` that this frame pinned: then the coarse tile is drawn over
-    // completely and is left out.
-    static bool coveredBy(const LevelInfo& coarse, int64_t tx, int64_t ty, const LevelInfo& fine, const LevelDraw& drawn,
-                          const Viewport& vp);
     void finishField(bool superseded);
     // Frame pacing on CPU devices (see run()): whether a frame of `snap` drawn now would show
     // the view's HR or LR layer whole for the first time. Such a frame is never delayed.
     bool showsLayerWhole(const Snapshot& snap) const;
-    // Whether every tile of `level` visible in `vp` is ACTIVE in the atlas.
-    bool allActive(const OpenSlide& slide, int level, const Viewport& vp) const;
 
     SharedState& shared_;
     gpu::Device& device_;
@@ -126,14 +114,15 @@ private:
     mutable std::mutex metricsMutex_;
     EngineMetrics metrics_;
 
-    std::array<LevelDraw, 3> draws_{}; // base, LR, HR (render thread only)
-    // IRIS_DRAW_COVERED=1: draw coarse tiles even where resident finer tiles cover them (the
-    // engine before culling; for A/B measurements and the culling test).
-    bool drawCovered_ = false;
+    render::DrawList drawList_;                  // this frame's tiles (render thread only; reused)
+    std::vector<gpu::TileInstance> thumbnail_;   // this frame's overview thumbnail tiles (same)
+    // EngineConfig::tuning: drawCovered draws coarse tiles even where resident finer tiles
+    // cover them (the engine before culling; for A/B measurements and the culling test).
+    const EngineTuning tuning_;
     // Frame pacing (CPU devices, where drawing takes the cores the loaders decode on): a frame
     // that only adds tiles to the view already drawn waits until kPaceFactor × the last
     // frame's GPU time has passed since the previous one was submitted, unless it shows a
-    // layer whole. IRIS_PACE_FRAMES=0/1 overrides the device-type default (A/B, tests).
+    // layer whole. tuning_.pacing overrides the device-type default (A/B, tests).
     static constexpr double kPaceFactor = 2.0;
     bool paceFrames_ = false;
     uint64_t drawnViewSerial_ = UINT64_MAX;   // the view of the last frame drawn
@@ -161,17 +150,31 @@ private:
     bool readback_ = true;
     uint32_t reqWidth_ = 0, reqHeight_ = 0;
 
-    // Guarded by mutex_: requests in, frames and completion out.
+    // Target requests in, guarded by mutex_. The render thread looks at requestPending_ and
+    // takes the lock only when it is set.
     mutable std::mutex mutex_;
-    std::condition_variable cv_;
+    std::condition_variable cv_; // unbindDone_, and completeViewSerial_ for waitForFrame
     TargetRequest request_;
+    std::atomic<bool> requestPending_{false};
     bool unbindDone_ = true;
-    Frame lastFrame_;
-    bool haveFrame_ = false;
-    OverlayLayout lastOverlays_;                      // of the last frame, either kind of target
-    std::weak_ptr<const SlideSource> lastOverlaySlide_; // the slide that frame showed
-    uint64_t completeViewSerial_ = 0;
-    std::function<void(const FrameStats&)> callback_;
+
+    // Frames out, each published whole by an atomic pointer swap (release/acquire through
+    // std::atomic<std::shared_ptr>): a reader gets one frame's pixels, view and overlays
+    // together, never parts of two, and keeps them alive while it copies.
+    struct Shown {
+        OverlayLayout overlays;                 // of the last frame, either kind of target
+        std::weak_ptr<const SlideSource> slide; // the slide that frame showed
+    };
+    std::atomic<std::shared_ptr<const Frame>> lastFrame_;  // the last offscreen read-back; null: none
+    std::atomic<std::shared_ptr<const Shown>> shown_;
+    std::atomic<std::shared_ptr<const std::function<void(const FrameStats&)>>> callback_;
+    // The newest view serial a complete frame showed. Written by the render thread only;
+    // waitForFrame sleeps on cv_. The render thread takes mutex_ (to close the window between
+    // a waiter's check and its sleep) only while frameWaiters_ says someone sleeps: the
+    // waiter's increment and the render thread's store are seq_cst, so one sees the other.
+    std::atomic<uint64_t> completeViewSerial_{0};
+    std::atomic<int> frameWaiters_{0};
+    // Render thread only: the previous frame's time and upload counter, for FrameStats.
     std::chrono::steady_clock::time_point lastFrameTime_{};
 
     std::thread thread_;

@@ -130,8 +130,15 @@ public:
     bool isRendererAvailable() const;
     QString rendererError() const;
     QString deviceName() const;
-    // Messages the Vulkan validation layers reported (IRIS_VALIDATION=1 enables them).
+    // Messages the Vulkan validation layers reported (setVulkanValidation(true) enables them).
     quint64 validationMessageCount() const;
+    // Whether the Khronos validation layer is used (off by default; for development and tests:
+    // it slows rendering down). The process's Vulkan instance is shared by every view and made
+    // when the first one starts, so call this before the first view is shown; it applies to
+    // instances and engines created afterwards. The widget never reads the environment: a host
+    // maps its own switch onto this (iris-viewer: --validation or IRIS_VALIDATION=1).
+    static void setVulkanValidation(bool on);
+    static bool vulkanValidation();
     // The Vulkan surface window inside the widget's window container (for screenshots and
     // event synthesis); null when Vulkan is unavailable.
     QWindow *surfaceWindow() const;

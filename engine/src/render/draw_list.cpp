@@ -1,0 +1,171 @@
+#include "render/draw_list.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include "slide/slide_source.h" // kTileSize
+
+namespace iris::render {
+
+namespace {
+
+gpu::TileInstance instanceOf(const TilePlacement& p, double originX, double originY, int layer, double lod) {
+    return gpu::TileInstance{
+        .rect = {float(originX + p.x0), float(originY + p.y0), float(originX + p.x1), float(originY + p.y1)},
+        .texel = {float(p.validW), float(p.validH), float(layer), float(lod)},
+        .scale = float(p.texelsPerPixel),
+    };
+}
+
+// The mip LOD a level is sampled at: log2 of target pixels' size in the level's pixels.
+double lodOf(const LevelInfo& level, const Viewport& vp) {
+    return std::max(0.0, std::log2(vp.view.downsample / level.downsample));
+}
+
+} // namespace
+
+uint32_t DrawList::instanceCount() const {
+    size_t n = 0;
+    for (const LevelDraw& d : levels) n += d.instances.size();
+    return uint32_t(n);
+}
+
+void DrawList::copyInstances(gpu::TileInstance* out) const {
+    for (const LevelDraw& d : levels) {
+        if (d.instances.empty()) continue;
+        std::memcpy(out, d.instances.data(), d.instances.size() * sizeof(gpu::TileInstance));
+        out += d.instances.size();
+    }
+}
+
+bool coveredBy(const LevelInfo& coarse, int64_t tx, int64_t ty, const LevelInfo& fine, const LevelDraw& drawn,
+               const Viewport& vp) {
+    // In level-0 units: the coarse tile, clipped to the target's field.
+    const double ds = vp.view.downsample;
+    const double vx0 = vp.view.centerX - vp.width * 0.5 * ds, vy0 = vp.view.centerY - vp.height * 0.5 * ds;
+    double x0 = std::max(double(tx * kTileSize) * coarse.downsample, vx0);
+    double y0 = std::max(double(ty * kTileSize) * coarse.downsample, vy0);
+    double x1 = std::min(double(std::min<int64_t>((tx + 1) * kTileSize, coarse.width)) * coarse.downsample,
+                         vx0 + vp.width * ds);
+    double y1 = std::min(double(std::min<int64_t>((ty + 1) * kTileSize, coarse.height)) * coarse.downsample,
+                         vy0 + vp.height * ds);
+    // One target pixel of margin: the two levels' tile edges are placed by different
+    // expressions, so an edge they share in exact arithmetic may round to different pixels.
+    // With the margin, coarse tiles along the slide's edges (where the levels' extents differ
+    // by rounding anyway) are always drawn.
+    x0 -= ds, y0 -= ds, x1 += ds, y1 += ds;
+    if (x0 < 0 || y0 < 0 || x1 > double(fine.width) * fine.downsample || y1 > double(fine.height) * fine.downsample)
+        return false;
+    const double span = double(kTileSize) * fine.downsample;
+    const int64_t fx0 = int64_t(std::floor(x0 / span)), fx1 = int64_t(std::floor(x1 / span));
+    const int64_t fy0 = int64_t(std::floor(y0 / span)), fy1 = int64_t(std::floor(y1 / span));
+    const TileRange& r = drawn.range;
+    if (r.empty() || fx0 < r.x0 || fy0 < r.y0 || fx1 > r.x1 || fy1 > r.y1) return false;
+    for (int64_t y = fy0; y <= fy1; ++y)
+        for (int64_t x = fx0; x <= fx1; ++x)
+            if (!drawn.isDrawn(x, y)) return false;
+    return true;
+}
+
+bool allResident(const SlideInfo& info, uint32_t generation, int level, const Viewport& vp,
+                 const TileResidency& tiles) {
+    const TileRange range = visibleTiles(info.levels[size_t(level)], vp, 0);
+    for (int64_t ty = range.y0; ty <= range.y1; ++ty)
+        for (int64_t tx = range.x0; tx <= range.x1; ++tx)
+            if (!tiles.isActive(TileKey::make(generation, level, tx, ty))) return false;
+    return true;
+}
+
+void buildDrawList(const SlideInfo& info, uint32_t generation, const Viewport& vp, const DrawOptions& options,
+                   TileResidency& tiles, DrawList& out) {
+    for (LevelDraw& d : out.levels) {
+        d.level = -1;
+        d.range = TileRange{};
+        d.drawn.clear();
+        d.instances.clear();
+    }
+    out.lrTiles = out.hrTiles = 0;
+    out.hasLr = out.lrComplete = out.hrComplete = false;
+    if (info.levels.empty() || vp.width == 0 || vp.height == 0) return;
+
+    const LevelChoice c = chooseLevels(info, vp.view.downsample);
+    // Painter's order. A layer that is the base level is drawn once, as the base.
+    int order[3] = {c.base, c.lr, c.hr};
+    if (order[1] == order[0]) order[1] = -1;
+    if (order[2] == order[0]) order[0] = -1;
+    bool hrComplete = options.sizeMatches;
+    out.hasLr = c.lr >= 0;
+    out.lrComplete = options.sizeMatches;
+    // LR left out of the order (it is the base level) is still counted for LR-TeFOV.
+    if (c.lr >= 0 && order[1] < 0) {
+        out.lrTiles = uint32_t(visibleTiles(info.levels[size_t(c.lr)], vp, 0).count());
+        if (!allResident(info, generation, c.lr, vp, tiles)) out.lrComplete = false;
+    }
+    // Finest first, so that a coarser tile lying wholly under finer tiles already drawn is
+    // left out; the instances still go out coarsest first (copyInstances).
+    uint32_t budget = options.maxInstances;
+    for (int oi = 2; oi >= 0; --oi) {
+        const int li = order[oi];
+        if (li < 0) continue;
+        LevelDraw& d = out.levels[size_t(oi)];
+        const LevelInfo& level = info.levels[size_t(li)];
+        d.level = li;
+        d.range = visibleTiles(level, vp, 0);
+        d.drawn.assign(size_t(d.range.count()), 0);
+        const bool isHr = li == c.hr, isLr = li == c.lr;
+        if (isHr) out.hrTiles = uint32_t(d.range.count());
+        if (isLr) out.lrTiles = uint32_t(d.range.count());
+        const double lod = lodOf(level, vp);
+        for (int64_t ty = d.range.y0; ty <= d.range.y1; ++ty) {
+            for (int64_t tx = d.range.x0; tx <= d.range.x1; ++tx) {
+                const uint64_t key = TileKey::make(generation, li, tx, ty);
+                bool covered = false;
+                for (int fi = oi + 1; fi <= 2 && !covered && !options.drawCovered; ++fi) {
+                    const LevelDraw& finer = out.levels[size_t(fi)];
+                    if (finer.level >= 0) covered = coveredBy(level, tx, ty, info.levels[size_t(finer.level)], finer, vp);
+                }
+                if (covered) {
+                    // Not drawn, but LR-TeFOV still asks whether it is resident.
+                    if (isLr && !tiles.isActive(key)) out.lrComplete = false;
+                    continue;
+                }
+                const int layer = budget > 0 ? tiles.pin(key) : -1;
+                if (layer < 0) {
+                    if (isHr) hrComplete = false;
+                    if (isLr) out.lrComplete = false;
+                    continue;
+                }
+                --budget;
+                d.drawn[size_t((ty - d.range.y0) * (d.range.x1 - d.range.x0 + 1) + (tx - d.range.x0))] = 1;
+                d.instances.push_back(instanceOf(placeTile(level, vp, tx, ty), 0, 0, layer, lod));
+            }
+        }
+    }
+    out.hrComplete = hrComplete;
+}
+
+bool appendThumbnail(const SlideInfo& info, uint32_t generation, double viewDownsample, const Viewport& thumbnailView,
+                     double originX, double originY, uint32_t budget, TileResidency& tiles,
+                     std::vector<gpu::TileInstance>& out) {
+    if (info.levels.empty()) return true;
+    const int base = chooseLevels(info, viewDownsample).base;
+    const LevelInfo& level = info.levels[size_t(base)];
+    const bool keptWhole = level.tilesX * level.tilesY <= kMaxResidentBaseTiles;
+    const TileRange range = visibleTiles(level, thumbnailView, 0);
+    const double lod = lodOf(level, thumbnailView);
+    bool complete = true;
+    for (int64_t ty = range.y0; ty <= range.y1; ++ty) {
+        for (int64_t tx = range.x0; tx <= range.x1; ++tx) {
+            const int layer = out.size() < budget ? tiles.pin(TileKey::make(generation, base, tx, ty)) : -1;
+            if (layer < 0) {
+                if (keptWhole) complete = false;
+                continue;
+            }
+            out.push_back(instanceOf(placeTile(level, thumbnailView, tx, ty), originX, originY, layer, lod));
+        }
+    }
+    return complete;
+}
+
+} // namespace iris::render

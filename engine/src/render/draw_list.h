@@ -1,0 +1,95 @@
+// The frame's draw list, built without Vulkan: which tiles of which level are drawn and in
+// which order, which are culled, and whether the LR and HR layers are whole. The render thread
+// copies the instances into its instance buffer and records them; tests build lists against a
+// fake tile map and check them with a CPU rasteriser (tests/render).
+//
+// Layers (docs/ARCHITECTURE.md): the base level (the slide's coarsest, kept resident), LR and
+// HR (view_model's chooseLevels), drawn coarsest first so finer tiles cover coarser ones; a
+// tile that is not resident is left out and what lies under it shows through. A coarse tile
+// lying wholly under finer tiles this frame draws is culled: drawn, it would only cost fill
+// (3x overdraw on a CPU device), and the frame is byte-identical without it.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "gpu/tile_instance.h"
+#include "view/view_model.h"
+
+namespace iris::render {
+
+// What the builder asks of the GPU tile map (gpu::TileMap on the render thread).
+class TileResidency {
+public:
+    // The atlas layer of `key` when its tile is resident, pinned until the frame that draws
+    // it has finished; -1 when it is not resident.
+    virtual int pin(uint64_t key) = 0;
+    // Whether `key`'s tile is resident (no pin).
+    virtual bool isActive(uint64_t key) const = 0;
+
+protected:
+    ~TileResidency() = default;
+};
+
+struct DrawOptions {
+    // Draw coarse tiles also where finer drawn tiles cover them (A/B measurements, tests).
+    bool drawCovered = false;
+    // The target has the size the view was published for. A frame drawn at another size (a
+    // resize the window system has not applied yet) shows the right view at the wrong size
+    // and is never complete.
+    bool sizeMatches = true;
+    // Instances the frame can hold; tiles past it are left out (and the frame is incomplete).
+    uint32_t maxInstances = 16384;
+};
+
+// One drawn level: its visible range, which tiles of it were drawn (row-major over the
+// range) and their instances.
+struct LevelDraw {
+    int level = -1; // -1: not drawn this frame
+    TileRange range;
+    std::vector<uint8_t> drawn;
+    std::vector<gpu::TileInstance> instances;
+
+    bool isDrawn(int64_t tx, int64_t ty) const {
+        return range.contains(tx, ty) && drawn[size_t((ty - range.y0) * (range.x1 - range.x0 + 1) + (tx - range.x0))];
+    }
+};
+
+struct DrawList {
+    std::array<LevelDraw, 3> levels; // base, LR, HR: painter's order
+    bool hasLr = false;              // the view has an LR layer
+    bool lrComplete = false;         // every visible LR tile is resident (drawn or culled)
+    bool hrComplete = false;         // every visible HR tile is drawn: the frame is complete
+    uint32_t lrTiles = 0, hrTiles = 0; // visible tiles of each layer
+
+    uint32_t instanceCount() const;
+    // The instances in painter's order (base, LR, HR) into `out`, which holds instanceCount().
+    void copyInstances(gpu::TileInstance* out) const;
+};
+
+// Builds the draw list of `vp` (its width and height are the target's) over a slide whose
+// tiles carry `generation`. `out` is reused from frame to frame (its vectors keep their
+// capacity). With no resident tile the list is empty and incomplete.
+void buildDrawList(const SlideInfo& info, uint32_t generation, const Viewport& vp, const DrawOptions& options,
+                   TileResidency& tiles, DrawList& out);
+
+// Whether every tile of `level` visible in `vp` is resident.
+bool allResident(const SlideInfo& info, uint32_t generation, int level, const Viewport& vp,
+                 const TileResidency& tiles);
+
+// The overview's thumbnail: the tiles of the view's base level visible in `thumbnailView`,
+// placed at (originX, originY) in the target, appended to `out` while fewer than `budget` are
+// there. Returns false when a tile is missing from a base level kept whole
+// (kMaxResidentBaseTiles), which makes the frame incomplete; a base level too large to keep
+// whole is never waited for.
+bool appendThumbnail(const SlideInfo& info, uint32_t generation, double viewDownsample, const Viewport& thumbnailView,
+                     double originX, double originY, uint32_t budget, TileResidency& tiles,
+                     std::vector<gpu::TileInstance>& out);
+
+// Whether the visible part of tile (tx, ty) of `coarse`, grown by one target pixel, lies
+// under tiles of `fine` that `drawn` drew.
+bool coveredBy(const LevelInfo& coarse, int64_t tx, int64_t ty, const LevelInfo& fine, const LevelDraw& drawn,
+               const Viewport& vp);
+
+} // namespace iris::render

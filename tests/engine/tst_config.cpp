@@ -1,0 +1,207 @@
+// Configuration, not environment (EngineConfig::tuning, iris/environment.h):
+//
+//   * tuningFromEnvironment maps each IRIS_* variable onto its EngineTuning field, leaves the
+//     base's value where a variable is unset or empty, and rejects any other value with an
+//     error naming the variable and the values it takes;
+//   * the engine itself reads no environment: with every variable set to the opposite of what
+//     the engine would choose, an engine created from a plain EngineConfig behaves as before;
+//   * two engines in one process can be set up differently (the mip schedule, the device).
+#include <QtTest>
+
+#include <cstdlib>
+#include <map>
+#include <optional>
+#include <string>
+
+#include <iris/environment.h>
+
+#include "test_support.h"
+
+using namespace iristest;
+
+namespace {
+
+constexpr const char* kVariables[] = {"IRIS_PACE_FRAMES", "IRIS_DRAW_COVERED", "IRIS_MIP_SCHEDULE", "IRIS_DEVICE",
+                                      "IRIS_QUEUES"};
+
+// Sets the variables for its lifetime and puts back what was there before.
+class ScopedEnvironment {
+public:
+    explicit ScopedEnvironment(const std::map<std::string, std::string>& values) {
+        for (const char* name : kVariables) {
+            const char* v = std::getenv(name);
+            saved_[name] = v ? std::optional<std::string>(v) : std::nullopt;
+            ::unsetenv(name);
+        }
+        for (const auto& [name, value] : values) ::setenv(name.c_str(), value.c_str(), 1);
+    }
+    ~ScopedEnvironment() {
+        for (const auto& [name, value] : saved_) {
+            if (value) ::setenv(name.c_str(), value->c_str(), 1);
+            else ::unsetenv(name.c_str());
+        }
+    }
+    ScopedEnvironment(const ScopedEnvironment&) = delete;
+    ScopedEnvironment& operator=(const ScopedEnvironment&) = delete;
+
+private:
+    std::map<std::string, std::optional<std::string>> saved_;
+};
+
+// An engine from a plain EngineConfig (no environment mapping, unlike createTestEngine).
+TestEngine createPlainEngine(const iris::EngineTuning& tuning) {
+    TestEngine t;
+    t.log = std::make_shared<LogSink>();
+    iris::EngineConfig base;
+    base.tuning = tuning;
+    auto created = iris::Engine::create(testEngineConfig(t.log, base));
+    if (created.ok()) t.engine = std::move(created.value());
+    else t.error = created.error();
+    return t;
+}
+
+} // namespace
+
+class TstConfig : public QObject {
+    Q_OBJECT
+
+private slots:
+    void eachVariableMapsOntoItsField() {
+        using T = iris::EngineTuning;
+        {
+            ScopedEnvironment env(std::map<std::string, std::string>{});
+            auto t = iris::tuningFromEnvironment();
+            QVERIFY(t.ok());
+            QVERIFY(t->pacing == T::Pacing::Auto);
+            QVERIFY(!t->drawCovered);
+            QVERIFY(t->mipSchedule == T::MipSchedule::Auto);
+            QVERIFY(t->deviceName.empty());
+            QVERIFY(!t->singleQueue);
+        }
+        {
+            ScopedEnvironment env({{"IRIS_PACE_FRAMES", "1"},
+                                   {"IRIS_DRAW_COVERED", "1"},
+                                   {"IRIS_MIP_SCHEDULE", "serial"},
+                                   {"IRIS_DEVICE", "llvmpipe"},
+                                   {"IRIS_QUEUES", "single"}});
+            auto t = iris::tuningFromEnvironment();
+            QVERIFY(t.ok());
+            QVERIFY(t->pacing == T::Pacing::On);
+            QVERIFY(t->drawCovered);
+            QVERIFY(t->mipSchedule == T::MipSchedule::Serial);
+            QCOMPARE(t->deviceName, std::string("llvmpipe"));
+            QVERIFY(t->singleQueue);
+        }
+        {
+            ScopedEnvironment env({{"IRIS_PACE_FRAMES", "0"}, {"IRIS_MIP_SCHEDULE", "wide"}, {"IRIS_QUEUES", "auto"},
+                                   {"IRIS_DRAW_COVERED", "0"}});
+            T base;
+            base.singleQueue = true;
+            base.drawCovered = true;
+            auto t = iris::tuningFromEnvironment(base);
+            QVERIFY(t.ok());
+            QVERIFY(t->pacing == T::Pacing::Off);
+            QVERIFY(t->mipSchedule == T::MipSchedule::Wide);
+            QVERIFY(!t->singleQueue);
+            QVERIFY(!t->drawCovered);
+        }
+    }
+
+    void unsetOrEmptyKeepsTheBase() {
+        iris::EngineTuning base;
+        base.pacing = iris::EngineTuning::Pacing::On;
+        base.drawCovered = true;
+        base.mipSchedule = iris::EngineTuning::MipSchedule::Wide;
+        base.deviceName = "NVIDIA";
+        base.singleQueue = true;
+        ScopedEnvironment env({{"IRIS_PACE_FRAMES", ""}, {"IRIS_DEVICE", ""}});
+        auto t = iris::tuningFromEnvironment(base);
+        QVERIFY(t.ok());
+        QVERIFY(t->pacing == base.pacing);
+        QCOMPARE(t->drawCovered, true);
+        QVERIFY(t->mipSchedule == base.mipSchedule);
+        QCOMPARE(t->deviceName, std::string("NVIDIA"));
+        QCOMPARE(t->singleQueue, true);
+    }
+
+    void badValuesAreErrorsNamingTheVariable_data() {
+        QTest::addColumn<QString>("name");
+        QTest::addColumn<QString>("value");
+        QTest::addColumn<QString>("allowed");
+        QTest::newRow("pacing yes") << "IRIS_PACE_FRAMES" << "yes" << "0, 1";
+        QTest::newRow("pacing 2") << "IRIS_PACE_FRAMES" << "2" << "0, 1";
+        QTest::newRow("covered true") << "IRIS_DRAW_COVERED" << "true" << "0, 1";
+        QTest::newRow("schedule Wide") << "IRIS_MIP_SCHEDULE" << "Wide" << "wide, serial";
+        QTest::newRow("queues one") << "IRIS_QUEUES" << "one" << "single, auto";
+    }
+    void badValuesAreErrorsNamingTheVariable() {
+        QFETCH(QString, name);
+        QFETCH(QString, value);
+        QFETCH(QString, allowed);
+        ScopedEnvironment env(std::map<std::string, std::string>{{name.toStdString(), value.toStdString()}});
+        auto t = iris::tuningFromEnvironment();
+        QVERIFY(!t.ok());
+        QCOMPARE(t.error().status(), iris::Status::InvalidArgument);
+        const QString message = QString::fromStdString(t.error().message());
+        QVERIFY2(message.contains(name) && message.contains("'" + value + "'") && message.contains(allowed),
+                 qPrintable(message));
+        // createTestEngine reports it as the creation error rather than ignoring it.
+        TestEngine e = createTestEngine();
+        QVERIFY(!e);
+        QCOMPARE(e.error.status(), iris::Status::InvalidArgument);
+    }
+
+    // The engine reads no environment: every variable set against what the engine chooses on
+    // its own changes nothing in an engine made from a plain EngineConfig.
+    void theEngineIgnoresTheEnvironment() {
+        std::string schedule, device;
+        {
+            ScopedEnvironment env(std::map<std::string, std::string>{});
+            TestEngine plain = createPlainEngine({});
+            QVERIFY2(plain, describe(plain.error).c_str());
+            schedule = plain->device().mipSchedule;
+            device = plain->device().name;
+        }
+        QVERIFY(schedule == "wide" || schedule == "serial");
+        ScopedEnvironment env({{"IRIS_MIP_SCHEDULE", schedule == "wide" ? "serial" : "wide"},
+                               {"IRIS_DEVICE", "no device is called this"},
+                               {"IRIS_QUEUES", "bogus"},
+                               {"IRIS_PACE_FRAMES", "bogus"}});
+        TestEngine e = createPlainEngine({});
+        QVERIFY2(e, describe(e.error).c_str());
+        QCOMPARE(e->device().mipSchedule, schedule);
+        QCOMPARE(e->device().name, device);
+        QCOMPARE(e->validationMessageCount(), uint64_t(0));
+    }
+
+    // Two engines in one process, set up differently.
+    void twoEnginesDiffer() {
+        ScopedEnvironment env(std::map<std::string, std::string>{});
+        iris::EngineTuning wide, serial;
+        wide.mipSchedule = iris::EngineTuning::MipSchedule::Wide;
+        serial.mipSchedule = iris::EngineTuning::MipSchedule::Serial;
+        TestEngine a = createPlainEngine(wide);
+        QVERIFY2(a, describe(a.error).c_str());
+        TestEngine b = createPlainEngine(serial);
+        QVERIFY2(b, describe(b.error).c_str());
+        QCOMPARE(a->device().mipSchedule, std::string("wide"));
+        QCOMPARE(b->device().mipSchedule, std::string("serial"));
+
+        // A device filter: the device's own name picks it; a name no device has fails clearly.
+        iris::EngineTuning named;
+        named.deviceName = a->device().name;
+        TestEngine c = createPlainEngine(named);
+        QVERIFY2(c, describe(c.error).c_str());
+        QCOMPARE(c->device().name, a->device().name);
+        iris::EngineTuning nowhere;
+        nowhere.deviceName = "no device is called this";
+        TestEngine d = createPlainEngine(nowhere);
+        QVERIFY(!d);
+        QVERIFY2(d.error.message().find("no device is called this") != std::string::npos,
+                 describe(d.error).c_str());
+        for (TestEngine* t : {&a, &b, &c}) QCOMPARE((*t)->validationMessageCount(), uint64_t(0));
+    }
+};
+
+QTEST_GUILESS_MAIN(TstConfig)
+#include "tst_config.moc"

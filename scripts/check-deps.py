@@ -12,9 +12,9 @@ under /usr that configuring, building and running read:
   pkgconf  the .pc file of every pkg_check_modules() module and the modules it requires;
   cache    every program the configure found and cached (compilers, binutils, pkg-config,
            glslangValidator, ccache) that something runs: the configure itself (execute_process),
-           a build command, or a test; CMake also caches tools it never runs (CMAKE_LINKER finds
-           ld.lld wherever lld is installed, and the compiler driver links with ld), and cached
-           libraries count when a command links them, since modules such as FindOpenGL cache
+           a build command, or a test (the clang configure runs CMAKE_LINKER, ld.lld where lld
+           is installed, for `--help`); CMake also caches tools it never runs (CMAKE_OBJDUMP,
+           CMAKE_READELF, …), which do not count, and cached libraries count when a command links them, since modules such as FindOpenGL cache
            optional ones (GLU, EGL) that nothing uses;
   header   every header the compiler read (Ninja's deps log: `ninja -t deps`);
   command  every file under /usr named in a build command (moc, uic, glslangValidator, the

@@ -12,7 +12,10 @@ PACKAGES=(
   libopenslide-dev openslide-tools libturbojpeg0-dev libtiff-dev libopenjp2-7-dev libpng-dev
   libfreetype-dev libfontconfig-dev fonts-dejavu-core
   xvfb xauth gnuplot-nox
-  clang libclang-rt-dev llvm
+  # The fuzz preset (clang, libFuzzer). lld: configuring with clang, CMake picks ld.lld as
+  # CMAKE_LINKER where it is installed and runs it (Platform/Linux.cmake, `ld.lld --help`), so
+  # without it a fresh machine would configure with another linker than this one.
+  clang libclang-rt-dev llvm lld
   libcli11-dev nlohmann-json3-dev
   dpkg-dev file help2man desktop-file-utils shared-mime-info
   python3 strace

@@ -189,12 +189,13 @@ bool BufferThread::submitNew(const Snapshot& snap) {
     const std::vector<TileRef>& region = region_;
     const std::unordered_set<uint64_t>& keep = keep_;
     gpu::TileMap& map = atlas_.map();
-    const auto outsideRegion = [&](uint64_t k) { return keep.count(k) != 0; };
+    // allocate() may reclaim a slot only for a tile outside the region.
+    const auto inRegion = [&](uint64_t k) { return keep.count(k) != 0; };
     auto* base = static_cast<uint8_t*>(staging_.mapped);
     for (const TileRef& t : region) {
         if (tx.slots.size() == kTilesPerTransaction || freeStaging_.empty()) break;
         if (map.contains(t.key) || !cache_.isReady(t.key)) continue;
-        const int slot = map.allocate(t.key, outsideRegion);
+        const int slot = map.allocate(t.key, inRegion);
         if (slot < 0) break; // atlas full of tiles that are needed or still drawn
         const uint32_t st = freeStaging_.back();
         bool failed = false;

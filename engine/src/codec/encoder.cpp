@@ -170,14 +170,14 @@ Result planImages(SlideSource& src, const EncodeOptions& o, JpegEncoder& jpeg, P
     return {};
 }
 
-// The tile pipeline (see the top of the file).
-class TilePipeline {
+// The encoder's workers and their window of tiles in file order (see the top of the file).
+class EncodeWorkers {
 public:
-    TilePipeline(SlideSource& src, const Plan& plan, const EncodeOptions& o, uint32_t threads, std::string name)
+    EncodeWorkers(SlideSource& src, const Plan& plan, const EncodeOptions& o, uint32_t threads, std::string name)
         : src_(src), plan_(plan), o_(o), threads_(threads), name_(std::move(name)),
           window_(std::clamp<uint64_t>(uint64_t(threads) * 8, 64, 1024)), slots_(window_) {}
 
-    ~TilePipeline() { stopAndJoin(); }
+    ~EncodeWorkers() { stopAndJoin(); }
 
     // Writes every tile to `out` in file order; fills `tiles` with their entries.
     Result run(OutputFile& out, std::vector<ife::PackedTile>& tiles) {
@@ -345,7 +345,7 @@ Expected<EncodeStats> encode(const std::string& sourcePath, const std::string& o
     if (Result r = checkOptions(o); !r.ok()) return r;
     if (outputPath.empty()) return Result(Status::InvalidArgument, "No output path given");
 
-    auto opened = openSlideSource(sourcePath, int(o.source));
+    auto opened = openSlideSource(sourcePath, o.source);
     if (!opened) return opened.error();
     SlideSource& src = **opened;
     const bool synthetic = SyntheticSource::detect(sourcePath);
@@ -389,8 +389,8 @@ Expected<EncodeStats> encode(const std::string& sourcePath, const std::string& o
     std::vector<ife::PackedTile> tiles;
     const auto tilesStart = std::chrono::steady_clock::now();
     {
-        TilePipeline pipeline(src, plan, o, threads, name);
-        if (Result r = pipeline.run(out, tiles); !r.ok()) return r;
+        EncodeWorkers workers(src, plan, o, threads, name);
+        if (Result r = workers.run(out, tiles); !r.ok()) return r;
     }
     stats.tileSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - tilesStart).count();
 

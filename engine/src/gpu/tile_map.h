@@ -104,7 +104,11 @@ private:
 
     std::vector<Slot> slots_;
     Table tables_[2];
-    std::atomic<Table*> current_;        // release store by the writer, acquire load by readers
+    // seq_cst both ways: the rebuild's store (after the spare table is filled) publishes it
+    // like a release; acquireTable()'s load, fetch_add on readers_ and re-load form a Dekker
+    // pair with maybeRebuild()'s load of readers_, so a table is never refilled while a
+    // reader probes it.
+    std::atomic<Table*> current_;
     mutable std::atomic<uint32_t> readers_[2] = {0, 0}; // readers probing tables_[i]
     // Writer-only bookkeeping.
     size_t live_ = 0;

@@ -35,7 +35,7 @@ const SlideFormat kFormats[] = {
 
 } // namespace
 
-Expected<std::unique_ptr<SlideSource>> openSlideSource(const std::string& path, int preference) {
+Expected<std::unique_ptr<SlideSource>> openSlideSource(const std::string& path, SourcePreference preference) {
     if (path.empty()) return Result(Status::InvalidArgument, "No slide path given");
     if (SyntheticSource::detect(path)) return SyntheticSource::open(path); // not a file
     std::error_code ec;
@@ -59,17 +59,16 @@ Expected<std::unique_ptr<SlideSource>> openSlideSource(const std::string& path, 
     if (fs::file_size(p, ec) == 0) {
         return Result(Status::UnsupportedFormat, "Cannot open '" + path + "': the file is empty");
     }
-    // preference: 0 auto, 1 OpenSlide only, 2 .iris only (EngineConfig::SourcePreference).
     for (const SlideFormat& f : kFormats) {
         const std::string name = f.name;
-        if (preference == 1 && name != "openslide") continue;
-        if (preference == 2 && name != "iris") continue;
+        if (preference == SourcePreference::OpenSlide && name != "openslide") continue;
+        if (preference == SourcePreference::Iris && name != "iris") continue;
         if (!f.detect(path)) continue;
         auto r = f.open(path);
         if (!r.ok() && f.fallThrough && r.error().status() == Status::UnsupportedFormat) continue;
         return r;
     }
-    if (preference == 2) {
+    if (preference == SourcePreference::Iris) {
         return Result(Status::UnsupportedFormat, "Cannot open '" + path + "' as .iris: it is not an Iris File Extension file");
     }
     return Result(Status::UnsupportedFormat,

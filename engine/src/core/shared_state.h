@@ -14,6 +14,7 @@
 #include <memory>
 #include <mutex>
 
+#include "core/published.h"
 #include "iris/types.h"
 #include "overlay/overlay_settings.h"
 #include "slide/slide_source.h"
@@ -52,19 +53,20 @@ struct UploadCounters {
 
 class SharedState {
 public:
-    // The current snapshot, copied. Readers take no lock: the published Snapshot is never
-    // written again, and the atomic shared_ptr keeps it alive while it is copied.
-    Snapshot snapshot() const { return *current_.load(std::memory_order_acquire); }
+    // The current snapshot, copied. The published Snapshot is never written again, and the
+    // pointer load()ed keeps it alive while it is copied (core/published.h: readers hold its
+    // spin lock only for that pointer's copy, never for the Snapshot's).
+    Snapshot snapshot() const { return *current_.load(); }
     // Applies f to a copy of the current snapshot and publishes the copy. Writers (API calls)
     // are serialised by updateMutex_, so no update is lost; f runs under it (keep it short).
     template <class F>
     void update(F&& f) {
         {
             std::lock_guard lock(updateMutex_);
-            auto next = std::make_shared<Snapshot>(*current_.load(std::memory_order_relaxed));
+            auto next = std::make_shared<Snapshot>(*current_.load());
             f(*next);
             ++next->viewSerial;
-            current_.store(std::move(next), std::memory_order_release);
+            current_.store(std::move(next));
         }
         bump();
     }
@@ -114,7 +116,7 @@ public:
 
 private:
     std::mutex updateMutex_; // API writers only; engine threads never take it
-    std::atomic<std::shared_ptr<const Snapshot>> current_{std::make_shared<const Snapshot>()};
+    Published<Snapshot> current_{std::make_shared<const Snapshot>()};
     std::atomic<uint64_t> wake_{0};
     mutable std::mutex errorMutex_;
     Result error_;

@@ -158,16 +158,16 @@ private:
     std::atomic<bool> requestPending_{false};
     bool unbindDone_ = true;
 
-    // Frames out, each published whole by an atomic pointer swap (release/acquire through
-    // std::atomic<std::shared_ptr>): a reader gets one frame's pixels, view and overlays
-    // together, never parts of two, and keeps them alive while it copies.
+    // Frames out, each published whole by a pointer swap (core/published.h): a reader gets one
+    // frame's pixels, view and overlays together, never parts of two, and keeps them alive
+    // while it copies them (the swap's spin lock covers one pointer copy, never the frame's).
     struct Shown {
         OverlayLayout overlays;                 // of the last frame, either kind of target
         std::weak_ptr<const SlideSource> slide; // the slide that frame showed
     };
-    std::atomic<std::shared_ptr<const Frame>> lastFrame_;  // the last offscreen read-back; null: none
-    std::atomic<std::shared_ptr<const Shown>> shown_;
-    std::atomic<std::shared_ptr<const std::function<void(const FrameStats&)>>> callback_;
+    Published<Frame> lastFrame_; // the last offscreen read-back; null: none
+    Published<Shown> shown_;
+    Published<std::function<void(const FrameStats&)>> callback_;
     // The newest view serial a complete frame showed. Written by the render thread only;
     // waitForFrame sleeps on cv_. The render thread takes mutex_ (to close the window between
     // a waiter's check and its sleep) only while frameWaiters_ says someone sleeps: the

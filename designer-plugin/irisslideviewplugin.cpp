@@ -1,11 +1,15 @@
 #include "irisslideviewplugin.h"
 
+#include <algorithm>
+#include <cmath>
+
 #include <QtGui/QColor>
 #include <QtGui/QIcon>
 #include <QtGui/QPainter>
 #include <QtGui/QPixmap>
 
 #include <iris/IrisSlideView.h>
+#include <iris/engine.h>
 
 namespace {
 
@@ -91,8 +95,11 @@ void IrisSlideViewPlugin::initialize(QDesignerFormEditorInterface *)
 
 QString IrisSlideViewPlugin::domXml() const
 {
-    // The defaults a new IrisSlideView gets when dropped on a form. The slide path stays
-    // empty: a form usually opens its slide at run time.
+    // The defaults a new IrisSlideView gets when dropped on a form: the engine's own
+    // (EngineConfig) for the background and the budgets. The slide path stays empty: a form
+    // usually opens its slide at run time.
+    const iris::EngineConfig engine;
+    const auto byte = [](float v) { return QString::number(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f)); };
     return QStringLiteral(R"(<ui language="c++">
   <widget class="IrisSlideView" name="slideView">
     <property name="geometry">
@@ -105,7 +112,7 @@ QString IrisSlideViewPlugin::domXml() const
       <enum>Qt::StrongFocus</enum>
     </property>
     <property name="backgroundColor">
-      <color><red>245</red><green>245</green><blue>245</blue></color>
+      <color><red>%1</red><green>%2</green><blue>%3</blue></color>
     </property>
     <property name="enhance">
       <bool>true</bool>
@@ -114,10 +121,10 @@ QString IrisSlideViewPlugin::domXml() const
       <bool>true</bool>
     </property>
     <property name="ramBudgetMB">
-      <number>1024</number>
+      <number>%4</number>
     </property>
     <property name="vramBudgetMB">
-      <number>512</number>
+      <number>%5</number>
     </property>
     <property name="scaleBarVisible">
       <bool>true</bool>
@@ -146,5 +153,7 @@ QString IrisSlideViewPlugin::domXml() const
     </customwidget>
   </customwidgets>
 </ui>
-)");
+)")
+        .arg(byte(engine.background[0]), byte(engine.background[1]), byte(engine.background[2]),
+             QString::number(engine.ramBudgetBytes >> 20), QString::number(engine.vramBudgetBytes >> 20));
 }

@@ -214,9 +214,7 @@ SizeResult runSize(const Options& o, uint32_t W, uint32_t H) {
             ++res.movesDone;
             // The field the engine just drew, for the baselines.
             const iris::View& v = walk[k];
-            int level = 0;
-            for (size_t l = 0; l < info.levels.size(); ++l)
-                if (info.levels[l].downsample <= ds * (1 + 1e-6)) level = int(l); // the engine's rule (kLevelTolerance)
+            const int level = info.levelFor(ds); // the engine's HR level
             const double lds = info.levels[size_t(level)].downsample;
             fields.push_back({v.centerX - W / 2.0 * ds, v.centerY - H / 2.0 * ds, level, lds,
                               int64_t(std::ceil(W * ds / lds)), int64_t(std::ceil(H * ds / lds))});

@@ -115,12 +115,11 @@ void EngineHost::applyOverlays(const EngineSettings &settings)
     for (int i = 0; i < iris::kOverlayCount; ++i)
         m_engine->setOverlayCorner(iris::Overlay(i), settings.overlayCorner[size_t(i)]);
     // The font first: turning a labelled overlay on would otherwise look up the default one.
-    if (!settings.overlayFont.isEmpty() && settings.overlayFont != m_settings.overlayFont) {
+    // (An empty path goes back to the engine's default font.)
+    if (settings.overlayFont != m_settings.overlayFont) {
         const iris::Result r = m_engine->setOverlayFont(QFile::encodeName(settings.overlayFont).toStdString());
         if (!r)
             qCWarning(lcIrisWidget).noquote() << "overlay font:" << fromStd(r.message());
-    } else if (settings.overlayFont.isEmpty() && !m_settings.overlayFont.isEmpty()) {
-        m_engine->setOverlayFont({});
     }
     m_settings.overlayFont = settings.overlayFont;
     for (int i = 0; i < iris::kOverlayCount; ++i)

@@ -28,10 +28,11 @@ QT_END_NAMESPACE
 namespace IrisWidget {
 
 struct EngineSettings {
-    quint64 ramBudgetBytes = 1ull << 30;
-    quint64 vramBudgetBytes = 512ull << 20;
+    // The engine's defaults (EngineConfig), which the widget's properties start from.
+    quint64 ramBudgetBytes = iris::EngineConfig{}.ramBudgetBytes;
+    quint64 vramBudgetBytes = iris::EngineConfig{}.vramBudgetBytes;
     bool validation = false;
-    std::array<float, 3> background{0.96f, 0.96f, 0.96f};
+    std::array<float, 3> background = iris::EngineConfig{}.background;
     bool enhance = true;
     // The widget shows every overlay by default (the engine's own default is none).
     std::array<bool, iris::kOverlayCount> overlayVisible{true, true, true};

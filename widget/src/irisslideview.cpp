@@ -54,7 +54,7 @@ IrisSlideInfo IrisSlideView::slideInfo() const
 double IrisSlideView::objectivePower() const
 {
     Q_D(const IrisSlideView);
-    return d->slide ? effectiveObjective(*d->slide) : 0;
+    return d->slide ? d->slide->effectiveObjectivePower() : 0;
 }
 
 QImage IrisSlideView::associatedImage(const QString &name) const

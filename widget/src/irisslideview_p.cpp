@@ -28,8 +28,8 @@ IrisSlideViewPrivate::IrisSlideViewPrivate(IrisSlideView *q)
     : q_ptr(q)
     , navigator(this)
 {
-    background = QColor::fromRgbF(0.96f, 0.96f, 0.96f); // the engine's default
-    settings.background = toEngineRgb(background);
+    const auto &[r, g, b] = settings.background; // the engine's default
+    background = QColor::fromRgbF(r, g, b);
 }
 
 IrisSlideViewPrivate::~IrisSlideViewPrivate() = default;

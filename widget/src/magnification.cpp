@@ -5,22 +5,6 @@
 
 namespace IrisWidget {
 
-double effectiveObjective(double objectivePower, double mppX, double mppY)
-{
-    if (objectivePower > 0 && std::isfinite(objectivePower))
-        return objectivePower;
-    // Where both axes are given, use their mean; most scanners have square pixels.
-    const double mpp = (mppX > 0 && mppY > 0) ? (mppX + mppY) / 2 : std::max(mppX, mppY);
-    if (mpp > 0 && std::isfinite(mpp))
-        return 10.0 / mpp;
-    return 0;
-}
-
-double effectiveObjective(const iris::SlideInfo &info)
-{
-    return effectiveObjective(info.objectivePower, info.mppX, info.mppY);
-}
-
 static double levelZeroDownsample(const iris::SlideInfo &info)
 {
     return info.levels.empty() ? 1.0 : info.levels.front().downsample;
@@ -28,7 +12,7 @@ static double levelZeroDownsample(const iris::SlideInfo &info)
 
 double magnificationFor(const iris::SlideInfo &info, double downsample)
 {
-    const double objective = effectiveObjective(info);
+    const double objective = info.effectiveObjectivePower();
     if (objective <= 0 || !(downsample > 0))
         return 0;
     return objective * levelZeroDownsample(info) / downsample;
@@ -36,7 +20,7 @@ double magnificationFor(const iris::SlideInfo &info, double downsample)
 
 double downsampleFor(const iris::SlideInfo &info, double magnification)
 {
-    const double objective = effectiveObjective(info);
+    const double objective = info.effectiveObjectivePower();
     if (objective <= 0 || !(magnification > 0) || !std::isfinite(magnification))
         return 0;
     return objective * levelZeroDownsample(info) / magnification;

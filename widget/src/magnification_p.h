@@ -10,9 +10,7 @@ namespace IrisWidget {
 // The magnifications keys 1–4 (and the demo's View menu) jump to.
 inline constexpr std::array<double, 4> kMagnificationPresets{5.0, 10.0, 20.0, 40.0};
 
-// The stated objective power, else 10 µm / mpp (0.25 µm per pixel → 40×), else 0.
-double effectiveObjective(double objectivePower, double mppX, double mppY);
-double effectiveObjective(const iris::SlideInfo &info);
+// (The objective itself: iris::SlideInfo::effectiveObjectivePower, the engine's rule.)
 
 // objective × level-0 downsample / downsample; 0 when the objective is unknown.
 double magnificationFor(const iris::SlideInfo &info, double downsample);

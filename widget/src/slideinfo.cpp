@@ -6,7 +6,7 @@
 
 double IrisSlideInfo::effectiveObjectivePower() const
 {
-    return IrisWidget::effectiveObjective(objectivePower, mppX, mppY);
+    return iris::effectiveObjectivePower(objectivePower, mppX, mppY);
 }
 
 namespace IrisWidget {

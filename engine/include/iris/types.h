@@ -6,7 +6,9 @@
 // downsample is level-0 pixels per screen (or level) pixel.
 #pragma once
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <optional>
@@ -40,7 +42,7 @@ enum class Status : int {
 IRIS_API const char* statusName(Status s) noexcept;
 
 // The result of a call that can fail: a status and a human-readable message.
-class Result {
+class [[nodiscard]] Result {
 public:
     Result() = default;
     Result(Status status, std::string message) : status_(status), message_(std::move(message)) {}
@@ -58,7 +60,7 @@ private:
 
 // A value or the Result that explains why there is none (std::expected is C++23).
 template <class T>
-class Expected {
+class [[nodiscard]] Expected {
 public:
     Expected(T value) : value_(std::move(value)) {}
     Expected(Result error) : error_(std::move(error)) {
@@ -112,7 +114,39 @@ struct SlideInfo {
     std::vector<std::pair<std::string, std::string>> properties; // every property, sorted by name
     std::vector<std::string> associatedImages;                     // "label", "macro", "thumbnail", …
     std::vector<uint8_t> iccProfile;   // the embedded ICC colour profile's bytes; empty when none
+
+    // The finest level whose downsample is at most `downsample`: the level the engine draws
+    // sharp (its HR layer) at that view downsample, and the one a viewer reads. 0 for a view
+    // finer than level 0 (or no levels). See kLevelTolerance.
+    int levelFor(double downsample) const;
+    // The objective the magnification readouts use: objectivePower when stated, else
+    // 10 µm ÷ mpp (a 0.25 µm/px scan is a 40× scan); 0 when the slide states neither.
+    double effectiveObjectivePower() const;
 };
+
+// Relative tolerance of "this level's downsample equals the view's": a view set to a level's
+// downsample must pick that level, also when one of the two went through float32 metadata
+// (.iris scales and mpp). One part per million is far below a pixel across any slide's tile.
+inline constexpr double kLevelTolerance = 1e-6;
+
+// The objective-power rule of SlideInfo::effectiveObjectivePower for loose fields. Where both
+// axes' mpp are given their mean counts (most scanners have square pixels).
+inline double effectiveObjectivePower(double objectivePower, double mppX, double mppY) {
+    if (objectivePower > 0 && std::isfinite(objectivePower)) return objectivePower;
+    const double mpp = (mppX > 0 && mppY > 0) ? (mppX + mppY) / 2 : std::max(mppX, mppY);
+    return mpp > 0 && std::isfinite(mpp) ? 10.0 / mpp : 0;
+}
+
+inline int SlideInfo::levelFor(double downsample) const {
+    int level = 0;
+    for (size_t i = 0; i < levels.size(); ++i)
+        if (levels[i].downsample <= downsample * (1.0 + kLevelTolerance)) level = int(i);
+    return level;
+}
+
+inline double SlideInfo::effectiveObjectivePower() const {
+    return iris::effectiveObjectivePower(objectivePower, mppX, mppY);
+}
 
 // The view: which level-0 point is at the centre of the target, and how many
 // level-0 pixels one target pixel covers. The target's size comes from bind/resize.

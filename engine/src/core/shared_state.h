@@ -15,6 +15,7 @@
 #include <mutex>
 
 #include "core/published.h"
+#include "iris/engine.h"
 #include "iris/types.h"
 #include "overlay/overlay_settings.h"
 #include "slide/slide_source.h"
@@ -33,7 +34,7 @@ struct Snapshot {
     Viewport viewport;
     uint64_t viewSerial = 0; // bumped by every view, slide or target change
     bool visible = true;
-    std::array<float, 3> background{0.96f, 0.96f, 0.96f};
+    std::array<float, 3> background = EngineConfig{}.background; // until create() sets the host's
     bool enhance = true;
     overlay::OverlaySettings overlays; // which overlays are on, where, the device pixel ratio, the font
     // The newest move to an entirely new field of view (0: none being timed). Set by the API

@@ -57,12 +57,6 @@ double niceScaleMicrons(double micronsPerPixel, double maxPixels) {
     return decimal(5, n - 2);
 }
 
-double effectiveObjective(const SlideInfo& slide) {
-    if (slide.objectivePower > 0 && std::isfinite(slide.objectivePower)) return slide.objectivePower;
-    const double mpp = (slide.mppX > 0 && slide.mppY > 0) ? (slide.mppX + slide.mppY) / 2 : std::max(slide.mppX, slide.mppY);
-    return mpp > 0 && std::isfinite(mpp) ? 10.0 / mpp : 0;
-}
-
 std::string scaleLabel(double microns) {
     if (microns >= 1000) return shortest(microns / 1000) + " mm";
     return shortest(microns) + " \u00B5m"; // MICRO SIGN
@@ -140,7 +134,7 @@ OverlayPlan layoutOverlays(const SlideInfo* slide, const Viewport& vp, const Ove
     }
 
     // Magnification readout: a label on a plate; nothing to show without a font.
-    const double objective = effectiveObjective(*slide);
+    const double objective = slide->effectiveObjectivePower();
     if (s.visible[size_t(Overlay::Magnification)] && objective > 0) {
         const double level0 = slide->levels.empty() ? 1.0 : slide->levels.front().downsample;
         const double m = objective * level0 / v.downsample;

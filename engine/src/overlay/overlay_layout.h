@@ -48,10 +48,6 @@ inline constexpr std::array<float, 4> kFieldColour{0.0f, 1.0f, 1.0f, 1.0f};
 // 0 when micronsPerPixel is not a positive number.
 double niceScaleMicrons(double micronsPerPixel, double maxPixels);
 std::string scaleLabel(double microns);        // "100 µm", "0.5 µm", "1 mm", "20 mm"
-// The objective the readout is based on: the stated objective power, else 10 µm / mpp (a
-// 0.25 µm/px scan is a 40× scan), the rule IrisSlideView's magnification() follows; 0 when
-// the slide states neither.
-double effectiveObjective(const SlideInfo& slide);
 std::string magnificationLabel(double magnification); // "20.0×", "0.50×"
 std::u32string decodeUtf8(const std::string& s);
 

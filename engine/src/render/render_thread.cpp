@@ -208,7 +208,8 @@ void RenderThread::applyTargetRequest() {
     }
     // Whatever the request, the old target goes first (after the GPU is done with it).
     device_.waitIdle();
-    for (FrameSlot& f : frames_) waitSlot(f);
+    for (FrameSlot& f : frames_)
+        if (Result r = waitSlot(f); !r.ok()) shared_.setError(r); // a lost device: the first error sticks
     offscreen_.reset();
     if (req.kind != TargetKind::Surface || req.surface != surface_) swapchain_.reset();
     kind_ = req.kind;

@@ -12,13 +12,7 @@ LevelChoice chooseLevels(const SlideInfo& info, double downsample) {
     LevelChoice c;
     const int n = int(info.levels.size());
     c.base = n - 1;
-    c.hr = 0;
-    // Tolerance: a view set to a level's downsample must pick that level, also when one of the
-    // two went through float32 metadata (.iris scales and mpp): one part per million is far
-    // below a pixel across any slide's tile.
-    for (int i = 0; i < n; ++i) {
-        if (info.levels[size_t(i)].downsample <= downsample * (1.0 + kLevelTolerance)) c.hr = i;
-    }
+    c.hr = info.levelFor(downsample);
     c.lr = c.hr + 1 < n ? c.hr + 1 : -1;
     return c;
 }

@@ -49,8 +49,6 @@ struct LevelChoice {
     int lr = -1;   // -1: none (HR is the coarsest level)
     int base = 0;
 };
-// Relative tolerance of "this level's downsample equals the view's" (see chooseLevels).
-inline constexpr double kLevelTolerance = 1e-6;
 LevelChoice chooseLevels(const SlideInfo& info, double downsample);
 
 struct TileRange {

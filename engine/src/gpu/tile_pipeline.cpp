@@ -33,14 +33,16 @@ Result TilePipeline::init() {
 
 Expected<VkPipeline> TilePipeline::pipelineFor(VkFormat format) {
     if (auto it = pipelines_.find(int(format)); it != pipelines_.end()) return it->second;
-    const VkVertexInputAttributeDescription attrs[3] = {
+    const VkVertexInputAttributeDescription attrs[5] = {
         {.location = 0, .binding = 0, .format = VK_FORMAT_R32G32B32A32_SFLOAT, .offset = offsetof(TileInstance, rect)},
         {.location = 1, .binding = 0, .format = VK_FORMAT_R32G32B32A32_SFLOAT, .offset = offsetof(TileInstance, texel)},
         {.location = 2, .binding = 0, .format = VK_FORMAT_R32_SFLOAT, .offset = offsetof(TileInstance, scale)},
+        {.location = 3, .binding = 0, .format = VK_FORMAT_R32G32B32A32_SFLOAT, .offset = offsetof(TileInstance, sides)},
+        {.location = 4, .binding = 0, .format = VK_FORMAT_R32G32B32A32_SFLOAT, .offset = offsetof(TileInstance, corners)},
     };
     // Premultiplied "over": tiles are premultiplied RGBA; the target stays opaque.
     Expected<VkPipeline> p = vk::createInstancedQuadPipeline(device_.device(), layout_, vert_, frag_, sizeof(TileInstance),
-                                                             attrs, 3, format);
+                                                             attrs, 5, format);
     if (p) pipelines_[int(format)] = *p;
     return p;
 }

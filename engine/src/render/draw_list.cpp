@@ -68,6 +68,39 @@ bool coveredBy(const LevelInfo& coarse, int64_t tx, int64_t ty, const LevelInfo&
     return true;
 }
 
+void linkNeighbours(const LevelInfo& level, int levelIndex, uint32_t generation, TileResidency& tiles, LevelDraw& d) {
+    const TileRange& r = d.range;
+    const int64_t w = r.x1 - r.x0 + 1, h = r.y1 - r.y0 + 1;
+    constexpr int32_t kUnknown = -2;
+    d.around.assign(size_t((w + 2) * (h + 2)), kUnknown);
+    // The layer of tile (tx, ty), -1 when it is outside the level or not resident; each tile
+    // looked up (and pinned) once per frame.
+    const auto layerOf = [&](int64_t tx, int64_t ty) {
+        if (tx < 0 || ty < 0 || tx >= level.tilesX || ty >= level.tilesY) return int32_t(-1);
+        int32_t& cached = d.around[size_t((ty - r.y0 + 1) * (w + 2) + (tx - r.x0 + 1))];
+        if (cached == kUnknown) {
+            const int32_t drawn = r.contains(tx, ty) ? d.layers[size_t((ty - r.y0) * w + (tx - r.x0))] : -1;
+            cached = drawn >= 0 ? drawn : tiles.pin(TileKey::make(generation, levelIndex, tx, ty));
+        }
+        return cached;
+    };
+    size_t k = 0; // the instances follow the drawn tiles in row-major order
+    for (int64_t ty = r.y0; ty <= r.y1; ++ty) {
+        for (int64_t tx = r.x0; tx <= r.x1; ++tx) {
+            if (d.layers[size_t((ty - r.y0) * w + (tx - r.x0))] < 0) continue;
+            gpu::TileInstance& t = d.instances[k++];
+            t.sides[0] = float(layerOf(tx - 1, ty));
+            t.sides[1] = float(layerOf(tx + 1, ty));
+            t.sides[2] = float(layerOf(tx, ty - 1));
+            t.sides[3] = float(layerOf(tx, ty + 1));
+            t.corners[0] = float(layerOf(tx - 1, ty - 1));
+            t.corners[1] = float(layerOf(tx + 1, ty - 1));
+            t.corners[2] = float(layerOf(tx - 1, ty + 1));
+            t.corners[3] = float(layerOf(tx + 1, ty + 1));
+        }
+    }
+}
+
 bool allResident(const SlideInfo& info, uint32_t generation, int level, const Viewport& vp,
                  const TileResidency& tiles) {
     const TileRange range = visibleTiles(info.levels[size_t(level)], vp, 0);
@@ -82,7 +115,7 @@ void buildDrawList(const SlideInfo& info, uint32_t generation, const Viewport& v
     for (LevelDraw& d : out.levels) {
         d.level = -1;
         d.range = TileRange{};
-        d.drawn.clear();
+        d.layers.clear();
         d.instances.clear();
     }
     out.lrTiles = out.hrTiles = 0;
@@ -112,7 +145,7 @@ void buildDrawList(const SlideInfo& info, uint32_t generation, const Viewport& v
         const LevelInfo& level = info.levels[size_t(li)];
         d.level = li;
         d.range = visibleTiles(level, vp, 0);
-        d.drawn.assign(size_t(d.range.count()), 0);
+        d.layers.assign(size_t(d.range.count()), -1);
         const bool isHr = li == c.hr, isLr = li == c.lr;
         if (isHr) out.hrTiles = uint32_t(d.range.count());
         if (isLr) out.lrTiles = uint32_t(d.range.count());
@@ -137,10 +170,11 @@ void buildDrawList(const SlideInfo& info, uint32_t generation, const Viewport& v
                     continue;
                 }
                 --budget;
-                d.drawn[size_t((ty - d.range.y0) * (d.range.x1 - d.range.x0 + 1) + (tx - d.range.x0))] = 1;
+                d.layers[size_t((ty - d.range.y0) * (d.range.x1 - d.range.x0 + 1) + (tx - d.range.x0))] = layer;
                 d.instances.push_back(instanceOf(placeTile(level, vp, tx, ty), 0, 0, layer, lod));
             }
         }
+        if (lod == 0.0 && !d.instances.empty()) linkNeighbours(level, li, generation, tiles, d);
     }
     out.hrComplete = hrComplete;
 }

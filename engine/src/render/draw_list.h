@@ -43,16 +43,17 @@ struct DrawOptions {
     uint32_t maxInstances = 16384;
 };
 
-// One drawn level: its visible range, which tiles of it were drawn (row-major over the
-// range) and their instances.
+// One drawn level: its visible range, the atlas layer of each tile drawn (row-major over the
+// range, -1 where none) and their instances.
 struct LevelDraw {
     int level = -1; // -1: not drawn this frame
     TileRange range;
-    std::vector<uint8_t> drawn;
+    std::vector<int32_t> layers;
     std::vector<gpu::TileInstance> instances;
+    std::vector<int32_t> around; // scratch: layers of the range grown by one tile (linkNeighbours)
 
     bool isDrawn(int64_t tx, int64_t ty) const {
-        return range.contains(tx, ty) && drawn[size_t((ty - range.y0) * (range.x1 - range.x0 + 1) + (tx - range.x0))];
+        return range.contains(tx, ty) && layers[size_t((ty - range.y0) * (range.x1 - range.x0 + 1) + (tx - range.x0))] >= 0;
     }
 };
 
@@ -73,6 +74,11 @@ struct DrawList {
 // capacity). With no resident tile the list is empty and incomplete.
 void buildDrawList(const SlideInfo& info, uint32_t generation, const Viewport& vp, const DrawOptions& options,
                    TileResidency& tiles, DrawList& out);
+
+// Zoomed in (the level drawn at LOD 0), names in each of `d`'s instances the atlas layers of the
+// tile's eight neighbours in the level, so that the tile shader interpolates across the seams:
+// drawn tiles' layers as they are, any other neighbour pinned for the frame when resident.
+void linkNeighbours(const LevelInfo& level, int levelIndex, uint32_t generation, TileResidency& tiles, LevelDraw& d);
 
 // Whether every tile of `level` visible in `vp` is resident.
 bool allResident(const SlideInfo& info, uint32_t generation, int level, const Viewport& vp,

@@ -20,6 +20,7 @@ using iris::TileKey;
 using iris::Viewport;
 using iris::render::DrawList;
 using iris::render::DrawOptions;
+using iris::render::LevelDraw;
 
 namespace {
 
@@ -119,6 +120,7 @@ private slots:
     void wrongSizeIsNeverComplete();
     void syntheticBase();
     void thumbnail();
+    void zoomedInTilesNameTheirNeighbours();
 };
 
 void TestDrawList::nothingResidentDrawsNothing() {
@@ -305,6 +307,56 @@ void TestDrawList::thumbnail() {
     FakeMap none;
     out.clear();
     QVERIFY(iris::render::appendThumbnail(big, kGen, 1, viewport(4096, 4096, 64, 128, 128), 0, 0, 100, none, out));
+}
+
+// Drawn at LOD 0 (here zoomed in past 1:1), each instance names the atlas layers of its eight
+// neighbours in the level for the seam pass: drawn tiles as drawn, tiles just outside the view
+// pinned when resident, -1 past the slide's edge and where a tile is not resident. Drawn
+// shrunk (through mips), no instance names any.
+void TestDrawList::zoomedInTilesNameTheirNeighbours() {
+    const SlideInfo s = scan();
+    FakeMap map;
+    map.addLevel(s, 2);
+    const LevelInfo& l0 = s.levels[0];
+    // Level 0 resident except tile (3, 1); the view shows its top-left corner at 2x.
+    for (int64_t y = 0; y < l0.tilesY; ++y)
+        for (int64_t x = 0; x < l0.tilesX; ++x)
+            if (!(x == 3 && y == 1)) map.add(TileKey::make(kGen, 0, x, y));
+    const Viewport vp = viewport(550 + 3.3, 250 + 1.7, 0.5, 2200, 1000); // level-0 tiles 0-4 × 0-1 in view
+    const DrawList list = build(s, vp, map);
+    const LevelDraw& hr = list.levels[2];
+    QCOMPARE(hr.level, 0);
+    QVERIFY(hr.linked);
+    QVERIFY(!hr.instances.empty());
+    const auto layerOf = [&](int64_t x, int64_t y) {
+        if (x < 0 || y < 0 || x >= l0.tilesX || y >= l0.tilesY || (x == 3 && y == 1)) return -1.0f;
+        for (int layer = 0;; ++layer)
+            if (map.keyOf(layer) == TileKey::make(kGen, 0, x, y)) return float(layer);
+    };
+    size_t k = 0;
+    for (int64_t ty = hr.range.y0; ty <= hr.range.y1; ++ty) {
+        for (int64_t tx = hr.range.x0; tx <= hr.range.x1; ++tx) {
+            if (!hr.isDrawn(tx, ty)) continue;
+            const iris::gpu::TileInstance& t = hr.instances[k++];
+            QCOMPARE(t.texel[2], layerOf(tx, ty));
+            const float sides[4] = {layerOf(tx - 1, ty), layerOf(tx + 1, ty), layerOf(tx, ty - 1), layerOf(tx, ty + 1)};
+            const float corners[4] = {layerOf(tx - 1, ty - 1), layerOf(tx + 1, ty - 1), layerOf(tx - 1, ty + 1),
+                                      layerOf(tx + 1, ty + 1)};
+            for (int i = 0; i < 4; ++i) {
+                QCOMPARE(t.sides[i], sides[i]);
+                QCOMPARE(t.corners[i], corners[i]);
+            }
+        }
+    }
+    QCOMPARE(k, hr.instances.size());
+    QVERIFY(hr.range.x0 == 0 && hr.range.y0 == 0); // the slide's edge is in view: -1 there was checked
+    QVERIFY(hr.range.contains(3, 1));               // and so is the missing tile
+
+    // Shrunk (LOD 1): nothing named.
+    const DrawList shrunk = build(s, viewport(10000, 7000, 2), map);
+    QVERIFY(!shrunk.levels[2].linked);
+    for (const iris::gpu::TileInstance& t : shrunk.levels[2].instances)
+        for (int i = 0; i < 4; ++i) QVERIFY(t.sides[i] == -1.0f && t.corners[i] == -1.0f);
 }
 
 QTEST_APPLESS_MAIN(TestDrawList)

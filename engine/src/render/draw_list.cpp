@@ -117,6 +117,7 @@ void buildDrawList(const SlideInfo& info, uint32_t generation, const Viewport& v
         d.range = TileRange{};
         d.layers.clear();
         d.instances.clear();
+        d.linked = false;
     }
     out.lrTiles = out.hrTiles = 0;
     out.hasLr = out.lrComplete = out.hrComplete = false;
@@ -174,7 +175,10 @@ void buildDrawList(const SlideInfo& info, uint32_t generation, const Viewport& v
                 d.instances.push_back(instanceOf(placeTile(level, vp, tx, ty), 0, 0, layer, lod));
             }
         }
-        if (lod == 0.0 && !d.instances.empty()) linkNeighbours(level, li, generation, tiles, d);
+        if (lod == 0.0 && !d.instances.empty()) {
+            linkNeighbours(level, li, generation, tiles, d);
+            d.linked = true;
+        }
     }
     out.hrComplete = hrComplete;
 }

@@ -51,6 +51,7 @@ struct LevelDraw {
     std::vector<int32_t> layers;
     std::vector<gpu::TileInstance> instances;
     std::vector<int32_t> around; // scratch: layers of the range grown by one tile (linkNeighbours)
+    bool linked = false;         // drawn at LOD 0, neighbours named: the seam pass draws its bands
 
     bool isDrawn(int64_t tx, int64_t ty) const {
         return range.contains(tx, ty) && layers[size_t((ty - range.y0) * (range.x1 - range.x0 + 1) + (tx - range.x0))] >= 0;

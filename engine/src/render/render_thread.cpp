@@ -385,6 +385,8 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
     }
     Expected<VkPipeline> pipe = pipeline_.pipelineFor(format);
     if (!pipe) return pipe.error();
+    Expected<VkPipeline> seamPipe = pipeline_.seamPipelineFor(format);
+    if (!seamPipe) return seamPipe.error();
 
     const uint64_t serial = ++serial_;
     f.serial = serial;
@@ -506,27 +508,40 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
         .pStencilAttachment = nullptr,
     };
     vkCmdBeginRendering(cmd, &ri);
-    // Tile quads [first, first + n) of this frame's instance buffer. The overview's thumbnail
-    // is drawn the same way inside the overlay pass, under the scissor that clips it.
-    const auto drawTiles = [&](uint32_t first, uint32_t n) {
+    // Tile quads [first, first + n) of this frame's instance buffer; with `seams`, then the
+    // seam pass's four bands of each (gpu/tile_pipeline.h). The overview's thumbnail is drawn
+    // the same way inside the overlay pass, under the scissor that clips it.
+    const auto drawTiles = [&](uint32_t first, uint32_t n, bool seams) {
         vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, *pipe);
         const VkViewport viewport{0, 0, float(extent.width), float(extent.height), 0, 1};
         vkCmdSetViewport(cmd, 0, 1, &viewport);
         VkDescriptorSet set = pipeline_.descriptorSet();
         vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline_.layout(), 0, 1, &set, 0, nullptr);
-        const gpu::TilePush push{{float(extent.width), float(extent.height)}};
+        gpu::TilePush push{{float(extent.width), float(extent.height)}};
         vkCmdPushConstants(cmd, pipeline_.layout(), VK_SHADER_STAGE_VERTEX_BIT, 0, sizeof(push), &push);
         const VkDeviceSize offset = 0;
         vkCmdBindVertexBuffers(cmd, 0, 1, &f.instances.buffer, &offset);
         vkCmdDraw(cmd, 4, n, 0, first);
+        if (!seams) return;
+        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, *seamPipe);
+        for (push.edge = 1; push.edge <= 4; ++push.edge) {
+            vkCmdPushConstants(cmd, pipeline_.layout(), VK_SHADER_STAGE_VERTEX_BIT, 0, sizeof(push), &push);
+            vkCmdDraw(cmd, 4, n, 0, first);
+        }
     };
     if (count > 0) {
         const VkRect2D scissor{{0, 0}, extent};
         vkCmdSetScissor(cmd, 0, 1, &scissor);
-        drawTiles(0, count);
+        // Level by level in painter's order: a level's seam bands go on before finer levels.
+        uint32_t first = 0;
+        for (const render::LevelDraw& d : drawList_.levels) {
+            const uint32_t n = uint32_t(d.instances.size());
+            if (n > 0) drawTiles(first, n, d.linked);
+            first += n;
+        }
     }
     const Result drawn = overlays_.recordDraws(cmd, slotIndex, overlay, format, extent, [&](const overlay::OverlayDraw&) {
-        if (thumbCount > 0) drawTiles(thumbFirst, thumbCount);
+        if (thumbCount > 0) drawTiles(thumbFirst, thumbCount, false);
     });
     if (!drawn.ok()) { // the frame goes on without its overlays
         shared_.setError(drawn);

@@ -1,0 +1,36 @@
+#version 450
+#extension GL_GOOGLE_include_directive : require
+// The seam pass: for each tile instance of a level drawn at LOD 0, the band along one side
+// (push constant `edge`) that the tile pass left out because a neighbour is resident there
+// (tile_bands.glsl). A side without a band gives an empty quad.
+
+layout(location = 0) in vec4 inRect;
+layout(location = 1) in vec4 inTexel;
+layout(location = 2) in float inScale;
+layout(location = 3) in vec4 inSides;   // left, right, above, below: atlas layers, -1 none
+layout(location = 4) in vec4 inCorners; // above-left, above-right, below-left, below-right
+
+layout(push_constant) uniform Push {
+    vec2 targetSize; // pixels
+    int edge;        // 1 left, 2 right, 3 top, 4 bottom
+} pc;
+
+layout(location = 0) flat out vec2 outOrigin;
+layout(location = 1) flat out vec4 outTexel;
+layout(location = 2) flat out float outScale;
+layout(location = 3) flat out vec4 outSides;
+layout(location = 4) flat out vec4 outCorners;
+
+#include "tile_bands.glsl"
+
+void main() {
+    vec2 corner = vec2(gl_VertexIndex & 1, (gl_VertexIndex >> 1) & 1);
+    vec4 r = tileBand(pc.edge, inRect, inTexel, inScale, inSides);
+    vec2 p = mix(r.xy, r.zw, corner);
+    gl_Position = vec4(p / pc.targetSize * 2.0 - 1.0, 0.0, 1.0);
+    outOrigin = inRect.xy;
+    outTexel = inTexel;
+    outScale = inScale;
+    outSides = inSides;
+    outCorners = inCorners;
+}

@@ -171,6 +171,34 @@ TestEngine createTestEngine(iris::EngineConfig base) {
     return t;
 }
 
+void TestEngine::beginTest() {
+    validationBefore = engine ? engine->validationMessageCount() : 0;
+}
+
+std::string TestEngine::endTest(ErrorLines errors) {
+    if (!engine) return {};
+    std::string why;
+    if (const uint64_t n = engine->validationMessageCount() - validationBefore; n > 0)
+        why = std::to_string(n) + " validation message(s) during this test (see the log above)";
+    const std::vector<std::string> lines = log->takeErrors();
+    for (const std::string& line : lines) {
+        std::fprintf(stderr, "%s: %s\n", errors == ErrorLines::Show ? "engine error line" : "engine logged an error",
+                     line.c_str());
+    }
+    if (errors == ErrorLines::Fail && !lines.empty())
+        why += std::string(why.empty() ? "" : "; ") + "the engine logged " + std::to_string(lines.size()) +
+               " Error line(s) (see above)";
+    return why;
+}
+
+std::string TestEngine::finish() {
+    if (!engine) return {};
+    engine->close();
+    const uint64_t n = engine->validationMessageCount();
+    engine.reset();
+    return n == 0 ? std::string() : std::to_string(n) + " validation message(s) in this suite";
+}
+
 bool validationLayerInstalled() {
     uint32_t count = 0;
     if (vkEnumerateInstanceLayerProperties(&count, nullptr) != VK_SUCCESS) return false;

@@ -66,12 +66,25 @@ inline constexpr std::array<float, 3> kBackground{0.2f, 0.4f, 0.6f};
 // EngineConfig::background ×255, rounded: what the RGBA8 target must hold outside the slide.
 std::array<uint8_t, 3> backgroundBytes(const std::array<float, 3>& bg = kBackground);
 
+// One engine for a whole suite, and the checks every engine suite makes around each test
+// function (call them from Qt Test's init(), cleanup() and cleanupTestCase(); each returns
+// what went wrong, empty when nothing did, for QVERIFY2):
+//   beginTest()  remembers the validation-message count;
+//   endTest()    no validation message during the test, and no Error line logged (or, with
+//                ErrorLines::Show, the lines printed: suites of bad input expect them);
+//   finish()     closes the slide, no validation message in the whole suite, engine destroyed.
 struct TestEngine {
     std::shared_ptr<LogSink> log;
     std::unique_ptr<iris::Engine> engine;
     iris::Result error; // why create() failed
+    uint64_t validationBefore = 0; // the count when the current test function began
     explicit operator bool() const { return engine != nullptr; }
     iris::Engine* operator->() const { return engine.get(); }
+
+    enum class ErrorLines { Fail, Show };
+    void beginTest();
+    std::string endTest(ErrorLines errors = ErrorLines::Fail);
+    std::string finish();
 };
 // EngineConfig{validation = true, loaderThreads = 2, background = kBackground, a log callback
 // recording Error lines} plus whatever `base` sets otherwise.

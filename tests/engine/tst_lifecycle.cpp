@@ -35,7 +35,6 @@ class TestLifecycle : public QObject {
     Q_OBJECT
 
     TestEngine e_;
-    uint64_t validationBefore_ = 0;
 
     // Renders a 1:1 patch at level-0 (x0, y0) of the open slide and compares it with
     // read_region over the part inside the slide (the rest must be background).
@@ -75,19 +74,16 @@ private slots:
         QVERIFY2(e_, describe(e_.error).c_str());
     }
 
-    void init() { validationBefore_ = e_ ? e_->validationMessageCount() : 0; }
+    void init() { e_.beginTest(); }
 
     void cleanup() {
-        if (!e_) return;
-        QCOMPARE(e_->validationMessageCount() - validationBefore_, uint64_t(0));
-        const auto errors = e_.log->takeErrors();
-        for (const auto& line : errors) qWarning("engine logged an error: %s", line.c_str());
-        QVERIFY2(errors.empty(), "the engine logged Error lines (see above)");
+        const std::string why = e_.endTest();
+        QVERIFY2(why.empty(), why.c_str());
     }
 
     void cleanupTestCase() {
-        if (e_) QCOMPARE(e_->validationMessageCount(), uint64_t(0));
-        e_.engine.reset();
+        const std::string why = e_.finish();
+        QVERIFY2(why.empty(), why.c_str());
     }
 
     // 30 opens, alternating slides; every other one without close() first (open replaces).

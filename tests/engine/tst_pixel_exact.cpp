@@ -75,7 +75,6 @@ class TestPixelExact : public QObject {
     Q_OBJECT
 
     TestEngine e_;
-    uint64_t validationBefore_ = 0;
     uint32_t boundW_ = 0, boundH_ = 0;
     std::string openPath_;
     std::map<std::string, std::unique_ptr<OpenSlideRef>> refs_;
@@ -130,23 +129,17 @@ private slots:
         qInfo("device: %s (%s), atlas slots %u", d.name.c_str(), d.driver.c_str(), d.atlasSlots);
     }
 
-    void init() { validationBefore_ = e_ ? e_->validationMessageCount() : 0; }
+    void init() { e_.beginTest(); }
 
     void cleanup() {
-        if (!e_) return;
-        QCOMPARE(e_->validationMessageCount() - validationBefore_, uint64_t(0));
-        const auto errors = e_.log->takeErrors();
-        for (const auto& line : errors) qWarning("engine logged an error: %s", line.c_str());
-        QVERIFY2(errors.empty(), "the engine logged Error lines while rendering good slides (see above)");
+        const std::string why = e_.endTest(); // good slides: no Error line
+        QVERIFY2(why.empty(), why.c_str());
     }
 
     void cleanupTestCase() {
-        if (e_) {
-            e_->close();
-            QCOMPARE(e_->validationMessageCount(), uint64_t(0));
-        }
-        e_.engine.reset();
         refs_.clear();
+        const std::string why = e_.finish();
+        QVERIFY2(why.empty(), why.c_str());
     }
 
     // slideInfo() against OpenSlide's own figures, and the engine's 256×256 grid.

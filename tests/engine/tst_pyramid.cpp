@@ -80,7 +80,6 @@ class TstPyramid : public QObject {
     Q_OBJECT
 
     TestEngine e_;
-    uint64_t validationBefore_ = 0;
 
     std::optional<iris::Frame> render(const iris::View& view, uint32_t w, uint32_t h) {
         if (const iris::Result r = e_->bindOffscreen(w, h); !r.ok()) {
@@ -130,20 +129,17 @@ private slots:
         QVERIFY2(e_, describe(e_.error).c_str());
     }
 
-    void init() { validationBefore_ = e_ ? e_->validationMessageCount() : 0; }
+    void init() { e_.beginTest(); }
 
     void cleanup() {
-        if (!e_) return;
-        e_->setOverlayVisible(iris::Overlay::Overview, false);
-        QCOMPARE(e_->validationMessageCount() - validationBefore_, uint64_t(0));
-        const auto errors = e_.log->takeErrors();
-        for (const auto& line : errors) qWarning("engine logged an error: %s", line.c_str());
-        QVERIFY2(errors.empty(), "the engine logged Error lines (see above)");
+        if (e_) e_->setOverlayVisible(iris::Overlay::Overview, false);
+        const std::string why = e_.endTest();
+        QVERIFY2(why.empty(), why.c_str());
     }
 
     void cleanupTestCase() {
-        if (e_) e_->close();
-        e_.engine.reset();
+        const std::string why = e_.finish();
+        QVERIFY2(why.empty(), why.c_str());
     }
 
     // Which slides get synthetic levels, and what those levels are.

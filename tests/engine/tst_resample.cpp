@@ -216,7 +216,6 @@ class TestResample : public QObject {
     Q_OBJECT
 
     TestEngine e_;
-    uint64_t validationBefore_ = 0;
     std::string openPath_;
 
 private slots:
@@ -232,19 +231,16 @@ private slots:
         e_->setEnhance(false);
     }
 
-    void init() { validationBefore_ = e_ ? e_->validationMessageCount() : 0; }
+    void init() { e_.beginTest(); }
 
     void cleanup() {
-        if (!e_) return;
-        QCOMPARE(e_->validationMessageCount() - validationBefore_, uint64_t(0));
-        const auto errors = e_.log->takeErrors();
-        for (const auto& line : errors) qWarning("engine logged an error: %s", line.c_str());
-        QVERIFY2(errors.empty(), "the engine logged Error lines while rendering good slides (see above)");
+        const std::string why = e_.endTest(); // good slides: no Error line
+        QVERIFY2(why.empty(), why.c_str());
     }
 
     void cleanupTestCase() {
-        if (e_) QCOMPARE(e_->validationMessageCount(), uint64_t(0));
-        e_.engine.reset();
+        const std::string why = e_.finish();
+        QVERIFY2(why.empty(), why.c_str());
     }
 
     void closeToReference_data() {

@@ -16,25 +16,25 @@ namespace iris::sample {
 
 inline constexpr int kTileSize = 256;
 inline constexpr int64_t kMaxDimension = 1'000'000;
-inline constexpr double kMicronsPerPixel = 0.25;  // a 40x scan
+inline constexpr double kMicronsPerPixel = 0.25; // a 40x scan
 
 struct Options {
-  std::string outPath = "iris-sample.tiff";
-  int64_t width = 50000;
-  int64_t height = 40000;
-  uint64_t seed = 1;
-  int quality = 90;  // JPEG quality, 1..100
-  int threads = 0;   // 0: std::thread::hardware_concurrency()
+    std::string outPath = "iris-sample.tiff";
+    int64_t width = 50000;
+    int64_t height = 40000;
+    uint64_t seed = 1;
+    int quality = 90; // JPEG quality, 1..100
+    int threads = 0;  // 0: std::thread::hardware_concurrency()
 };
 
 struct Result {
-  bool ok = false;
-  std::string message;  // error text when !ok, a one-line summary when ok
+    bool ok = false;
+    std::string message; // error text when !ok, a one-line summary when ok
 };
 
 struct LevelInfo {
-  int64_t width = 0;
-  int64_t height = 0;
+    int64_t width = 0;
+    int64_t height = 0;
 };
 
 // Progress: fraction done in [0, 1]. Called from the writing thread only.
@@ -54,10 +54,9 @@ Result writeSampleSlide(const Options& options, const ProgressCallback& progress
 // (tileX, tileY) exactly as they were handed to the JPEG encoder. Pixels beyond the
 // image's right/bottom edge are generated as well (they lie in the tile's padding).
 // Returns false (and leaves rgb untouched) for bad arguments.
-bool generateTile(const Options& options, int64_t tileX, int64_t tileY,
-                  std::vector<uint8_t>& rgb);
+bool generateTile(const Options& options, int64_t tileX, int64_t tileY, std::vector<uint8_t>& rgb);
 
 // True when level-0 tile (tileX, tileY) is pure empty glass.
 bool isGlassTile(const Options& options, int64_t tileX, int64_t tileY);
 
-}  // namespace iris::sample
+} // namespace iris::sample

@@ -233,6 +233,25 @@ private slots:
 
     void init() { e_.beginTest(); }
 
+    // Opens `p` with OpenSlide, and in the engine unless it has it open already; null with the
+    // reason in *why when either fails.
+    std::unique_ptr<OpenSlideRef> openSlide(const std::filesystem::path& p, std::string* why) {
+        if (!std::filesystem::exists(p)) {
+            *why = "missing: " + p.string();
+            return nullptr;
+        }
+        auto os = OpenSlideRef::open(p, why);
+        if (os && openPath_ != p.string()) {
+            openPath_.clear();
+            if (const iris::Result r = e_->open(p.string()); !r.ok()) {
+                *why = describe(r);
+                return nullptr;
+            }
+            openPath_ = p.string();
+        }
+        return os;
+    }
+
     void cleanup() {
         const std::string why = e_.endTest(); // good slides: no Error line
         QVERIFY2(why.empty(), why.c_str());
@@ -269,16 +288,9 @@ private slots:
         QFETCH(double, fy);
         if (path.isEmpty()) QSKIP("no test data (set IRIS_TESTDATA or IRIS_TESTDATA_DEFAULT)");
         const std::filesystem::path p = path.toStdString();
-        QVERIFY2(std::filesystem::exists(p), ("missing: " + p.string()).c_str());
         std::string err;
-        auto os = OpenSlideRef::open(p, &err);
+        auto os = openSlide(p, &err);
         QVERIFY2(os, err.c_str());
-        if (openPath_ != p.string()) {
-            openPath_.clear();
-            const iris::Result r = e_->open(p.string());
-            QVERIFY2(r.ok(), describe(r).c_str());
-            openPath_ = p.string();
-        }
         const auto info = e_->slideInfo();
         QVERIFY(info.has_value());
 
@@ -348,16 +360,9 @@ private slots:
         QFETCH(double, downsample);
         if (path.isEmpty()) QSKIP("no test data (set IRIS_TESTDATA or IRIS_TESTDATA_DEFAULT)");
         const std::filesystem::path p = path.toStdString();
-        QVERIFY2(std::filesystem::exists(p), ("missing: " + p.string()).c_str());
         std::string err;
-        auto os = OpenSlideRef::open(p, &err);
+        auto os = openSlide(p, &err);
         QVERIFY2(os, err.c_str());
-        if (openPath_ != p.string()) {
-            openPath_.clear();
-            const iris::Result r = e_->open(p.string());
-            QVERIFY2(r.ok(), describe(r).c_str());
-            openPath_ = p.string();
-        }
         const auto info = e_->slideInfo();
         QVERIFY(info.has_value());
         const int64_t tiles = 256; // the engine's tile (kTileSize)

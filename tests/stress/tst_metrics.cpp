@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "iris/engine.h"
-#include "iris/environment.h"
+#include "test_support.h"
 
 class TestMetrics : public QObject {
     Q_OBJECT
@@ -22,16 +22,11 @@ private slots:
 
 void TestMetrics::scriptedMoves() {
     iris::EngineConfig cfg;
-    cfg.validation = true;
-    cfg.loaderThreads = 2;
     cfg.perimeterTiles = 0; // the buffered set is then exactly the visible tiles
     cfg.vramBudgetBytes = 64ull << 20;
-    auto tuning = iris::tuningFromEnvironment();
-    QVERIFY2(tuning.ok(), tuning.ok() ? "" : tuning.error().message().c_str());
-    cfg.tuning = *tuning;
-    auto created = iris::Engine::create(cfg);
-    QVERIFY2(created.ok(), created.ok() ? "" : created.error().message().c_str());
-    iris::Engine& e = **created;
+    iristest::TestEngine created = iristest::createTestEngine(cfg);
+    QVERIFY2(created, iristest::describe(created.error).c_str());
+    iris::Engine& e = *created.engine;
     QVERIFY(e.bindOffscreen(512, 512).ok());
     QVERIFY(e.open("synthetic:100000x100000").ok());
     // Field A: level-0 [20480, 20992)², tile-aligned at downsample 1 → HR (level 0) tiles
@@ -90,16 +85,10 @@ void TestMetrics::pacedFrames() {
     // Pacing on whatever the device; IRIS_PACE_FRAMES=0 turns it off, and then this test must
     // fail (it did: every field had tile-only frames closer together than that).
     iris::EngineConfig cfg;
-    cfg.validation = true;
-    cfg.loaderThreads = 2;
-    iris::EngineTuning paced;
-    paced.pacing = iris::EngineTuning::Pacing::On;
-    auto tuning = iris::tuningFromEnvironment(paced);
-    QVERIFY2(tuning.ok(), tuning.ok() ? "" : tuning.error().message().c_str());
-    cfg.tuning = *tuning;
-    auto created = iris::Engine::create(cfg);
-    QVERIFY2(created.ok(), created.ok() ? "" : created.error().message().c_str());
-    iris::Engine& e = **created;
+    cfg.tuning.pacing = iris::EngineTuning::Pacing::On; // the environment may still override it
+    iristest::TestEngine created = iristest::createTestEngine(cfg);
+    QVERIFY2(created, iristest::describe(created.error).c_str());
+    iris::Engine& e = *created.engine;
     QVERIFY(e.bindOffscreen(1024, 768).ok());
     QVERIFY(e.open("synthetic:200000x200000").ok());
     QVERIFY(e.waitForFrame(std::chrono::seconds(60)).ok());

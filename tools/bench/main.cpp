@@ -447,12 +447,8 @@ int main(int argc, char** argv) {
         ->option_text("N")
         ->check(iris::tools::wholeNumber<uint64_t>(0, std::numeric_limits<uint64_t>::max()));
     app.add_flag("--validation", o.validation, "Run with the Vulkan validation layer");
-    app.footer("Exit status: 0 done; 1 the engine, slide or an output failed; 2 bad arguments." "\n\nEnvironment (EngineTuning, see iris/environment.h):\n"
-               "  IRIS_PACE_FRAMES=0|1           frame pacing off/on (default: on for CPU devices)\n"
-               "  IRIS_DRAW_COVERED=0|1          draw tiles hidden under finer ones\n"
-               "  IRIS_MIP_SCHEDULE=wide|serial  mip compute schedule (default: by device type)\n"
-               "  IRIS_DEVICE=TEXT               use the Vulkan device whose name contains TEXT\n"
-               "  IRIS_QUEUES=single|auto        every role on the graphics queue");
+    app.footer(std::string("Exit status: 0 done; 1 the engine, slide or an output failed; 2 bad arguments.") +
+               iris::tools::kTuningEnvironmentHelp);
     if (const int status = iris::tools::parseArguments(app, argc, argv); status >= 0) return status;
     if (auto tuning = iris::tuningFromEnvironment(); tuning.ok()) {
         o.tuning = *tuning;

@@ -82,12 +82,8 @@ int main(int argc, char** argv) {
     app.add_flag("--validation", validation, "Run with the Vulkan validation layer; fail if it\nreports anything");
     app.add_flag("-v,--verbose", verbose, "Log every engine message and the frame's timing\nto stderr");
     app.footer("Exit status: 0 written; 1 the device, the slide or the output failed, the frame\n"
-               "was not complete in time, or validation reported messages; 2 bad arguments." "\n\nEnvironment (EngineTuning, see iris/environment.h):\n"
-               "  IRIS_PACE_FRAMES=0|1           frame pacing off/on (default: on for CPU devices)\n"
-               "  IRIS_DRAW_COVERED=0|1          draw tiles hidden under finer ones\n"
-               "  IRIS_MIP_SCHEDULE=wide|serial  mip compute schedule (default: by device type)\n"
-               "  IRIS_DEVICE=TEXT               use the Vulkan device whose name contains TEXT\n"
-               "  IRIS_QUEUES=single|auto        every role on the graphics queue");
+               "was not complete in time, or validation reported messages; 2 bad arguments." +
+               std::string(iris::tools::kTuningEnvironmentHelp));
     if (const int status = iris::tools::parseArguments(app, argc, argv); status >= 0) return status;
     auto tuning = iris::tuningFromEnvironment();
     if (!tuning) return iris::tools::usageError(app, tuning.error().message());

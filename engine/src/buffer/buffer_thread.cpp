@@ -102,7 +102,8 @@ void BufferThread::stop() {
                                      .semaphoreCount = 1,
                                      .pSemaphores = &timeline_,
                                      .pValues = &nextValue_};
-        vkWaitSemaphores(device_.device(), &wi, UINT64_MAX);
+        if (const VkResult r = vkWaitSemaphores(device_.device(), &wi, UINT64_MAX); r != VK_SUCCESS)
+            log_.error(vk::check(r, "vkWaitSemaphores (uploads in flight at shutdown)").message());
     }
 }
 
@@ -126,7 +127,12 @@ void BufferThread::run() {
                                          .semaphoreCount = 1,
                                          .pSemaphores = &timeline_,
                                          .pValues = &oldest};
-            vkWaitSemaphores(device_.device(), &wi, 2'000'000);
+            if (const VkResult r = vkWaitSemaphores(device_.device(), &wi, 2'000'000); r < 0) {
+                // The device is lost: nothing in flight will complete. Report it once (first
+                // error wins) and sleep until the host changes something, instead of spinning.
+                shared_.setError(vk::check(r, "vkWaitSemaphores (uploads in flight)"));
+                shared_.waitChange(seen);
+            }
             continue;
         }
         shared_.waitChange(seen);

@@ -37,7 +37,7 @@ bool hasInstanceExtension(const char* name) {
 
 Device::~Device() {
     if (device_) {
-        vkDeviceWaitIdle(device_);
+        (void)vkDeviceWaitIdle(device_); // going away: a lost device is destroyed all the same
         vkDestroyDevice(device_, nullptr);
     }
     if (messenger_) {
@@ -289,10 +289,10 @@ VkResult Device::present(const VkPresentInfoKHR& info) {
     return vkQueuePresentKHR(queues_[q], &info);
 }
 
-void Device::waitIdle() {
+Result Device::waitIdle() {
     // vkDeviceWaitIdle needs every queue externally synchronised.
     std::scoped_lock lock(queueMutex_[0], queueMutex_[1], queueMutex_[2]);
-    vkDeviceWaitIdle(device_);
+    return vk::check(vkDeviceWaitIdle(device_), "vkDeviceWaitIdle");
 }
 
 } // namespace iris::gpu

@@ -50,7 +50,8 @@ public:
     VkResult submit(const VkSubmitInfo2& info, VkFence fence) { return submit(Role::Graphics, info, fence); }
     VkResult submit(Role role, const VkSubmitInfo2& info, VkFence fence);
     VkResult present(const VkPresentInfoKHR& info);
-    void waitIdle();
+    // vkDeviceWaitIdle under every queue's mutex; an error (a lost device) is returned.
+    [[nodiscard]] Result waitIdle();
 
     uint64_t validationMessages() const { return validationMessages_.load(std::memory_order_relaxed); }
 

@@ -59,7 +59,7 @@ Result Swapchain::recreate(uint32_t width, uint32_t height) {
         extent.height = std::clamp(height, caps.minImageExtent.height, caps.maxImageExtent.height);
     }
     // The old swapchain's images may still be in use by the presentation engine: wait.
-    device_.waitIdle();
+    if (Result r = device_.waitIdle(); !r.ok()) return r;
     destroyResources();
     VkSwapchainKHR old = swapchain_;
     swapchain_ = VK_NULL_HANDLE;

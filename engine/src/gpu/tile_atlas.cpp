@@ -77,25 +77,29 @@ Result TileAtlas::init(uint64_t vramBudgetBytes) {
                                           .commandPool = pool,
                                           .level = VK_COMMAND_BUFFER_LEVEL_PRIMARY,
                                           .commandBufferCount = 1};
-    vkAllocateCommandBuffers(dev, &cai, &cmd);
+    // Each step runs only if the one before succeeded; the first failure is reported, and the
+    // fence and the pool go away on every path.
+    VkResult sr = vkAllocateCommandBuffers(dev, &cai, &cmd);
     const VkCommandBufferBeginInfo bi{.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO,
                                       .pNext = nullptr,
                                       .flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT,
                                       .pInheritanceInfo = nullptr};
-    vkBeginCommandBuffer(cmd, &bi);
+    if (sr == VK_SUCCESS) sr = vkBeginCommandBuffer(cmd, &bi);
     const VkImageMemoryBarrier2 b = vk::imageBarrier(image_, VK_PIPELINE_STAGE_2_NONE, VK_ACCESS_2_NONE,
                                                  VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT,
                                                  VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL, vk::colorRange());
-    vk::pipelineBarrier(cmd, &b, 1);
-    vkEndCommandBuffer(cmd);
-    VkFence fence;
+    if (sr == VK_SUCCESS) {
+        vk::pipelineBarrier(cmd, &b, 1);
+        sr = vkEndCommandBuffer(cmd);
+    }
+    VkFence fence = VK_NULL_HANDLE;
     const VkFenceCreateInfo fci{.sType = VK_STRUCTURE_TYPE_FENCE_CREATE_INFO, .pNext = nullptr, .flags = 0};
-    vkCreateFence(dev, &fci, nullptr, &fence);
+    if (sr == VK_SUCCESS) sr = vkCreateFence(dev, &fci, nullptr, &fence);
     const VkCommandBufferSubmitInfo cbi = vk::commandInfo(cmd);
     const VkSubmitInfo2 si = vk::submitInfo(&cbi);
-    VkResult sr = device_.submit(si, fence);
+    if (sr == VK_SUCCESS) sr = device_.submit(si, fence);
     if (sr == VK_SUCCESS) sr = vkWaitForFences(dev, 1, &fence, VK_TRUE, UINT64_MAX);
-    vkDestroyFence(dev, fence, nullptr);
+    if (fence) vkDestroyFence(dev, fence, nullptr);
     vkDestroyCommandPool(dev, pool, nullptr);
     IRIS_VK_TRY(sr);
 

@@ -172,18 +172,18 @@ void destroyMappedBuffer(VkDevice dev, MappedBuffer& b) {
     b = MappedBuffer{};
 }
 
-void invalidate(VkDevice dev, const MappedBuffer& b) {
-    if (b.coherent) return;
+Result invalidate(VkDevice dev, const MappedBuffer& b) {
+    if (b.coherent) return {};
     const VkMappedMemoryRange range{
         .sType = VK_STRUCTURE_TYPE_MAPPED_MEMORY_RANGE, .pNext = nullptr, .memory = b.memory, .offset = 0, .size = VK_WHOLE_SIZE};
-    vkInvalidateMappedMemoryRanges(dev, 1, &range);
+    return check(vkInvalidateMappedMemoryRanges(dev, 1, &range), "vkInvalidateMappedMemoryRanges");
 }
 
-void flush(VkDevice dev, const MappedBuffer& b) {
-    if (b.coherent) return;
+Result flush(VkDevice dev, const MappedBuffer& b) {
+    if (b.coherent) return {};
     const VkMappedMemoryRange range{
         .sType = VK_STRUCTURE_TYPE_MAPPED_MEMORY_RANGE, .pNext = nullptr, .memory = b.memory, .offset = 0, .size = VK_WHOLE_SIZE};
-    vkFlushMappedMemoryRanges(dev, 1, &range);
+    return check(vkFlushMappedMemoryRanges(dev, 1, &range), "vkFlushMappedMemoryRanges");
 }
 
 Result createShaderModule(VkDevice dev, const uint32_t* code, size_t bytes, VkShaderModule& out) {

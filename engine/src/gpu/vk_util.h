@@ -194,8 +194,8 @@ Result createMappedBuffer(VkPhysicalDevice pd, VkDevice dev, VkDeviceSize size, 
                           bool preferCached, MappedBuffer& out);
 void destroyMappedBuffer(VkDevice dev, MappedBuffer& b);
 // Makes device writes visible to the host for non-coherent memory.
-void invalidate(VkDevice dev, const MappedBuffer& b);
+[[nodiscard]] Result invalidate(VkDevice dev, const MappedBuffer& b);
 // Makes host writes visible to the device for non-coherent memory.
-void flush(VkDevice dev, const MappedBuffer& b);
+[[nodiscard]] Result flush(VkDevice dev, const MappedBuffer& b);
 
 } // namespace iris::vk

@@ -100,7 +100,8 @@ OverlayFrame OverlayRenderer::prepare(uint32_t slot, const Snapshot& snap, VkExt
         r[1].count = n - r[1].first;
         out.ranges.push_back(r);
     }
-    vk::flush(device_.device(), s.instances);
+    // (Host-coherent memory, as on lavapipe and NVIDIA, needs no flush and cannot fail here.)
+    if (Result r = vk::flush(device_.device(), s.instances); !r.ok()) log_.error("overlay instances: " + r.message());
 
     // Glyphs rasterised for this frame: into the slot's staging buffer (the atlas is its size,
     // so everything pending fits).
@@ -108,7 +109,7 @@ OverlayFrame OverlayRenderer::prepare(uint32_t slot, const Snapshot& snap, VkExt
     const auto& bytes = glyphs_.pending();
     if (!uploads.empty() && bytes.size() <= s.staging.size) {
         std::memcpy(s.staging.mapped, bytes.data(), bytes.size());
-        vk::flush(device_.device(), s.staging);
+        if (Result r = vk::flush(device_.device(), s.staging); !r.ok()) log_.error("glyph upload: " + r.message());
         out.uploads = uint32_t(uploads.size());
     }
     return out;

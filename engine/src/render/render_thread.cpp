@@ -49,7 +49,7 @@ RenderThread::~RenderThread() {
     stop();
     VkDevice dev = device_.device();
     if (!dev) return;
-    device_.waitIdle();
+    if (Result r = device_.waitIdle(); !r.ok()) log_.error(r.message()); // going away regardless
     swapchain_.reset();
     offscreen_.reset();
     if (timestamps_) vkDestroyQueryPool(dev, timestamps_, nullptr);
@@ -207,7 +207,7 @@ void RenderThread::applyTargetRequest() {
         }
     }
     // Whatever the request, the old target goes first (after the GPU is done with it).
-    device_.waitIdle();
+    if (Result r = device_.waitIdle(); !r.ok()) shared_.setError(r);
     for (FrameSlot& f : frames_)
         if (Result r = waitSlot(f); !r.ok()) shared_.setError(r); // a lost device: the first error sticks
     offscreen_.reset();
@@ -331,6 +331,7 @@ bool RenderThread::showsLayerWhole(const Snapshot& snap) const {
 }
 
 Result RenderThread::waitSlot(FrameSlot& f) {
+    if (!f.fence) return Result(Status::DeviceLost, "frame slot without a fence (a submit failed and so did its replacement)");
     IRIS_VK_TRY(vkWaitForFences(device_.device(), 1, &f.fence, VK_TRUE, UINT64_MAX));
     if (f.timed) {
         uint64_t t[2] = {0, 0};
@@ -602,10 +603,15 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
     const VkSubmitInfo2 si = vk::submitInfo(&cbi, waits, waitCount, &sigDone, surface ? 1u : 0u);
     if (const VkResult sr = device_.submit(si, f.fence); sr != VK_SUCCESS) {
         // The fence was reset but nothing will signal it: replace it with a signalled one so
-        // the next use of this frame slot does not wait forever.
+        // the next use of this frame slot does not wait forever. Should even that fail (the
+        // device is gone), the slot has no fence and waitSlot reports the loss instead.
         vkDestroyFence(dev, f.fence, nullptr);
+        f.fence = VK_NULL_HANDLE;
         const VkFenceCreateInfo fci{.sType = VK_STRUCTURE_TYPE_FENCE_CREATE_INFO, .pNext = nullptr, .flags = VK_FENCE_CREATE_SIGNALED_BIT};
-        vkCreateFence(dev, &fci, nullptr, &f.fence);
+        if (const VkResult fr = vkCreateFence(dev, &fci, nullptr, &f.fence); fr != VK_SUCCESS) {
+            f.fence = VK_NULL_HANDLE;
+            log_.error("vkCreateFence after a failed frame submit: " + vk::check(fr, "vkCreateFence").message());
+        }
         return vk::check(sr, "vkQueueSubmit2 (frame)");
     }
 
@@ -639,7 +645,7 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
     }
     // Offscreen: the frame is read back right away (that is what an offscreen target is for).
     if (Result r = waitSlot(f); !r.ok()) return r;
-    vk::invalidate(dev, offscreen_->readback());
+    if (Result r = vk::invalidate(dev, offscreen_->readback()); !r.ok()) return r;
     {
         // A new Frame each time: readers may still be copying the previous one.
         auto frame = std::make_shared<Frame>();

@@ -16,6 +16,7 @@
 #include "gpu/tile_atlas.h"
 #include "gpu/tile_pipeline.h"
 #include "overlay/font.h"
+#include "metrics/field_metrics.h"
 #include "render/render_thread.h"
 #include "slide/pyramid_source.h"
 #include "view/view_model.h"
@@ -61,37 +62,12 @@ struct Engine::Impl {
         return {};
     }
 
-    // A move whose new field shares no pixel with the old one starts a TeFOV measurement,
-    // unless every LR and HR tile of the new field is already drawable (a revisit).
+    // A move whose new field shares no pixel with the old one starts a TeFOV measurement
+    // (metrics/field_metrics.h; the render thread leaves a revisit, whose tiles are all
+    // resident already, untimed).
     void noteFieldMove(Snapshot& s, const View& before) {
         if (!s.slide || s.viewport.width == 0) return;
-        const double w = s.viewport.width, h = s.viewport.height;
-        const View& a = before;
-        const View& b = s.viewport.view;
-        const double ax0 = a.centerX - w / 2 * a.downsample, ax1 = a.centerX + w / 2 * a.downsample;
-        const double ay0 = a.centerY - h / 2 * a.downsample, ay1 = a.centerY + h / 2 * a.downsample;
-        const double bx0 = b.centerX - w / 2 * b.downsample, bx1 = b.centerX + w / 2 * b.downsample;
-        const double by0 = b.centerY - h / 2 * b.downsample, by1 = b.centerY + h / 2 * b.downsample;
-        // Fields that only touch (a walk of adjacent fields) share no pixel, even when their
-        // edges, computed from different centres, differ by a rounding error: overlaps below
-        // a thousandth of a screen pixel do not count.
-        const double eps = 1e-3 * std::max(a.downsample, b.downsample);
-        const bool overlap = ax0 + eps < bx1 && bx0 + eps < ax1 && ay0 + eps < by1 && by0 + eps < ay1;
-        if (overlap) return;
-        const LevelChoice c = chooseLevels(s.slide->info, b.downsample);
-        bool resident = true;
-        for (int li : {c.lr, c.hr}) {
-            if (li < 0 || !resident) continue;
-            const TileRange r = visibleTiles(s.slide->info.levels[size_t(li)], s.viewport, 0);
-            for (int64_t ty = r.y0; ty <= r.y1 && resident; ++ty)
-                for (int64_t tx = r.x0; tx <= r.x1 && resident; ++tx)
-                    resident = atlas.map().statusOf(TileKey::make(s.slide->generation, li, tx, ty)) ==
-                               gpu::TileMap::Status::Active;
-        }
-        if (resident) {
-            s.fieldId = 0; // a revisit: not timed (and any field still being timed is superseded)
-            return;
-        }
+        if (!metrics::isNewField(before, s.viewport.view, s.viewport.width, s.viewport.height)) return;
         s.fieldId = ++fieldCounter;
         s.fieldStart = std::chrono::steady_clock::now();
         s.fieldTilesAtStart = counters.tiles.load(std::memory_order_relaxed);

@@ -41,7 +41,7 @@ RenderThread::RenderThread(SharedState& shared, gpu::Device& device, gpu::TileAt
                            Handover& handover, const UploadCounters& counters, const Log& log,
                            const EngineTuning& tuning)
     : shared_(shared), device_(device), atlas_(atlas), pipeline_(pipeline), handover_(handover), counters_(counters),
-      log_(log), overlays_(device, log), tuning_(tuning) {
+      log_(log), overlays_(device, log), metrics_(counters), tuning_(tuning) {
     if (tuning_.drawCovered) log_.info("draw covered: coarse tiles are drawn also under resident finer tiles");
 }
 
@@ -424,13 +424,13 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
     const bool sizeMatches = kind_ == TargetKind::Offscreen
                                  ? extent.width == snap.viewport.width && extent.height == snap.viewport.height
                                  : !extentPending_;
-    FieldProgress progress;
+    metrics::FieldProgress progress;
     if (snap.slide) {
         const render::DrawOptions options{
             .drawCovered = tuning_.drawCovered, .sizeMatches = sizeMatches, .maxInstances = kMaxInstances};
         render::buildDrawList(snap.slide->info, snap.slide->generation, vp, options, pins, drawList_);
         drawList_.copyInstances(inst);
-        progress = FieldProgress{.hasLr = drawList_.hasLr,
+        progress = metrics::FieldProgress{.hasLr = drawList_.hasLr,
                                  .lrComplete = drawList_.lrComplete,
                                  .hrComplete = drawList_.hrComplete,
                                  .lrTiles = drawList_.lrTiles,
@@ -439,7 +439,7 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
     const uint32_t count = snap.slide ? drawList_.instanceCount() : 0;
     bool complete = progress.hrComplete;
     if (progress.lrComplete) lrWholeViewSerial_ = snap.viewSerial;
-    trackField(snap, progress);
+    metrics_.frameDrawn(snap, progress);
 
     // Overlays, laid out for this target; the overview's thumbnail is the coarsest level's
     // tiles (the ones kept resident), placed at the thumbnail's downsample after the view's
@@ -684,20 +684,7 @@ void RenderThread::publishFrame(const Snapshot& snap, bool complete, uint32_t ti
         Shown{overlays, snap.slide ? std::weak_ptr<const SlideSource>(snap.slide->source) : std::weak_ptr<const SlideSource>()}));
     const bool newlyComplete = complete && snap.viewSerial > completeViewSerial_.load(std::memory_order_relaxed);
     if (newlyComplete) completeViewSerial_.store(snap.viewSerial, std::memory_order_seq_cst);
-    // Publish without ever waiting for a reader: a busy lock leaves the figures for next time.
-    if (std::unique_lock lock(metricsMutex_, std::try_to_lock); lock.owns_lock()) {
-        metrics_.frames = stats.serial;
-        metrics_.lastFrame = stats;
-        metrics_.tilesBuffered = counters_.tiles.load(std::memory_order_relaxed);
-        metrics_.bytesBuffered = counters_.bytes.load(std::memory_order_relaxed);
-        metrics_.mipGpuMs = double(counters_.mipNs.load(std::memory_order_relaxed)) / 1e6;
-        metrics_.mipTiles = counters_.mipTiles.load(std::memory_order_relaxed);
-        for (FieldStats& fs : unpublished_) metrics_.fields.push_back(fs);
-        unpublished_.clear();
-        constexpr size_t kKeep = 4096;
-        if (metrics_.fields.size() > kKeep)
-            metrics_.fields.erase(metrics_.fields.begin(), metrics_.fields.end() - long(kKeep));
-    }
+    metrics_.publish(stats);
     // After the metrics, so that a waiter that wakes sees this frame's figures. The lock is
     // taken only when a thread sleeps in waitForFrame (see frameWaiters_).
     if (newlyComplete && frameWaiters_.load(std::memory_order_seq_cst) > 0) {
@@ -717,53 +704,8 @@ OverlayLayout RenderThread::overlayLayout(std::shared_ptr<const SlideSource>* so
     return shown->overlays;
 }
 
-EngineMetrics RenderThread::metrics() const {
-    std::lock_guard lock(metricsMutex_);
-    return metrics_;
-}
+EngineMetrics RenderThread::metrics() const { return metrics_.read(); }
 
-void RenderThread::resetMetrics() {
-    std::lock_guard lock(metricsMutex_);
-    metrics_.fields.clear();
-}
-
-void RenderThread::finishField(bool superseded) {
-    if (!field_.active) return;
-    if (superseded) field_.stats.hrTeFovMs = -1;
-    unpublished_.push_back(field_.stats);
-    field_.active = false;
-}
-
-void RenderThread::trackField(const Snapshot& snap, const FieldProgress& p) {
-    if (snap.fieldId != field_.id) {
-        finishField(/*superseded=*/true);
-        field_ = FieldTrack{};
-        field_.id = snap.fieldId;
-        if (snap.fieldId != 0) {
-            field_.active = true;
-            field_.start = snap.fieldStart;
-            field_.tilesAtStart = snap.fieldTilesAtStart;
-            field_.stats.id = snap.fieldId;
-            field_.stats.view = snap.viewport.view;
-        }
-    }
-    if (!field_.active) return;
-    const auto now = Clock::now();
-    const double ms = std::chrono::duration<double, std::milli>(now - field_.start).count();
-    const uint64_t tiles = counters_.tiles.load(std::memory_order_relaxed) - field_.tilesAtStart;
-    field_.stats.lrTiles = p.lrTiles;
-    field_.stats.hrTiles = p.hrTiles;
-    if (p.hasLr && !field_.lrDone && p.lrComplete) {
-        field_.lrDone = true;
-        field_.stats.lrTeFovMs = ms;
-        field_.stats.lrTptUs = tiles ? ms * 1000.0 / double(tiles) : -1;
-    }
-    if (p.hrComplete) {
-        field_.stats.hrTeFovMs = ms;
-        field_.stats.tilesBuffered = uint32_t(tiles);
-        field_.stats.hrTptUs = tiles ? ms * 1000.0 / double(tiles) : -1;
-        finishField(/*superseded=*/false);
-    }
-}
+void RenderThread::resetMetrics() { metrics_.resetFields(); }
 
 } // namespace iris

@@ -20,6 +20,7 @@
 #include "gpu/render_target.h"
 #include "gpu/tile_atlas.h"
 #include "gpu/tile_pipeline.h"
+#include "metrics/field_metrics.h"
 #include "render/draw_list.h"
 #include "render/overlay_renderer.h"
 
@@ -80,12 +81,6 @@ private:
     Result renderFrame(const Snapshot& snap);
     Result waitSlot(FrameSlot& f);
     void publishFrame(const Snapshot& snap, bool complete, uint32_t tiles, double cpuMs, const OverlayLayout& overlays);
-    struct FieldProgress {
-        bool hasLr = false, lrComplete = false, hrComplete = false;
-        uint32_t lrTiles = 0, hrTiles = 0;
-    };
-    void trackField(const Snapshot& snap, const FieldProgress& p);
-    void finishField(bool superseded);
     // Frame pacing on CPU devices (see run()): whether a frame of `snap` drawn now would show
     // the view's HR or LR layer whole for the first time. Such a frame is never delayed.
     bool showsLayerWhole(const Snapshot& snap) const;
@@ -103,16 +98,8 @@ private:
     double lastGpuMs_ = -1;
     uint64_t lastBytes_ = 0;
 
-    // Field-of-view timing (render thread only), published into metrics_.
-    struct FieldTrack {
-        bool active = false, lrDone = false;
-        uint64_t id = 0, tilesAtStart = 0;
-        std::chrono::steady_clock::time_point start{};
-        FieldStats stats;
-    } field_;
-    std::vector<FieldStats> unpublished_;
-    mutable std::mutex metricsMutex_;
-    EngineMetrics metrics_;
+    // Field-of-view timing and the published figures (metrics/field_metrics.h).
+    metrics::MetricsBoard metrics_;
 
     render::DrawList drawList_;                  // this frame's tiles (render thread only; reused)
     std::vector<gpu::TileInstance> thumbnail_;   // this frame's overview thumbnail tiles (same)

@@ -18,7 +18,15 @@ bool isNewField(const View& a, const View& b, double w, double h) {
 void MetricsBoard::finishField(bool superseded) {
     if (!field_.active) return;
     if (superseded) field_.stats.hrTeFovMs = -1;
-    unpublished_.push_back(field_.stats);
+    // A new list (boards already published keep theirs); a field finishes at most once a frame.
+    auto next = std::make_shared<std::vector<FieldStats>>();
+    const std::vector<FieldStats>& prev = *fields_;
+    const size_t keep = std::min(prev.size(), kKeepFields - 1);
+    next->reserve(keep + 1);
+    next->insert(next->end(), prev.end() - long(keep), prev.end());
+    next->push_back(field_.stats);
+    fields_ = std::move(next);
+    ++fieldsTotal_;
     field_.active = false;
 }
 
@@ -61,32 +69,61 @@ void MetricsBoard::frameDrawn(const Snapshot& snap, const FieldProgress& p) {
     }
 }
 
-void MetricsBoard::publish(const FrameStats& stats) {
-    // Never wait for a reader: a busy lock leaves the figures (and the finished fields, kept in
-    // unpublished_) for the next frame.
-    std::unique_lock lock(mutex_, std::try_to_lock);
-    if (!lock.owns_lock()) return;
-    published_.frames = stats.serial;
-    published_.lastFrame = stats;
-    published_.tilesBuffered = counters_.tiles.load(std::memory_order_relaxed);
-    published_.bytesBuffered = counters_.bytes.load(std::memory_order_relaxed);
-    published_.mipGpuMs = double(counters_.mipNs.load(std::memory_order_relaxed)) / 1e6;
-    published_.mipTiles = counters_.mipTiles.load(std::memory_order_relaxed);
-    for (FieldStats& fs : unpublished_) published_.fields.push_back(fs);
-    unpublished_.clear();
-    constexpr size_t kKeep = 4096;
-    if (published_.fields.size() > kKeep)
-        published_.fields.erase(published_.fields.begin(), published_.fields.end() - long(kKeep));
+FrameStats MetricsBoard::frameFinished(const Snapshot& snap, uint64_t serial, bool complete, uint32_t tilesDrawn,
+                                       double cpuMs, double gpuMs) {
+    FrameStats stats;
+    const auto now = std::chrono::steady_clock::now();
+    stats.serial = serial;
+    stats.intervalMs = lastFrameTime_.time_since_epoch().count()
+                           ? std::chrono::duration<double, std::milli>(now - lastFrameTime_).count()
+                           : 0;
+    lastFrameTime_ = now;
+    stats.cpuMs = cpuMs;
+    stats.gpuMs = gpuMs;
+    const uint64_t bytes = counters_.bytes.load(std::memory_order_relaxed);
+    stats.bytesBuffered = bytes - lastBytes_;
+    lastBytes_ = bytes;
+    stats.bufferRateGBps = stats.intervalMs > 0 ? double(stats.bytesBuffered) / (stats.intervalMs * 1e6) : 0;
+    stats.tilesDrawn = tilesDrawn;
+    stats.complete = complete;
+    stats.view = snap.viewport.view;
+
+    auto board = std::make_shared<Board>();
+    EngineMetrics& m = board->figures;
+    m.frames = serial;
+    m.lastFrame = stats;
+    m.tilesBuffered = counters_.tiles.load(std::memory_order_relaxed);
+    m.bytesBuffered = bytes;
+    m.mipGpuMs = double(counters_.mipNs.load(std::memory_order_relaxed)) / 1e6;
+    m.mipTiles = counters_.mipTiles.load(std::memory_order_relaxed);
+    board->fields = fields_;
+    board->fieldsTotal = fieldsTotal_;
+    board_.store(std::move(board));
+    return stats;
 }
 
 EngineMetrics MetricsBoard::read() const {
-    std::lock_guard lock(mutex_);
-    return published_;
+    const std::shared_ptr<const Board> board = board_.load();
+    if (!board) return {};
+    EngineMetrics m = board->figures;
+    // The board lists fields [fieldsTotal - size, fieldsTotal); those below fieldsReset_ were
+    // finished before the last resetFields().
+    const std::vector<FieldStats>& all = *board->fields;
+    const uint64_t firstListed = board->fieldsTotal - all.size();
+    const uint64_t reset = fieldsReset_.load(std::memory_order_acquire);
+    const size_t skip = reset > firstListed ? size_t(std::min<uint64_t>(reset - firstListed, all.size())) : 0;
+    m.fields.assign(all.begin() + long(skip), all.end());
+    return m;
 }
 
 void MetricsBoard::resetFields() {
-    std::lock_guard lock(mutex_);
-    published_.fields.clear();
+    // Everything the newest board lists is dropped; a field finished after it (not yet on a
+    // board) is kept. Monotonic, so concurrent resets keep the later mark.
+    const std::shared_ptr<const Board> board = board_.load();
+    const uint64_t mark = board ? board->fieldsTotal : 0;
+    uint64_t cur = fieldsReset_.load(std::memory_order_relaxed);
+    while (cur < mark && !fieldsReset_.compare_exchange_weak(cur, mark, std::memory_order_release)) {
+    }
 }
 
 } // namespace iris::metrics

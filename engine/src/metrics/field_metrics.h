@@ -9,15 +9,22 @@
 //                  resident (a revisit) and is not timed — and publishes the frame's stats and
 //                  the finished fields for the API threads (metrics(), resetMetrics()).
 //
-// Publication never waits on a reader: the render thread try_locks the board and, when a
-// reader holds it, keeps its figures for the next frame. Readers hold the lock only to copy.
+//   frameFinished  (render thread) the frame's stats (interval, GPU and CPU time, bytes
+//                  buffered since the last frame) made and published with the fields finished.
+//
+// Publication takes no lock: each frame publishes an immutable board by pointer swap
+// (core/published.h); the list of finished fields is shared between boards and copied only
+// when a field finishes. resetFields() does not write the board: it records how many fields
+// had been finished, and read() leaves those out.
 #pragma once
 
+#include <atomic>
 #include <chrono>
 #include <cstdint>
-#include <mutex>
+#include <memory>
 #include <vector>
 
+#include "core/published.h"
 #include "core/shared_state.h"
 #include "iris/types.h"
 
@@ -42,8 +49,11 @@ public:
     // --- render thread -------------------------------------------------------------------
     // A frame of `snap` was drawn and showed `p` of its field.
     void frameDrawn(const Snapshot& snap, const FieldProgress& p);
-    // The frame's stats, with the fields finished since the last publication.
-    void publish(const FrameStats& stats);
+    // Frame `serial` of `snap` was submitted (and presented or read back): makes its stats
+    // (`gpuMs`: the GPU time of the last frame whose timestamps have come back, -1 when none)
+    // and publishes them with the fields finished since the last frame.
+    FrameStats frameFinished(const Snapshot& snap, uint64_t serial, bool complete, uint32_t tilesDrawn, double cpuMs,
+                             double gpuMs);
 
     // --- API threads ---------------------------------------------------------------------
     EngineMetrics read() const;
@@ -60,10 +70,23 @@ private:
         std::chrono::steady_clock::time_point start{};
         FieldStats stats;
     } field_;
-    std::vector<FieldStats> unpublished_;
-    // The published figures.
-    mutable std::mutex mutex_;
-    EngineMetrics published_;
+    std::chrono::steady_clock::time_point lastFrameTime_{};
+    uint64_t lastBytes_ = 0;
+    // The fields finished so far (the last kKeepFields), shared by the boards that list them;
+    // fieldsTotal_ counts every field ever finished. Render thread only.
+    static constexpr size_t kKeepFields = 4096;
+    std::shared_ptr<const std::vector<FieldStats>> fields_ = std::make_shared<const std::vector<FieldStats>>();
+    uint64_t fieldsTotal_ = 0;
+
+    // What the API threads read: one immutable board per frame.
+    struct Board {
+        EngineMetrics figures; // all but the fields
+        std::shared_ptr<const std::vector<FieldStats>> fields;
+        uint64_t fieldsTotal = 0; // fields ever finished when this board was made
+    };
+    Published<Board> board_;
+    // resetFields(): fields numbered below this (counting from 0 in finishing order) are left out.
+    std::atomic<uint64_t> fieldsReset_{0};
 };
 
 } // namespace iris::metrics

@@ -41,7 +41,8 @@ RenderThread::RenderThread(SharedState& shared, gpu::Device& device, gpu::TileAt
                            Handover& handover, const UploadCounters& counters, const Log& log,
                            const EngineTuning& tuning)
     : shared_(shared), device_(device), atlas_(atlas), pipeline_(pipeline), handover_(handover), counters_(counters),
-      log_(log), overlays_(device, log), metrics_(counters), tuning_(tuning) {
+      log_(log), metrics_(counters), tuning_(tuning), tilePass_(pipeline, tuning.drawCovered),
+      hudPass_(device, log, tilePass_) {
     if (tuning_.drawCovered) log_.info("draw covered: coarse tiles are drawn also under resident finer tiles");
 }
 
@@ -71,7 +72,7 @@ Result RenderThread::init() {
     case EngineTuning::Pacing::Off: paceFrames_ = false; break;
     }
     log_.info(std::string("frame pacing: ") + (paceFrames_ ? "on" : "off"));
-    if (Result r = overlays_.init(kFramesInFlight); !r.ok()) return r;
+    if (Result r = hudPass_.init(kFramesInFlight); !r.ok()) return r;
     if (Result r = vk::createTimestampPool(device_.physical(), dev, device_.queueFamily(), 2 * kFramesInFlight,
                                            timestamps_, timestampPeriodNs_);
         !r.ok())
@@ -192,7 +193,7 @@ void RenderThread::applyTargetRequest() {
         request_.pending = false;
         requestPending_.store(false, std::memory_order_relaxed);
     }
-    extentPending_ = false; // a new size: its own patience
+    windowGiveUp_.reset(); // a new size: its own patience
     if (!req.resizeOnly && req.kind == TargetKind::Offscreen) readback_ = req.readback;
     if (req.resizeOnly) {
         reqWidth_ = req.width;
@@ -200,7 +201,7 @@ void RenderThread::applyTargetRequest() {
         if (kind_ == TargetKind::Offscreen) {
             req.kind = TargetKind::Offscreen;
         } else if (kind_ == TargetKind::Surface) {
-            swapchainDirty_ = true;
+            if (surfacePhase_ != SurfacePhase::Lost) surfacePhase_ = SurfacePhase::Stale;
             return;
         } else {
             return;
@@ -226,7 +227,7 @@ void RenderThread::applyTargetRequest() {
     } else if (kind_ == TargetKind::Surface) {
         surface_ = req.surface;
         if (!swapchain_) swapchain_ = std::make_unique<gpu::Swapchain>(device_, surface_);
-        swapchainDirty_ = true;
+        surfacePhase_ = SurfacePhase::Stale;
     } else {
         surface_ = VK_NULL_HANDLE;
         std::lock_guard lock(mutex_);
@@ -235,35 +236,85 @@ void RenderThread::applyTargetRequest() {
     }
 }
 
-void RenderThread::run() {
-    uint64_t renderedWake = UINT64_MAX;
-    while (!shared_.stopping.load(std::memory_order_acquire)) {
-        const uint64_t seen = shared_.wakeValue();
-        applyTargetRequest();
-        if (kind_ == TargetKind::Surface && swapchainDirty_) {
-            swapchainDirty_ = false;
+RenderThread::TargetStep RenderThread::handleSurfaceChanges() {
+    applyTargetRequest();
+    TargetStep step;
+    if (kind_ == TargetKind::Surface && swapchain_) {
+        if (surfacePhase_ == SurfacePhase::WaitingForWindow) {
+            const VkExtent2D e = swapchain_->surfaceExtent();
+            if (e.width == reqWidth_ && e.height == reqHeight_) {
+                surfacePhase_ = SurfacePhase::Stale; // the window has its new size now
+            } else if (windowGiveUp_ && Clock::now() >= *windowGiveUp_) {
+                const VkExtent2D s = swapchain_->extent();
+                log_.warn("the window is " + std::to_string(s.width) + "x" + std::to_string(s.height) + " pixels, not the " +
+                          std::to_string(reqWidth_) + "x" + std::to_string(reqHeight_) +
+                          " the host asked for; drawing at its size");
+                surfacePhase_ = SurfacePhase::Current;
+                step.redraw = true; // a frame at this size is complete now
+            } else {
+                step.poll = true;
+            }
+        }
+        if (surfacePhase_ == SurfacePhase::Stale) {
+            step.redraw = true; // a new swapchain needs a frame, and that frame is not paced
             if (Result r = swapchain_->recreate(reqWidth_, reqHeight_); !r.ok()) {
                 shared_.setError(r);
                 log_.error("swapchain: " + r.message());
             }
-            renderedWake = UINT64_MAX; // a new swapchain needs a frame
-            drawnViewSerial_ = UINT64_MAX; // and is not paced
-            checkSwapchainExtent();
-        } else if (kind_ == TargetKind::Surface && extentPending_ && swapchain_) {
-            const VkExtent2D e = swapchain_->surfaceExtent();
-            if (e.width == reqWidth_ && e.height == reqHeight_) {
-                swapchainDirty_ = true; // the window has its new size now
-                continue;
+            surfacePhase_ = SurfacePhase::Current;
+            // Made at another size than the host asked for: the window system has not applied
+            // the window's resize yet (X11 reports the window's size at that moment, and a
+            // software WSI may never say that the swapchain went stale). Frames are drawn but
+            // none is complete until the surface reports the asked-for size (polled, then
+            // recreated) or kWindowPatience has passed.
+            const VkExtent2D e = swapchain_->extent();
+            if (swapchain_->valid() && reqWidth_ && reqHeight_ && (e.width != reqWidth_ || e.height != reqHeight_)) {
+                if (!windowGiveUp_) {
+                    windowGiveUp_ = Clock::now() + kWindowPatience;
+                    log_.info("swapchain made at " + std::to_string(e.width) + "x" + std::to_string(e.height) +
+                              ", the host asked for " + std::to_string(reqWidth_) + "x" + std::to_string(reqHeight_) +
+                              ": waiting for the window to follow");
+                }
+                if (Clock::now() < *windowGiveUp_) {
+                    surfacePhase_ = SurfacePhase::WaitingForWindow;
+                    step.poll = true;
+                } else {
+                    log_.warn("the window is " + std::to_string(e.width) + "x" + std::to_string(e.height) +
+                              " pixels, not the " + std::to_string(reqWidth_) + "x" + std::to_string(reqHeight_) +
+                              " the host asked for; drawing at its size");
+                }
             }
-            checkSwapchainExtent();
-            if (!extentPending_) renderedWake = UINT64_MAX; // gave up: a frame at this size is complete now
+        }
+        if (surfacePhase_ == SurfacePhase::Lost) {
+            // The window system took the surface away (its window is gone or was re-created):
+            // nothing can be drawn until the host binds a new one (the widget does when it
+            // next shows its window).
+            const Result r(Status::Vulkan, "the window's Vulkan surface was lost; drawing stops until a new one is bound");
+            shared_.setError(r);
+            log_.error(r.message());
+            if (Result w = device_.waitIdle(); !w.ok()) shared_.setError(w);
+            swapchain_.reset();
+        }
+    }
+    step.drawable = (kind_ == TargetKind::Offscreen && offscreen_) ||
+                    (kind_ == TargetKind::Surface && swapchain_ && swapchain_->valid());
+    return step;
+}
+
+void RenderThread::run() {
+    uint64_t renderedWake = 0;
+    bool rendered = false; // renderedWake is the wake value of the last frame drawn
+    while (!shared_.stopping.load(std::memory_order_acquire)) {
+        const uint64_t seen = shared_.wakeValue();
+        const TargetStep step = handleSurfaceChanges();
+        if (step.redraw) {
+            rendered = false;                 // a new or resized target needs a frame
+            drawnViewSerial_ = UINT64_MAX;    // which is not paced
         }
         const Snapshot snap = shared_.snapshot();
-        const bool canRender = (kind_ == TargetKind::Offscreen && offscreen_) ||
-                               (kind_ == TargetKind::Surface && swapchain_ && swapchain_->valid());
-        if (!canRender || !snap.visible || seen == renderedWake) {
-            if (extentPending_) {
-                std::this_thread::sleep_for(std::chrono::milliseconds(5)); // poll the surface's size
+        if (!step.drawable || !snap.visible || (rendered && seen == renderedWake)) {
+            if (step.poll) {
+                std::this_thread::sleep_for(kWindowPoll); // the window system tells no one: look again
             } else {
                 shared_.waitChange(seen);
             }
@@ -285,37 +336,19 @@ void RenderThread::run() {
             if (r.status() == Status::DeviceLost) {
                 // Nothing more can be drawn; sleep until the host tears the engine down.
                 renderedWake = seen;
+                rendered = true;
                 shared_.waitChange(seen);
                 continue;
             }
         }
         renderedWake = seen;
+        rendered = true;
         drawnViewSerial_ = snap.viewSerial;
         if (paceFrames_ && lastGpuMs_ > 0) {
             paceUntil_ = Clock::now() + std::chrono::duration_cast<Clock::duration>(
                                             std::chrono::duration<double, std::milli>(kPaceFactor * lastGpuMs_));
         }
     }
-}
-
-void RenderThread::checkSwapchainExtent() {
-    const bool wasPending = extentPending_;
-    extentPending_ = false;
-    if (!swapchain_ || !swapchain_->valid() || reqWidth_ == 0 || reqHeight_ == 0) return;
-    const VkExtent2D e = swapchain_->extent();
-    if (e.width == reqWidth_ && e.height == reqHeight_) return;
-    const auto now = Clock::now();
-    if (!wasPending) {
-        extentGiveUp_ = now + kExtentPatience;
-        log_.info("swapchain made at " + std::to_string(e.width) + "x" + std::to_string(e.height) + ", the host asked for " +
-                  std::to_string(reqWidth_) + "x" + std::to_string(reqHeight_) + ": waiting for the window to follow");
-    }
-    if (now < extentGiveUp_) {
-        extentPending_ = true;
-        return;
-    }
-    log_.warn("the window is " + std::to_string(e.width) + "x" + std::to_string(e.height) + " pixels, not the " +
-              std::to_string(reqWidth_) + "x" + std::to_string(reqHeight_) + " the host asked for; drawing at its size");
 }
 
 bool RenderThread::showsLayerWhole(const Snapshot& snap) const {
@@ -349,45 +382,40 @@ Result RenderThread::waitSlot(FrameSlot& f) {
     return {};
 }
 
+Expected<RenderThread::TargetImage> RenderThread::acquireTarget(FrameSlot& f) {
+    if (kind_ == TargetKind::Offscreen)
+        return TargetImage{offscreen_->image(), offscreen_->view(), gpu::OffscreenTarget::kFormat, offscreen_->extent(), 0};
+    uint32_t index = 0;
+    const VkResult ar = vkAcquireNextImageKHR(device_.device(), swapchain_->handle(), 100'000'000, f.acquired,
+                                              VK_NULL_HANDLE, &index);
+    switch (ar) {
+    case VK_SUCCESS: break;
+    case VK_SUBOPTIMAL_KHR: surfacePhase_ = SurfacePhase::Stale; break; // draw this one, recreate after
+    case VK_ERROR_OUT_OF_DATE_KHR:
+        surfacePhase_ = SurfacePhase::Stale;
+        shared_.bump();
+        return TargetImage{};
+    case VK_ERROR_SURFACE_LOST_KHR:
+        surfacePhase_ = SurfacePhase::Lost;
+        shared_.bump();
+        return TargetImage{};
+    case VK_TIMEOUT:
+    case VK_NOT_READY:
+        shared_.bump(); // try again on the next pass
+        return TargetImage{};
+    default: return vk::check(ar, "vkAcquireNextImageKHR");
+    }
+    return TargetImage{swapchain_->image(index), swapchain_->view(index), swapchain_->format(), swapchain_->extent(), index};
+}
+
 Result RenderThread::renderFrame(const Snapshot& snap) {
     const auto t0 = Clock::now();
-    VkDevice dev = device_.device();
     FrameSlot& f = frames_[serial_ % kFramesInFlight];
     if (Result r = waitSlot(f); !r.ok()) return r;
-
-    // Target image for this frame.
-    VkImage image;
-    VkImageView view;
-    VkFormat format;
-    VkExtent2D extent;
-    uint32_t imageIndex = 0;
-    if (kind_ == TargetKind::Offscreen) {
-        image = offscreen_->image();
-        view = offscreen_->view();
-        format = gpu::OffscreenTarget::kFormat;
-        extent = offscreen_->extent();
-    } else {
-        const VkResult ar = vkAcquireNextImageKHR(dev, swapchain_->handle(), 100'000'000, f.acquired, VK_NULL_HANDLE, &imageIndex);
-        if (ar == VK_ERROR_OUT_OF_DATE_KHR) {
-            swapchainDirty_ = true;
-            shared_.bump();
-            return {};
-        }
-        if (ar == VK_TIMEOUT || ar == VK_NOT_READY) {
-            shared_.bump(); // try again on the next pass
-            return {};
-        }
-        if (ar == VK_SUBOPTIMAL_KHR) swapchainDirty_ = true; // draw this one, recreate after
-        else IRIS_VK_TRY(ar);
-        image = swapchain_->image(imageIndex);
-        view = swapchain_->view(imageIndex);
-        format = swapchain_->format();
-        extent = swapchain_->extent();
-    }
-    Expected<VkPipeline> pipe = pipeline_.pipelineFor(format);
-    if (!pipe) return pipe.error();
-    Expected<VkPipeline> seamPipe = pipeline_.seamPipelineFor(format);
-    if (!seamPipe) return seamPipe.error();
+    Expected<TargetImage> acquired = acquireTarget(f);
+    if (!acquired) return acquired.error();
+    const TargetImage target = *acquired;
+    if (!target.image) return {}; // nothing to draw into now (handleSurfaceChanges follows up)
 
     const uint64_t serial = ++serial_;
     f.serial = serial;
@@ -412,56 +440,38 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
         });
     }
 
-    // Draw list: base, LR, HR, each only where its tiles are ACTIVE (render/draw_list).
-    Viewport vp = snap.viewport;
-    vp.width = extent.width;
-    vp.height = extent.height;
-    auto* inst = static_cast<gpu::TileInstance*>(f.instances.mapped);
+    // The passes prepare on the CPU: what each draws, in the frame slot's own buffers.
     FramePins pins(atlas_.map(), serial, &f.pinned);
-    // A frame drawn into a target whose size is not the published one (a rebind or resize
-    // not yet applied; a swapchain made before the window system resized the window) shows
-    // the right view at the wrong size: it is never "complete".
-    const bool sizeMatches = kind_ == TargetKind::Offscreen
-                                 ? extent.width == snap.viewport.width && extent.height == snap.viewport.height
-                                 : !extentPending_;
-    metrics::FieldProgress progress;
-    if (snap.slide) {
-        const render::DrawOptions options{
-            .drawCovered = tuning_.drawCovered, .sizeMatches = sizeMatches, .maxInstances = kMaxInstances};
-        render::buildDrawList(snap.slide->info, snap.slide->generation, vp, options, pins, drawList_);
-        drawList_.copyInstances(inst);
-        progress = metrics::FieldProgress{.hasLr = drawList_.hasLr,
-                                 .lrComplete = drawList_.lrComplete,
-                                 .hrComplete = drawList_.hrComplete,
-                                 .lrTiles = drawList_.lrTiles,
-                                 .hrTiles = drawList_.hrTiles};
-    }
-    const uint32_t count = snap.slide ? drawList_.instanceCount() : 0;
-    bool complete = progress.hrComplete;
-    if (progress.lrComplete) lrWholeViewSerial_ = snap.viewSerial;
-    metrics_.frameDrawn(snap, progress);
+    render::InstanceArena instances{static_cast<gpu::TileInstance*>(f.instances.mapped), f.instances.buffer,
+                                    kMaxInstances, 0};
+    render::FrameContext frame{.snap = snap,
+                               .viewport = snap.viewport,
+                               .extent = target.extent,
+                               .format = target.format,
+                               .slot = uint32_t(&f - frames_.data()),
+                               .serial = serial,
+                               // A frame drawn into a target whose size is not the published one
+                               // (a rebind or resize not yet applied; a swapchain made before
+                               // the window system resized the window) shows the right view at
+                               // the wrong size: it is never complete.
+                               .sizeMatches = kind_ == TargetKind::Offscreen
+                                                  ? target.extent.width == snap.viewport.width &&
+                                                        target.extent.height == snap.viewport.height
+                                                  : surfacePhase_ != SurfacePhase::WaitingForWindow,
+                               .tiles = pins,
+                               .instances = instances};
+    frame.viewport.width = target.extent.width;
+    frame.viewport.height = target.extent.height;
+    const auto passFailed = [&](render::FramePass& pass, const Result& r) {
+        shared_.setError(r);
+        log_.error(std::string(pass.name()) + ": " + r.message());
+    };
+    for (render::FramePass* pass : passes_)
+        if (Result r = pass->prepare(frame); !r.ok()) passFailed(*pass, r); // the frame goes on without it
+    if (tilePass_.progress().lrComplete) lrWholeViewSerial_ = snap.viewSerial;
+    metrics_.frameDrawn(snap, tilePass_.progress());
 
-    // Overlays, laid out for this target; the overview's thumbnail is the coarsest level's
-    // tiles (the ones kept resident), placed at the thumbnail's downsample after the view's
-    // tiles in the same instance buffer. While a shown thumbnail misses tiles of a level kept
-    // whole, the frame is not complete.
-    const uint32_t slotIndex = uint32_t(&f - frames_.data());
-    const OverlayFrame overlay = overlays_.prepare(slotIndex, snap, extent);
-    if (!overlay.fontError.ok()) {
-        shared_.setError(overlay.fontError);
-        log_.error("overlay font: " + overlay.fontError.message());
-    }
-    const uint32_t thumbFirst = count;
-    thumbnail_.clear();
-    for (const overlay::OverlayDraw& d : overlay.plan.draws) {
-        if (!d.thumbnail || !snap.slide) continue;
-        if (!render::appendThumbnail(snap.slide->info, snap.slide->generation, vp.view.downsample, d.thumbnailView,
-                                     d.thumbnailRect.x, d.thumbnailRect.y, kMaxInstances - count, pins, thumbnail_))
-            complete = false;
-    }
-    const uint32_t thumbCount = uint32_t(thumbnail_.size());
-    if (thumbCount > 0) std::memcpy(inst + thumbFirst, thumbnail_.data(), thumbCount * sizeof(gpu::TileInstance));
-
+    // Recording: uploads, then one render pass with every pass's draws in order.
     VkCommandBuffer cmd = f.cmd;
     IRIS_VK_TRY(vkResetCommandBuffer(cmd, 0));
     const VkCommandBufferBeginInfo bi{.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO,
@@ -477,16 +487,16 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
     // Previous contents are discarded (UNDEFINED); the wait on the previous frame's copy
     // (offscreen) or on the acquire semaphore (swapchain) is covered by the source stages.
     const VkImageMemoryBarrier2 toColor = vk::imageBarrier(
-        image, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT | VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_NONE,
+        target.image, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT | VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_NONE,
         VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
         VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, vk::colorRange(0, 1, 0, 1));
     vk::pipelineBarrier(cmd, &toColor, 1);
     if (!acquires.empty()) vk::pipelineBarrier(cmd, acquires.data(), uint32_t(acquires.size()));
-    overlays_.recordUploads(cmd, slotIndex, overlay);
+    for (render::FramePass* pass : passes_) pass->recordUploads(cmd, frame);
     const VkRenderingAttachmentInfo color{
         .sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO,
         .pNext = nullptr,
-        .imageView = view,
+        .imageView = target.view,
         .imageLayout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
         .resolveMode = VK_RESOLVE_MODE_NONE,
         .resolveImageView = VK_NULL_HANDLE,
@@ -500,7 +510,7 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
         .sType = VK_STRUCTURE_TYPE_RENDERING_INFO,
         .pNext = nullptr,
         .flags = 0,
-        .renderArea = {{0, 0}, extent},
+        .renderArea = {{0, 0}, target.extent},
         .layerCount = 1,
         .viewMask = 0,
         .colorAttachmentCount = 1,
@@ -509,50 +519,25 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
         .pStencilAttachment = nullptr,
     };
     vkCmdBeginRendering(cmd, &ri);
-    // Tile quads [first, first + n) of this frame's instance buffer; with `seams`, then the
-    // seam pass's four bands of each (gpu/tile_pipeline.h). The overview's thumbnail is drawn
-    // the same way inside the overlay pass, under the scissor that clips it.
-    const auto drawTiles = [&](uint32_t first, uint32_t n, bool seams) {
-        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, *pipe);
-        const VkViewport viewport{0, 0, float(extent.width), float(extent.height), 0, 1};
-        vkCmdSetViewport(cmd, 0, 1, &viewport);
-        VkDescriptorSet set = pipeline_.descriptorSet();
-        vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline_.layout(), 0, 1, &set, 0, nullptr);
-        gpu::TilePush push{{float(extent.width), float(extent.height)}};
-        vkCmdPushConstants(cmd, pipeline_.layout(), VK_SHADER_STAGE_VERTEX_BIT, 0, sizeof(push), &push);
-        const VkDeviceSize offset = 0;
-        vkCmdBindVertexBuffers(cmd, 0, 1, &f.instances.buffer, &offset);
-        vkCmdDraw(cmd, 4, n, 0, first);
-        if (!seams) return;
-        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, *seamPipe);
-        for (push.edge = 1; push.edge <= 4; ++push.edge) {
-            vkCmdPushConstants(cmd, pipeline_.layout(), VK_SHADER_STAGE_VERTEX_BIT, 0, sizeof(push), &push);
-            vkCmdDraw(cmd, 4, n, 0, first);
-        }
-    };
-    if (count > 0) {
-        const VkRect2D scissor{{0, 0}, extent};
-        vkCmdSetScissor(cmd, 0, 1, &scissor);
-        // Level by level in painter's order: a level's seam bands go on before finer levels.
-        uint32_t first = 0;
-        for (const render::LevelDraw& d : drawList_.levels) {
-            const uint32_t n = uint32_t(d.instances.size());
-            if (n > 0) drawTiles(first, n, d.linked);
-            first += n;
-        }
-    }
-    const Result drawn = overlays_.recordDraws(cmd, slotIndex, overlay, format, extent, [&](const overlay::OverlayDraw&) {
-        if (thumbCount > 0) drawTiles(thumbFirst, thumbCount, false);
-    });
-    if (!drawn.ok()) { // the frame goes on without its overlays
-        shared_.setError(drawn);
-        log_.error("overlays: " + drawn.message());
-    }
+    for (render::FramePass* pass : passes_)
+        if (Result r = pass->recordDraws(cmd, frame); !r.ok()) passFailed(*pass, r);
     vkCmdEndRendering(cmd);
+    recordTargetFinish(cmd, target);
+    if (timestamps_) vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, timestamps_, query + 1);
+    IRIS_VK_TRY(vkEndCommandBuffer(cmd));
+    f.timed = timestamps_ != VK_NULL_HANDLE;
 
+    if (Result r = submitFrame(f, target, uploadWait); !r.ok()) return r;
+    if (Result r = deliverFrame(f, target, frame); !r.ok()) return r;
+    publishFrame(snap, frame.complete, tilePass_.tilesDrawn(),
+                 std::chrono::duration<double, std::milli>(Clock::now() - t0).count(), hudPass_.layout());
+    return {};
+}
+
+void RenderThread::recordTargetFinish(VkCommandBuffer cmd, const TargetImage& target) {
     if (kind_ == TargetKind::Offscreen && readback_) {
         const VkImageMemoryBarrier2 toCopy = vk::imageBarrier(
-            image, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
+            target.image, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
             VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_READ_BIT, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
             VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, vk::colorRange(0, 1, 0, 1));
         vk::pipelineBarrier(cmd, &toCopy, 1);
@@ -562,9 +547,10 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
             .bufferImageHeight = 0,
             .imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1},
             .imageOffset = {0, 0, 0},
-            .imageExtent = {extent.width, extent.height, 1},
+            .imageExtent = {target.extent.width, target.extent.height, 1},
         };
-        vkCmdCopyImageToBuffer(cmd, image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, offscreen_->readback().buffer, 1, &region);
+        vkCmdCopyImageToBuffer(cmd, target.image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, offscreen_->readback().buffer, 1,
+                               &region);
         const VkBufferMemoryBarrier2 toHost{
             .sType = VK_STRUCTURE_TYPE_BUFFER_MEMORY_BARRIER_2,
             .pNext = nullptr,
@@ -581,110 +567,92 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
         vk::pipelineBarrier(cmd, toHost);
     } else if (kind_ == TargetKind::Surface) {
         const VkImageMemoryBarrier2 toPresent = vk::imageBarrier(
-            image, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
+            target.image, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
             VK_PIPELINE_STAGE_2_NONE, VK_ACCESS_2_NONE, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
             VK_IMAGE_LAYOUT_PRESENT_SRC_KHR, vk::colorRange(0, 1, 0, 1));
         vk::pipelineBarrier(cmd, &toPresent, 1);
     }
-    if (timestamps_) vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, timestamps_, query + 1);
-    IRIS_VK_TRY(vkEndCommandBuffer(cmd));
-    f.timed = timestamps_ != VK_NULL_HANDLE;
+}
 
+Result RenderThread::submitFrame(FrameSlot& f, const TargetImage& target, uint64_t uploadWait) {
+    VkDevice dev = device_.device();
     IRIS_VK_TRY(vkResetFences(dev, 1, &f.fence));
-    const VkCommandBufferSubmitInfo cbi = vk::commandInfo(cmd);
+    const VkCommandBufferSubmitInfo cbi = vk::commandInfo(f.cmd);
     const bool surface = kind_ == TargetKind::Surface;
     VkSemaphoreSubmitInfo waits[2];
     uint32_t waitCount = 0;
     if (surface) waits[waitCount++] = vk::semaphoreInfo(f.acquired, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT);
     if (uploadWait)
         waits[waitCount++] = vk::semaphoreInfo(handover_.uploadTimeline, uploadWait, VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT);
-    const VkSemaphoreSubmitInfo sigDone =
-        vk::semaphoreInfo(surface ? swapchain_->renderDone(imageIndex) : VK_NULL_HANDLE, 0, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT);
+    const VkSemaphoreSubmitInfo sigDone = vk::semaphoreInfo(
+        surface ? swapchain_->renderDone(target.index) : VK_NULL_HANDLE, 0, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT);
     const VkSubmitInfo2 si = vk::submitInfo(&cbi, waits, waitCount, &sigDone, surface ? 1u : 0u);
-    if (const VkResult sr = device_.submit(si, f.fence); sr != VK_SUCCESS) {
-        // The fence was reset but nothing will signal it: replace it with a signalled one so
-        // the next use of this frame slot does not wait forever. Should even that fail (the
-        // device is gone), the slot has no fence and waitSlot reports the loss instead.
-        vkDestroyFence(dev, f.fence, nullptr);
+    const VkResult sr = device_.submit(si, f.fence);
+    if (sr == VK_SUCCESS) return {};
+    // The fence was reset but nothing will signal it: replace it with a signalled one so the
+    // next use of this frame slot does not wait forever. Should even that fail (the device is
+    // gone), the slot has no fence and waitSlot reports the loss instead.
+    vkDestroyFence(dev, f.fence, nullptr);
+    f.fence = VK_NULL_HANDLE;
+    const VkFenceCreateInfo fci{.sType = VK_STRUCTURE_TYPE_FENCE_CREATE_INFO, .pNext = nullptr, .flags = VK_FENCE_CREATE_SIGNALED_BIT};
+    if (const VkResult fr = vkCreateFence(dev, &fci, nullptr, &f.fence); fr != VK_SUCCESS) {
         f.fence = VK_NULL_HANDLE;
-        const VkFenceCreateInfo fci{.sType = VK_STRUCTURE_TYPE_FENCE_CREATE_INFO, .pNext = nullptr, .flags = VK_FENCE_CREATE_SIGNALED_BIT};
-        if (const VkResult fr = vkCreateFence(dev, &fci, nullptr, &f.fence); fr != VK_SUCCESS) {
-            f.fence = VK_NULL_HANDLE;
-            log_.error("vkCreateFence after a failed frame submit: " + vk::check(fr, "vkCreateFence").message());
-        }
-        return vk::check(sr, "vkQueueSubmit2 (frame)");
+        log_.error("vkCreateFence after a failed frame submit: " + vk::check(fr, "vkCreateFence").message());
     }
+    return vk::check(sr, "vkQueueSubmit2 (frame)");
+}
 
-    if (surface) {
+Result RenderThread::deliverFrame(FrameSlot& f, const TargetImage& target, const render::FrameContext& frame) {
+    if (kind_ == TargetKind::Surface) {
         VkSwapchainKHR sc = swapchain_->handle();
-        VkSemaphore done = swapchain_->renderDone(imageIndex);
+        VkSemaphore done = swapchain_->renderDone(target.index);
         const VkPresentInfoKHR pi{.sType = VK_STRUCTURE_TYPE_PRESENT_INFO_KHR,
                                   .pNext = nullptr,
                                   .waitSemaphoreCount = 1,
                                   .pWaitSemaphores = &done,
                                   .swapchainCount = 1,
                                   .pSwapchains = &sc,
-                                  .pImageIndices = &imageIndex,
+                                  .pImageIndices = &target.index,
                                   .pResults = nullptr};
-        const VkResult pr = device_.present(pi);
-        if (pr == VK_ERROR_OUT_OF_DATE_KHR || pr == VK_SUBOPTIMAL_KHR) {
-            swapchainDirty_ = true;
+        switch (const VkResult pr = device_.present(pi)) {
+        case VK_SUCCESS: return {};
+        case VK_SUBOPTIMAL_KHR:
+        case VK_ERROR_OUT_OF_DATE_KHR:
+            surfacePhase_ = SurfacePhase::Stale;
             shared_.bump();
-        } else {
-            IRIS_VK_TRY(pr);
+            return {};
+        case VK_ERROR_SURFACE_LOST_KHR:
+            surfacePhase_ = SurfacePhase::Lost;
+            shared_.bump();
+            return {};
+        default: return vk::check(pr, "vkQueuePresentKHR");
         }
-        publishFrame(snap, complete, count, std::chrono::duration<double, std::milli>(Clock::now() - t0).count(),
-                     overlay.plan.layout);
-        return {};
     }
-
-    if (!readback_) {
-        publishFrame(snap, complete, count, std::chrono::duration<double, std::milli>(Clock::now() - t0).count(),
-                     overlay.plan.layout);
-        return {};
-    }
+    if (!readback_) return {};
     // Offscreen: the frame is read back right away (that is what an offscreen target is for).
     if (Result r = waitSlot(f); !r.ok()) return r;
-    if (Result r = vk::invalidate(dev, offscreen_->readback()); !r.ok()) return r;
-    {
-        // A new Frame each time: readers may still be copying the previous one.
-        auto frame = std::make_shared<Frame>();
-        frame->image.width = extent.width;
-        frame->image.height = extent.height;
-        frame->image.rgba.resize(size_t(extent.width) * extent.height * 4);
-        std::memcpy(frame->image.rgba.data(), offscreen_->readback().mapped, frame->image.rgba.size());
-        frame->view = vp.view;
-        frame->serial = serial;
-        frame->complete = complete;
-        frame->overlays = overlay.plan.layout;
-        lastFrame_.store(std::move(frame));
-    }
-    publishFrame(snap, complete, count, std::chrono::duration<double, std::milli>(Clock::now() - t0).count(),
-                 overlay.plan.layout);
+    if (Result r = vk::invalidate(device_.device(), offscreen_->readback()); !r.ok()) return r;
+    // A new Frame each time: readers may still be copying the previous one.
+    auto out = std::make_shared<Frame>();
+    out->image.width = target.extent.width;
+    out->image.height = target.extent.height;
+    out->image.rgba.resize(size_t(target.extent.width) * target.extent.height * 4);
+    std::memcpy(out->image.rgba.data(), offscreen_->readback().mapped, out->image.rgba.size());
+    out->view = frame.viewport.view;
+    out->serial = frame.serial;
+    out->complete = frame.complete;
+    out->overlays = hudPass_.layout();
+    lastFrame_.store(std::move(out));
     return {};
 }
 
 void RenderThread::publishFrame(const Snapshot& snap, bool complete, uint32_t tiles, double cpuMs,
                                 const OverlayLayout& overlays) {
-    FrameStats stats;
-    const auto now = Clock::now();
-    stats.serial = serial_;
-    stats.intervalMs = lastFrameTime_.time_since_epoch().count() ? std::chrono::duration<double, std::milli>(now - lastFrameTime_).count() : 0;
-    lastFrameTime_ = now;
-    stats.cpuMs = cpuMs;
-    stats.gpuMs = lastGpuMs_;
-    const uint64_t bytes = counters_.bytes.load(std::memory_order_relaxed);
-    stats.bytesBuffered = bytes - lastBytes_;
-    lastBytes_ = bytes;
-    stats.bufferRateGBps = stats.intervalMs > 0 ? double(stats.bytesBuffered) / (stats.intervalMs * 1e6) : 0;
-    stats.tilesDrawn = tiles;
-    stats.complete = complete;
-    stats.view = snap.viewport.view;
     shown_.store(std::make_shared<const Shown>(
         Shown{overlays, snap.slide ? std::weak_ptr<const SlideSource>(snap.slide->source) : std::weak_ptr<const SlideSource>()}));
     const bool newlyComplete = complete && snap.viewSerial > completeViewSerial_.load(std::memory_order_relaxed);
     if (newlyComplete) completeViewSerial_.store(snap.viewSerial, std::memory_order_seq_cst);
-    metrics_.publish(stats);
+    const FrameStats stats = metrics_.frameFinished(snap, serial_, complete, tiles, cpuMs, lastGpuMs_);
     // After the metrics, so that a waiter that wakes sees this frame's figures. The lock is
     // taken only when a thread sleeps in waitForFrame (see frameWaiters_).
     if (newlyComplete && frameWaiters_.load(std::memory_order_seq_cst) > 0) {

@@ -1,8 +1,11 @@
 // The render thread: owns the render target (offscreen image or swapchain), the frame
-// command buffers and the instance buffers. Per frame it draws every ACTIVE tile of the
-// base level, then the LR level, then the HR level over them (tiles not yet buffered are
-// simply absent, so coarser ones show through), then the overlays (OverlayRenderer). It
-// renders while something changes and sleeps on the shared wake counter otherwise.
+// command buffers and the instance buffers, and the frame's passes (render/frame_pass.h): the
+// tiles of the base, LR and HR levels (tiles not yet buffered are simply absent, so coarser
+// ones show through), then the HUD overlays. Per frame: handleSurfaceChanges() (target
+// requests, stale swapchains, a window that lags its resize, a lost surface), acquire the
+// target image, prepare the passes, record them in one render pass, submit, then present or
+// read back, and publish the frame. It renders while something changes and sleeps on the
+// shared wake counter otherwise.
 #pragma once
 
 #include <array>
@@ -11,6 +14,7 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <thread>
 #include <vector>
 
@@ -21,8 +25,9 @@
 #include "gpu/tile_atlas.h"
 #include "gpu/tile_pipeline.h"
 #include "metrics/field_metrics.h"
-#include "render/draw_list.h"
-#include "render/overlay_renderer.h"
+#include "render/frame_pass.h"
+#include "render/hud_pass.h"
+#include "render/tile_pass.h"
 
 namespace iris {
 
@@ -46,7 +51,7 @@ public:
     Expected<Frame> lastFrame() const;
     Result waitForFrame(uint64_t viewSerial, std::chrono::milliseconds timeout);
     void setFrameCallback(std::function<void(const FrameStats&)> cb);
-    // Metrics: the render thread publishes with try_lock only (it never waits for a reader).
+    // Metrics: the render thread publishes by pointer swap (metrics/field_metrics.h).
     EngineMetrics metrics() const;
     void resetMetrics();
     // The overlays of the last frame rendered, and the slide source that frame showed (empty
@@ -76,9 +81,33 @@ private:
         bool readback = true;
     };
 
+    // The image a frame draws into; image is null when there is none to draw into now (an
+    // out-of-date or lost swapchain, an acquire that timed out).
+    struct TargetImage {
+        VkImage image = VK_NULL_HANDLE;
+        VkImageView view = VK_NULL_HANDLE;
+        VkFormat format = VK_FORMAT_UNDEFINED;
+        VkExtent2D extent{};
+        uint32_t index = 0; // swapchain image index
+    };
+    // What handleSurfaceChanges() leaves the loop to do.
+    struct TargetStep {
+        bool drawable = false; // a target image can be acquired
+        bool redraw = false;   // the target is new or was resized: draw a frame (not paced)
+        bool poll = false;     // waiting for the window system, which signals nothing: look again soon
+    };
+
     void run();
+    // The one place where the target changes: the host's requests (offscreen, surface, resize,
+    // unbind), a stale swapchain (out of date or suboptimal at acquire or present, a resize), a
+    // window that has not yet taken the size asked for, and a lost surface.
+    TargetStep handleSurfaceChanges();
     void applyTargetRequest();
     Result renderFrame(const Snapshot& snap);
+    Expected<TargetImage> acquireTarget(FrameSlot& f);
+    void recordTargetFinish(VkCommandBuffer cmd, const TargetImage& target); // readback copy or present layout
+    Result submitFrame(FrameSlot& f, const TargetImage& target, uint64_t uploadWait);
+    Result deliverFrame(FrameSlot& f, const TargetImage& target, const render::FrameContext& frame); // present or read back
     Result waitSlot(FrameSlot& f);
     void publishFrame(const Snapshot& snap, bool complete, uint32_t tiles, double cpuMs, const OverlayLayout& overlays);
     // Frame pacing on CPU devices (see run()): whether a frame of `snap` drawn now would show
@@ -92,20 +121,21 @@ private:
     Handover& handover_;
     const UploadCounters& counters_;
     const Log& log_;
-    OverlayRenderer overlays_;
     VkQueryPool timestamps_ = VK_NULL_HANDLE; // 2 per frame slot; null when the queue has no timestamps
     double timestampPeriodNs_ = 0;
     double lastGpuMs_ = -1;
-    uint64_t lastBytes_ = 0;
 
     // Field-of-view timing and the published figures (metrics/field_metrics.h).
     metrics::MetricsBoard metrics_;
 
-    render::DrawList drawList_;                  // this frame's tiles (render thread only; reused)
-    std::vector<gpu::TileInstance> thumbnail_;   // this frame's overview thumbnail tiles (same)
     // EngineConfig::tuning: drawCovered draws coarse tiles even where resident finer tiles
     // cover them (the engine before culling; for A/B measurements and the culling test).
     const EngineTuning tuning_;
+    // The frame's passes, in drawing order (render/frame_pass.h). Overlay layers (annotations,
+    // heat maps) go between the tiles and the HUD.
+    render::TilePass tilePass_;
+    render::HudPass hudPass_;
+    std::array<render::FramePass*, 2> passes_{&tilePass_, &hudPass_};
     // Frame pacing (CPU devices, where drawing takes the cores the loaders decode on): a frame
     // that only adds tiles to the view already drawn waits until kPaceFactor × the last
     // frame's GPU time has passed since the previous one was submitted, unless it shows a
@@ -124,16 +154,19 @@ private:
     std::unique_ptr<gpu::OffscreenTarget> offscreen_;
     std::unique_ptr<gpu::Swapchain> swapchain_;
     VkSurfaceKHR surface_ = VK_NULL_HANDLE;
-    bool swapchainDirty_ = false;
-    // The swapchain was made at another size than the host asked for: the window system had
-    // not applied the window's resize yet (X11 reports the window's size at that moment, and
-    // a software WSI may never say that the swapchain went stale). Until the surface reports
-    // the asked-for size (polled, then recreated) or kExtentPatience has passed, frames are
-    // drawn but none is complete.
-    static constexpr std::chrono::milliseconds kExtentPatience{2000};
-    bool extentPending_ = false;
-    std::chrono::steady_clock::time_point extentGiveUp_{};
-    void checkSwapchainExtent();
+    enum class SurfacePhase {
+        Current,          // the swapchain matches the window
+        Stale,            // recreate it before the next frame
+        WaitingForWindow, // made at another size than asked for: frames are drawn, none complete
+        Lost,             // VK_ERROR_SURFACE_LOST_KHR: nothing is drawn until a new surface is bound
+    };
+    SurfacePhase surfacePhase_ = SurfacePhase::Current;
+    // How long a swapchain of the wrong size waits for the window to follow its resize, and how
+    // often the surface's size is looked at meanwhile. Set when the wait starts; a new request
+    // clears it.
+    static constexpr std::chrono::milliseconds kWindowPatience{2000};
+    static constexpr std::chrono::milliseconds kWindowPoll{5};
+    std::optional<std::chrono::steady_clock::time_point> windowGiveUp_;
     bool readback_ = true;
     uint32_t reqWidth_ = 0, reqHeight_ = 0;
 
@@ -161,8 +194,6 @@ private:
     // waiter's increment and the render thread's store are seq_cst, so one sees the other.
     std::atomic<uint64_t> completeViewSerial_{0};
     std::atomic<int> frameWaiters_{0};
-    // Render thread only: the previous frame's time and upload counter, for FrameStats.
-    std::chrono::steady_clock::time_point lastFrameTime_{};
 
     std::thread thread_;
 };

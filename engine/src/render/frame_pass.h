@@ -1,0 +1,66 @@
+// The frame as a fixed list of passes (docs/ARCHITECTURE.md, "The frame"). The render thread
+// acquires the target image, builds one FrameContext, and then, for each pass in order:
+//
+//   prepare(frame)            CPU only: what the pass draws this frame, written into the frame
+//                             slot's own buffers; clears frame.complete when what it shows is
+//                             not whole yet;
+//   recordUploads(cmd, frame) transfers before the render pass (glyphs, later layer data);
+//   recordDraws(cmd, frame)   draws inside the one render pass, over the passes before it.
+//
+// The passes today: tiles (render/tile_pass.h: base, LR, HR, seams), then the HUD
+// (render/hud_pass.h: scale bar, magnification, overview map). Overlay layers (annotations,
+// heat maps) go between the two; a colour transform is a step of the tile pass's shader.
+//
+// Passes are owned and called by the render thread only; they read nothing but the frame's
+// snapshot and the context, so they need no synchronisation of their own.
+#pragma once
+
+#include <cstdint>
+
+#include "core/shared_state.h"
+#include "gpu/tile_instance.h"
+#include "gpu/vk_util.h"
+#include "render/draw_list.h"
+
+namespace iris::render {
+
+// The frame slot's tile instance buffer, shared by the passes that draw atlas tiles (the tile
+// pass, the overview's thumbnail): each takes a contiguous span of it.
+struct InstanceArena {
+    gpu::TileInstance* mapped = nullptr;
+    VkBuffer buffer = VK_NULL_HANDLE;
+    uint32_t capacity = 0;
+    uint32_t used = 0;
+
+    uint32_t remaining() const { return capacity - used; }
+    // Appends `n` instances and returns the index of the first.
+    uint32_t append(const gpu::TileInstance* src, uint32_t n);
+};
+
+struct FrameContext {
+    const Snapshot& snap;
+    Viewport viewport;   // the snapshot's view at the target's size
+    VkExtent2D extent{}; // the target image's size
+    VkFormat format = VK_FORMAT_UNDEFINED;
+    uint32_t slot = 0;   // frame slot index: per-slot buffers of the passes
+    uint64_t serial = 0; // frame serial: pins taken for this frame are held until its fence
+    // The target has the size the view was published for (see DrawOptions::sizeMatches).
+    bool sizeMatches = true;
+    TileResidency& tiles; // the GPU tile map, pinning what this frame samples
+    InstanceArena& instances;
+    // Cleared by any pass whose content is not whole: a complete frame is what TeFOV times and
+    // what waitForFrame waits for.
+    bool complete = true;
+};
+
+class FramePass {
+public:
+    virtual ~FramePass() = default;
+    virtual const char* name() const = 0;
+    // An error leaves the frame going on without what failed (logged, reported to the host).
+    virtual Result prepare(FrameContext& frame) = 0;
+    virtual void recordUploads(VkCommandBuffer /*cmd*/, const FrameContext& /*frame*/) {}
+    virtual Result recordDraws(VkCommandBuffer cmd, const FrameContext& frame) = 0;
+};
+
+} // namespace iris::render

@@ -1,0 +1,85 @@
+#include "render/tile_pass.h"
+
+#include <cstring>
+
+namespace iris::render {
+
+uint32_t InstanceArena::append(const gpu::TileInstance* src, uint32_t n) {
+    const uint32_t first = used;
+    if (n > 0) std::memcpy(mapped + first, src, n * sizeof(gpu::TileInstance));
+    used += n;
+    return first;
+}
+
+Result TilePass::prepare(FrameContext& frame) {
+    progress_ = {};
+    first_ = frame.instances.used;
+    count_ = 0;
+    pipe_ = seamPipe_ = VK_NULL_HANDLE;
+    Expected<VkPipeline> pipe = pipeline_.pipelineFor(frame.format);
+    if (!pipe) {
+        frame.complete = false;
+        return pipe.error();
+    }
+    Expected<VkPipeline> seamPipe = pipeline_.seamPipelineFor(frame.format);
+    if (!seamPipe) {
+        frame.complete = false;
+        return seamPipe.error();
+    }
+    pipe_ = *pipe;
+    seamPipe_ = *seamPipe;
+    if (!frame.snap.slide) {
+        frame.complete = false; // nothing to show is not a shown view (waitForFrame needs a slide)
+        return {};
+    }
+    const DrawOptions options{
+        .drawCovered = drawCovered_, .sizeMatches = frame.sizeMatches, .maxInstances = frame.instances.remaining()};
+    buildDrawList(frame.snap.slide->info, frame.snap.slide->generation, frame.viewport, options, frame.tiles,
+                  drawList_);
+    count_ = drawList_.instanceCount();
+    drawList_.copyInstances(frame.instances.mapped + first_);
+    frame.instances.used += count_;
+    progress_ = metrics::FieldProgress{.hasLr = drawList_.hasLr,
+                                       .lrComplete = drawList_.lrComplete,
+                                       .hrComplete = drawList_.hrComplete,
+                                       .lrTiles = drawList_.lrTiles,
+                                       .hrTiles = drawList_.hrTiles};
+    if (!drawList_.hrComplete) frame.complete = false;
+    return {};
+}
+
+Result TilePass::recordDraws(VkCommandBuffer cmd, const FrameContext& frame) {
+    if (count_ == 0) return {};
+    const VkRect2D scissor{{0, 0}, frame.extent};
+    vkCmdSetScissor(cmd, 0, 1, &scissor);
+    // Level by level in painter's order: a level's seam bands go on before finer levels.
+    uint32_t first = first_;
+    for (const LevelDraw& d : drawList_.levels) {
+        const uint32_t n = uint32_t(d.instances.size());
+        if (n > 0) drawSpan(cmd, frame, first, n, d.linked);
+        first += n;
+    }
+    return {};
+}
+
+void TilePass::drawSpan(VkCommandBuffer cmd, const FrameContext& frame, uint32_t first, uint32_t n, bool seams) {
+    if (!pipe_ || n == 0) return; // prepare failed to make the pipelines (and said so)
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipe_);
+    const VkViewport viewport{0, 0, float(frame.extent.width), float(frame.extent.height), 0, 1};
+    vkCmdSetViewport(cmd, 0, 1, &viewport);
+    VkDescriptorSet set = pipeline_.descriptorSet();
+    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline_.layout(), 0, 1, &set, 0, nullptr);
+    gpu::TilePush push{{float(frame.extent.width), float(frame.extent.height)}};
+    vkCmdPushConstants(cmd, pipeline_.layout(), VK_SHADER_STAGE_VERTEX_BIT, 0, sizeof(push), &push);
+    const VkDeviceSize offset = 0;
+    vkCmdBindVertexBuffers(cmd, 0, 1, &frame.instances.buffer, &offset);
+    vkCmdDraw(cmd, 4, n, 0, first);
+    if (!seams) return;
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, seamPipe_);
+    for (push.edge = 1; push.edge <= 4; ++push.edge) {
+        vkCmdPushConstants(cmd, pipeline_.layout(), VK_SHADER_STAGE_VERTEX_BIT, 0, sizeof(push), &push);
+        vkCmdDraw(cmd, 4, n, 0, first);
+    }
+}
+
+} // namespace iris::render

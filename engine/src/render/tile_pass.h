@@ -1,0 +1,41 @@
+// The tile pass: the slide's tiles of the base, LR and HR levels in painter's order, each only
+// where it is resident (render/draw_list builds the list, without Vulkan), with the seam bands
+// of levels drawn zoomed in (gpu/tile_pipeline.h). It also draws other spans of atlas tiles
+// for later passes: the overview map's thumbnail (render/hud_pass.h).
+#pragma once
+
+#include "gpu/tile_pipeline.h"
+#include "metrics/field_metrics.h"
+#include "render/frame_pass.h"
+
+namespace iris::render {
+
+class TilePass final : public FramePass {
+public:
+    // drawCovered: EngineTuning::drawCovered (coarse tiles also under resident finer ones).
+    TilePass(gpu::TilePipeline& pipeline, bool drawCovered) : pipeline_(pipeline), drawCovered_(drawCovered) {}
+
+    const char* name() const override { return "tiles"; }
+    Result prepare(FrameContext& frame) override;
+    Result recordDraws(VkCommandBuffer cmd, const FrameContext& frame) override;
+
+    // What the last prepared frame showed of its view's field (metrics/field_metrics.h).
+    const metrics::FieldProgress& progress() const { return progress_; }
+    // Tiles the last prepared frame draws.
+    uint32_t tilesDrawn() const { return count_; }
+
+    // Records instances [first, first + n) of the frame's arena as tile quads; with `seams`,
+    // then the seam pass's four bands of each. Binds its own pipeline and state. Only after
+    // this frame's prepare() (which makes the pipelines for the frame's format).
+    void drawSpan(VkCommandBuffer cmd, const FrameContext& frame, uint32_t first, uint32_t n, bool seams);
+
+private:
+    gpu::TilePipeline& pipeline_;
+    const bool drawCovered_;
+    DrawList drawList_; // reused from frame to frame
+    metrics::FieldProgress progress_;
+    uint32_t first_ = 0, count_ = 0;                               // this frame's span of the arena
+    VkPipeline pipe_ = VK_NULL_HANDLE, seamPipe_ = VK_NULL_HANDLE; // for this frame's format
+};
+
+} // namespace iris::render

@@ -315,6 +315,16 @@ Result Engine::waitForFrame(std::chrono::milliseconds timeout) {
     return impl_->render->waitForFrame(s.viewSerial, timeout);
 }
 
+Result Engine::waitForSettled(std::chrono::milliseconds timeout) {
+    const Snapshot s = impl_->shared.snapshot();
+    if (!s.slide) return Result(Status::NoSlide, "No slide is open");
+    {
+        std::lock_guard lock(impl_->openMutex);
+        if (!impl_->offscreenBound && !impl_->surfaceBound) return Result(Status::NotBound, "No render target is bound");
+    }
+    return impl_->render->waitForSettled(s.viewSerial, timeout);
+}
+
 void Engine::setFrameCallback(std::function<void(const FrameStats&)> callback) {
     impl_->render->setFrameCallback(std::move(callback));
 }

@@ -13,7 +13,6 @@
 #include <QtTest>
 
 #include <cstdlib>
-#include <thread>
 
 #include "test_support.h"
 
@@ -24,24 +23,27 @@ namespace {
 
 constexpr uint32_t kW = 640, kH = 480;
 
-// The frame of `view` once the engine has nothing left to load for it: rendered complete, then
-// re-read until no new frame arrives for a while (uploads of LR, base and perimeter tiles make
-// new frames), so that two engines are compared in the same state.
+// The frame of `view` once the engine has nothing left to load for it (Engine::waitForSettled:
+// every tile of the buffer region resident and drawn), so that two engines are compared in the
+// same state.
 std::optional<iris::Frame> settledFrame(iris::Engine& e, const iris::View& view, std::string* why) {
     auto f = renderView(e, view, kW, kH, 60s, why);
     if (!f) return f;
-    for (int i = 0; i < 100; ++i) {
-        std::this_thread::sleep_for(150ms);
-        auto next = e.readFrame();
-        if (!next.ok()) {
-            *why = describe(next.error());
-            return std::nullopt;
-        }
-        if (next.value().serial == f->serial) return f;
-        f = std::move(next.value());
+    if (const iris::Result w = e.waitForSettled(60s); !w.ok()) {
+        *why = "waitForSettled: " + describe(w);
+        return std::nullopt;
     }
-    *why = "the engine kept rendering new frames for 15 s";
-    return std::nullopt;
+    auto settled = e.readFrame();
+    if (!settled.ok()) {
+        *why = describe(settled.error());
+        return std::nullopt;
+    }
+    if (!settled.value().complete || settled.value().view.centerX != view.centerX ||
+        settled.value().view.downsample != view.downsample) {
+        *why = "the settled frame is incomplete or shows another view";
+        return std::nullopt;
+    }
+    return std::move(settled.value());
 }
 
 } // namespace

@@ -5,9 +5,14 @@
 // And frame pacing (on by default on CPU devices, forced on here): while a new field's tiles
 // arrive, a frame that only adds tiles to the view on screen comes at least 2× the previous
 // frame's GPU time after it, except the frames that show the LR and the HR layer whole.
+//
+// And waitForSettled: once it returns, the perimeter is resident too, so a pan within it is
+// complete in its very first frame; it reports NoSlide, NotBound and Timeout.
 #include <QtTest>
 
+#include <condition_variable>
 #include <mutex>
+#include <optional>
 #include <vector>
 
 #include "iris/engine.h"
@@ -18,6 +23,7 @@ class TestMetrics : public QObject {
 private slots:
     void scriptedMoves();
     void pacedFrames();
+    void settledMeansPerimeterResident();
 };
 
 void TestMetrics::scriptedMoves() {
@@ -56,7 +62,7 @@ void TestMetrics::scriptedMoves() {
     // An overlapping move (half a field): no new sample either.
     e.translate(200, 0);
     QVERIFY(e.waitForFrame(std::chrono::seconds(60)).ok());
-    QTest::qWait(200);
+    QVERIFY(e.waitForSettled(std::chrono::seconds(60)).ok()); // every frame this view will get
     QCOMPARE(e.metrics().fields.size(), size_t(1));
 
     // A walk of adjacent fields at a downsample that is not a dyadic fraction: the shared edge
@@ -102,7 +108,7 @@ void TestMetrics::pacedFrames() {
     for (int i = 0; i < 4; ++i) {
         e.setView({30000.0 + i * 40000.0, 50000.0 + i * 30000.0, 1.0}); // an entirely new field each time
         QVERIFY(e.waitForFrame(std::chrono::seconds(60)).ok());
-        QTest::qWait(300); // the perimeter's frames
+        QVERIFY(e.waitForSettled(std::chrono::seconds(60)).ok()); // the perimeter's frames
     }
     e.setFrameCallback({});
 
@@ -131,6 +137,52 @@ void TestMetrics::pacedFrames() {
     QVERIFY(checked > 0);
     QVERIFY2(early <= fields, (std::to_string(early) + " early frames over " + std::to_string(fields) + " fields").c_str());
     QCOMPARE(e.validationMessageCount(), 0u);
+}
+
+void TestMetrics::settledMeansPerimeterResident() {
+    iris::EngineConfig cfg;
+    cfg.perimeterTiles = 2;
+    iristest::TestEngine created = iristest::createTestEngine(cfg);
+    QVERIFY2(created, iristest::describe(created.error).c_str());
+    iris::Engine& e = *created.engine;
+    QCOMPARE(e.waitForSettled(std::chrono::seconds(1)).status(), iris::Status::NoSlide);
+    QVERIFY(e.open("synthetic:100000x100000").ok());
+    QCOMPARE(e.waitForSettled(std::chrono::seconds(1)).status(), iris::Status::NotBound);
+    QVERIFY(e.bindOffscreen(512, 384).ok());
+    // Three views, each an entirely new field: settle, then pan by less than the perimeter
+    // (two tiles, 512 level-0 pixels at downsample 1) in each direction.
+    for (int i = 0; i < 3; ++i) {
+        const iris::View v{20000.0 + i * 25000.0, 30000.0 + i * 17000.0, 1.0};
+        e.setView(v);
+        QVERIFY(e.waitForSettled(std::chrono::seconds(60)).ok());
+        const auto frame = e.readFrame();
+        QVERIFY(frame.ok());
+        QVERIFY(frame.value().complete);
+        QCOMPARE(frame.value().view.centerX, v.centerX);
+
+        // The first frame of the panned view, as the frame callback reports it (waitForFrame
+        // may return before the callback of the frame that completed the view has run).
+        const iris::View panned{v.centerX + 400, v.centerY - 300, 1.0};
+        std::mutex m;
+        std::condition_variable cv;
+        std::optional<iris::FrameStats> first;
+        e.setFrameCallback([&](const iris::FrameStats& f) {
+            std::lock_guard lock(m);
+            if (!first && f.view.centerX == panned.centerX && f.view.centerY == panned.centerY) first = f;
+            cv.notify_all();
+        });
+        e.setView(panned);
+        std::unique_lock lock(m);
+        const bool seen = cv.wait_for(lock, std::chrono::seconds(60), [&] { return first.has_value(); });
+        lock.unlock();
+        e.setFrameCallback({});
+        QVERIFY(seen);
+        QVERIFY2(first->complete, "the first frame after a pan within the settled perimeter lacked tiles");
+    }
+    // A view whose region cannot settle in the time given: a fresh field, 1 ms.
+    e.setView({90000, 90000, 1.0});
+    const iris::Result r = e.waitForSettled(std::chrono::milliseconds(1));
+    QVERIFY(r.ok() || r.status() == iris::Status::Timeout); // a fast machine may settle in 1 ms
 }
 
 QTEST_GUILESS_MAIN(TestMetrics)

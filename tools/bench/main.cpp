@@ -223,7 +223,8 @@ SizeResult runSize(const Options& o, uint32_t W, uint32_t H) {
         }
         // Settled frames: the walk's last field once its uploads (perimeter included) are
         // done, redrawn by quarter-pixel pans that load nothing: the drawing's own GPU cost.
-        std::this_thread::sleep_for(std::chrono::milliseconds(300));
+        if (const iris::Result r = e.waitForSettled(std::chrono::seconds(30)); !r.ok())
+            std::fprintf(stderr, "iris-bench: the last field did not settle: %s\n", r.message().c_str());
         {
             std::lock_guard lock(traceMutex);
             settledSkip = 3;

@@ -123,6 +123,13 @@ public:
     // Waits until a frame of the current view with every visible tile resident has been
     // rendered (or until timeout). Returns Timeout, NoSlide, NotBound or the engine error.
     Result waitForFrame(std::chrono::milliseconds timeout);
+    // Waits until the engine has nothing left to load for the current view: every tile of its
+    // buffer region (the visible tiles of every layer and the perimeter around them), or as
+    // many as the atlas holds, is resident, and a complete frame drawn after that has been
+    // rendered. Later frames of this view are identical until something changes. For
+    // snapshots, batch rendering and tests that must compare settled frames. Returns Timeout,
+    // NoSlide, NotBound or the engine error.
+    Result waitForSettled(std::chrono::milliseconds timeout);
     // Called on the render thread after each frame is submitted (presented); keep it
     // quick and thread-safe (a Qt host posts a queued signal).
     void setFrameCallback(std::function<void(const FrameStats&)> callback);

@@ -135,8 +135,20 @@ void BufferThread::run() {
             }
             continue;
         }
+        if (snap.slide && snap.viewSerial != shared_.bufferedView.load(std::memory_order_relaxed) && regionDone(snap)) {
+            shared_.bufferedView.store(snap.viewSerial, std::memory_order_release);
+            shared_.bump(); // the render thread draws the settled frame
+            continue;
+        }
         shared_.waitChange(seen);
     }
+}
+
+bool BufferThread::regionDone(const Snapshot& snap) const {
+    if (regionSlide_ != snap.slide.get() || regionSerial_ != snap.viewSerial) return false; // not planned yet
+    if (atlasFull_) return true;
+    const gpu::TileMap& map = atlas_.map();
+    return std::all_of(region_.begin(), region_.end(), [&](const TileRef& t) { return map.contains(t.key); });
 }
 
 bool BufferThread::pollCompleted() {
@@ -192,6 +204,7 @@ bool BufferThread::submitNew(const Snapshot& snap) {
         regionSlide_ = snap.slide.get();
         regionSerial_ = snap.viewSerial;
     }
+    atlasFull_ = false;
     const std::vector<TileRef>& region = region_;
     const std::unordered_set<uint64_t>& keep = keep_;
     gpu::TileMap& map = atlas_.map();
@@ -202,7 +215,10 @@ bool BufferThread::submitNew(const Snapshot& snap) {
         if (tx.slots.size() == kTilesPerTransaction || freeStaging_.empty()) break;
         if (map.contains(t.key) || !cache_.isReady(t.key)) continue;
         const int slot = map.allocate(t.key, inRegion);
-        if (slot < 0) break; // atlas full of tiles that are needed or still drawn
+        if (slot < 0) { // atlas full of tiles that are needed or still drawn
+            atlasFull_ = true;
+            break;
+        }
         const uint32_t st = freeStaging_.back();
         bool failed = false;
         if (!cache_.copyOut(t.key, base + size_t(st) * kTileBytes, &failed)) {

@@ -67,6 +67,10 @@ private:
     // The buffer region of the last view seen (slide identity + view serial), and its keys.
     const void* regionSlide_ = nullptr;
     uint64_t regionSerial_ = 0;
+    bool atlasFull_ = false; // the last pass over the region found no slot it could reclaim
+    // Whether every tile of the current region is in the tile map (or the atlas is full), with
+    // nothing in flight: the region is done (SharedState::bufferedView).
+    bool regionDone(const Snapshot& snap) const;
     std::vector<TileRef> region_;
     std::unordered_set<uint64_t> keep_;
 

@@ -82,6 +82,13 @@ public:
 
     std::atomic<bool> stopping{false};
 
+    // The view serial whose whole buffer region (visible tiles and perimeter) the buffer thread
+    // has made resident, or as much of it as the atlas can hold: nothing is left to load for
+    // that view. The buffer thread stores it (release) and then bumps `wake`; the render thread
+    // loads it (acquire) before it drains the hand-over, so a frame of that view drawn after the
+    // load shows every tile (Engine::waitForSettled).
+    std::atomic<uint64_t> bufferedView{0};
+
     // First error wins and sticks (until cleared).
     void setError(const Result& r) {
         std::lock_guard lock(errorMutex_);

@@ -172,14 +172,24 @@ Expected<Frame> RenderThread::lastFrame() const {
 }
 
 Result RenderThread::waitForFrame(uint64_t viewSerial, std::chrono::milliseconds timeout) {
+    return waitForSerial(completeViewSerial_, viewSerial, timeout, "complete frame");
+}
+
+Result RenderThread::waitForSettled(uint64_t viewSerial, std::chrono::milliseconds timeout) {
+    return waitForSerial(settledViewSerial_, viewSerial, timeout, "settled frame (every tile of the buffer region resident)");
+}
+
+Result RenderThread::waitForSerial(const std::atomic<uint64_t>& serial, uint64_t viewSerial,
+                                   std::chrono::milliseconds timeout, const char* what) {
     std::unique_lock lock(mutex_);
     frameWaiters_.fetch_add(1, std::memory_order_seq_cst);
     const bool ok = cv_.wait_for(lock, timeout, [&] {
-        return completeViewSerial_.load(std::memory_order_seq_cst) >= viewSerial ||
-               shared_.stopping.load(std::memory_order_acquire);
+        return serial.load(std::memory_order_seq_cst) >= viewSerial || shared_.stopping.load(std::memory_order_acquire);
     });
     frameWaiters_.fetch_sub(1, std::memory_order_relaxed);
-    if (!ok) return Result(Status::Timeout, "No complete frame of the current view within " + std::to_string(timeout.count()) + " ms");
+    if (!ok)
+        return Result(Status::Timeout,
+                      std::string("No ") + what + " of the current view within " + std::to_string(timeout.count()) + " ms");
     return {};
 }
 
@@ -419,6 +429,9 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
 
     const uint64_t serial = ++serial_;
     f.serial = serial;
+    // Before the hand-over is drained: every tile of a view the buffer thread has finished is
+    // then either activated already or drained below.
+    const uint64_t buffered = shared_.bufferedView.load(std::memory_order_acquire);
 
     // Tiles whose mips were made on another queue family: record the acquire half of their
     // compute → graphics ownership transfer (the buffer thread recorded the release), wait on
@@ -529,7 +542,7 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
 
     if (Result r = submitFrame(f, target, uploadWait); !r.ok()) return r;
     if (Result r = deliverFrame(f, target, frame); !r.ok()) return r;
-    publishFrame(snap, frame.complete, tilePass_.tilesDrawn(),
+    publishFrame(snap, frame.complete, buffered, tilePass_.tilesDrawn(),
                  std::chrono::duration<double, std::milli>(Clock::now() - t0).count(), hudPass_.layout());
     return {};
 }
@@ -646,16 +659,19 @@ Result RenderThread::deliverFrame(FrameSlot& f, const TargetImage& target, const
     return {};
 }
 
-void RenderThread::publishFrame(const Snapshot& snap, bool complete, uint32_t tiles, double cpuMs,
+void RenderThread::publishFrame(const Snapshot& snap, bool complete, uint64_t buffered, uint32_t tiles, double cpuMs,
                                 const OverlayLayout& overlays) {
     shown_.store(std::make_shared<const Shown>(
         Shown{overlays, snap.slide ? std::weak_ptr<const SlideSource>(snap.slide->source) : std::weak_ptr<const SlideSource>()}));
     const bool newlyComplete = complete && snap.viewSerial > completeViewSerial_.load(std::memory_order_relaxed);
     if (newlyComplete) completeViewSerial_.store(snap.viewSerial, std::memory_order_seq_cst);
+    const bool newlySettled = complete && buffered == snap.viewSerial &&
+                              snap.viewSerial > settledViewSerial_.load(std::memory_order_relaxed);
+    if (newlySettled) settledViewSerial_.store(snap.viewSerial, std::memory_order_seq_cst);
     const FrameStats stats = metrics_.frameFinished(snap, serial_, complete, tiles, cpuMs, lastGpuMs_);
     // After the metrics, so that a waiter that wakes sees this frame's figures. The lock is
     // taken only when a thread sleeps in waitForFrame (see frameWaiters_).
-    if (newlyComplete && frameWaiters_.load(std::memory_order_seq_cst) > 0) {
+    if ((newlyComplete || newlySettled) && frameWaiters_.load(std::memory_order_seq_cst) > 0) {
         { std::lock_guard lock(mutex_); }
         cv_.notify_all();
     }

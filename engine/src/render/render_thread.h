@@ -50,6 +50,9 @@ public:
     // never takes a lock to publish it and readers never hold one while they copy it.
     Expected<Frame> lastFrame() const;
     Result waitForFrame(uint64_t viewSerial, std::chrono::milliseconds timeout);
+    // Waits for a complete frame of `viewSerial` drawn after the buffer thread finished that
+    // view's buffer region (SharedState::bufferedView).
+    Result waitForSettled(uint64_t viewSerial, std::chrono::milliseconds timeout);
     void setFrameCallback(std::function<void(const FrameStats&)> cb);
     // Metrics: the render thread publishes by pointer swap (metrics/field_metrics.h).
     EngineMetrics metrics() const;
@@ -109,7 +112,11 @@ private:
     Result submitFrame(FrameSlot& f, const TargetImage& target, uint64_t uploadWait);
     Result deliverFrame(FrameSlot& f, const TargetImage& target, const render::FrameContext& frame); // present or read back
     Result waitSlot(FrameSlot& f);
-    void publishFrame(const Snapshot& snap, bool complete, uint32_t tiles, double cpuMs, const OverlayLayout& overlays);
+    // `buffered`: SharedState::bufferedView as loaded before the frame drained the hand-over.
+    void publishFrame(const Snapshot& snap, bool complete, uint64_t buffered, uint32_t tiles, double cpuMs,
+                      const OverlayLayout& overlays);
+    Result waitForSerial(const std::atomic<uint64_t>& serial, uint64_t viewSerial, std::chrono::milliseconds timeout,
+                         const char* what);
     // Frame pacing on CPU devices (see run()): whether a frame of `snap` drawn now would show
     // the view's HR or LR layer whole for the first time. Such a frame is never delayed.
     bool showsLayerWhole(const Snapshot& snap) const;
@@ -193,6 +200,7 @@ private:
     // a waiter's check and its sleep) only while frameWaiters_ says someone sleeps: the
     // waiter's increment and the render thread's store are seq_cst, so one sees the other.
     std::atomic<uint64_t> completeViewSerial_{0};
+    std::atomic<uint64_t> settledViewSerial_{0}; // the same for settled frames (waitForSettled)
     std::atomic<int> frameWaiters_{0};
 
     std::thread thread_;

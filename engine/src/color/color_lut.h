@@ -1,0 +1,45 @@
+// Colour management (docs/COLOR.md): the transform from a slide's embedded ICC profile to the
+// display's, built with LittleCMS and baked into a 3D lookup table that the tile shader applies
+// to every sample after mip sampling (trilinear interpolation of the table on the GPU).
+//
+// Thread-safety: pure functions; call from any thread.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "iris/types.h"
+
+namespace iris::color {
+
+// ICC rendering intent of the slide → display transform.
+enum class Intent {
+    Perceptual,           // the default
+    RelativeColorimetric, // with black-point compensation
+};
+
+// A baked transform: size³ entries; entry (r, g, b) (r fastest, then g, then b) holds the
+// display RGB, as IEEE half floats (RGBA, A = 1), of the source colour (r, g, b) / (size - 1).
+struct Lut3D {
+    uint32_t size = 0;
+    std::vector<uint16_t> rgba; // size³ × 4 half floats
+    std::string sourceDescription;  // the slide profile's description tag ("" when it has none)
+    std::string displayDescription; // the display profile's ("sRGB" for the built-in one)
+};
+
+// The grid size the engine uses (docs/COLOR.md says why).
+inline constexpr uint32_t kLutSize = 33;
+
+// Builds the transform from `source` (the slide's ICC profile bytes) to `display` (the display's
+// profile bytes; empty: LittleCMS's built-in sRGB) with `intent`, and bakes it into a size³
+// table. Errors (InvalidArgument / CorruptData / UnsupportedFormat) say why: a truncated or
+// malformed profile, one LittleCMS rejects, a non-RGB profile, an absurd size.
+Expected<Lut3D> bakeLut(std::span<const uint8_t> source, std::span<const uint8_t> display, Intent intent,
+                        uint32_t size = kLutSize);
+
+// The profile's description tag (ASCII), or "" when it has none or the bytes are no profile.
+std::string profileDescription(std::span<const uint8_t> profile);
+
+} // namespace iris::color

@@ -1,4 +1,5 @@
 #version 450
+#extension GL_GOOGLE_include_directive : require
 // Samples one tile. The texel is computed from the fragment's own pixel centre rather than
 // from interpolated UVs, so that at 1:1 with integer alignment every fragment lands exactly
 // on a texel centre and reproduces the source bytes (linear filtering with weight 0).
@@ -6,6 +7,8 @@
 // to the seam pass (tile_bands.glsl, tile_seam.frag), which filters across the seam.
 
 layout(set = 0, binding = 0) uniform sampler2DArray atlas; // 256×256 RGBA8 premultiplied, full mips
+
+#include "color_lut.glsl"
 
 layout(location = 0) flat in vec2 inOrigin;
 layout(location = 1) flat in vec4 inTexel;  // valid w, valid h, layer, lod
@@ -19,5 +22,5 @@ void main() {
     vec2 texel = (gl_FragCoord.xy - inOrigin) * inScale;
     // Clamp into the tile's valid area so edge tiles never sample their padding at level 0.
     texel = clamp(texel, vec2(0.5), inTexel.xy - vec2(0.5));
-    outColor = textureLod(atlas, vec3(texel / TILE, inTexel.z), inTexel.w);
+    outColor = colorManaged(textureLod(atlas, vec3(texel / TILE, inTexel.z), inTexel.w));
 }

@@ -1,4 +1,5 @@
 #version 450
+#extension GL_GOOGLE_include_directive : require
 // The seam pass's pixels: those within half a texel of a side of the tile where a neighbour is
 // resident (tile_bands.glsl). The hardware sampler, clamped to the tile's own layer, would
 // interpolate the tile's edge texel with itself there (a one-pixel grid along every tile
@@ -8,6 +9,8 @@
 // shader costs every pixel both paths.
 
 layout(set = 0, binding = 0) uniform sampler2DArray atlas; // 256×256 RGBA8 premultiplied, full mips
+
+#include "color_lut.glsl"
 
 layout(location = 0) flat in vec2 inOrigin;
 layout(location = 1) flat in vec4 inTexel;   // valid w, valid h, layer, lod (0 here)
@@ -44,6 +47,6 @@ void main() {
     vec2 q = (gl_FragCoord.xy - inOrigin) * inScale - 0.5;
     ivec2 i0 = ivec2(floor(q));
     vec2 f = q - vec2(i0);
-    outColor = mix(mix(texelAt(i0), texelAt(i0 + ivec2(1, 0)), f.x),
-                   mix(texelAt(i0 + ivec2(0, 1)), texelAt(i0 + ivec2(1, 1)), f.x), f.y);
+    outColor = colorManaged(mix(mix(texelAt(i0), texelAt(i0 + ivec2(1, 0)), f.x),
+                                mix(texelAt(i0 + ivec2(0, 1)), texelAt(i0 + ivec2(1, 1)), f.x), f.y));
 }

@@ -26,7 +26,9 @@ namespace iris {
 struct Engine::Impl {
     explicit Impl(const EngineConfig& c)
         : config(c), log(c.log), device(log), atlas(device), pipeline(device, atlas), mips(device, atlas),
-          cache(c.ramBudgetBytes) {}
+          cache(c.ramBudgetBytes) {
+        color = c.color;
+    }
 
     ~Impl() {
         // A loader computing a synthetic tile stops at its next stored tile instead of
@@ -44,7 +46,7 @@ struct Engine::Impl {
     Result init() {
         if (Result r = device.init(config); !r.ok()) return r;
         if (Result r = atlas.init(config.vramBudgetBytes); !r.ok()) return r;
-        if (Result r = pipeline.init(); !r.ok()) return r;
+        if (Result r = pipeline.init(RenderThread::kFramesInFlight); !r.ok()) return r;
         if (Result r = mips.init(config.tuning.mipSchedule); !r.ok()) return r;
         log.info(std::string("mip pass: ") + gpu::MipPipeline::scheduleName(mips.schedule()) + " schedule");
         handover = std::make_unique<Handover>(atlas.slotCount());
@@ -54,6 +56,7 @@ struct Engine::Impl {
                                                 int(config.perimeterTiles));
         if (Result r = buffer->init(); !r.ok()) return r;
         shared.update([&](Snapshot& s) { s.background = config.background; });
+        (void)bakeColor(nullptr, color, colorStatus); // the display profile's description
         render->start();
         buffer->start();
         loaders = std::make_unique<LoaderPool>(shared, cache, log, config.loaderThreads, int(config.perimeterTiles));
@@ -71,6 +74,36 @@ struct Engine::Impl {
         s.fieldId = ++fieldCounter;
         s.fieldStart = std::chrono::steady_clock::now();
         s.fieldTilesAtStart = counters.tiles.load(std::memory_order_relaxed);
+    }
+
+    // The colour transform of `info`'s embedded profile under `settings` (null: none), and what
+    // is applied in `status`. Runs on the calling API thread outside the snapshot lock
+    // (LittleCMS takes milliseconds for the table); a profile that cannot be used is logged
+    // and leaves the slide untransformed.
+    std::shared_ptr<const color::Lut3D> bakeColor(const SlideInfo* info, const ColorSettings& settings,
+                                                  ColorStatus& status) const {
+        status = {};
+        if (settings.displayProfile.empty()) {
+            status.displayProfile = "sRGB (built-in)";
+        } else {
+            status.displayProfile = color::profileDescription(settings.displayProfile);
+            if (status.displayProfile.empty()) status.displayProfile = "display profile without a description";
+        }
+        if (!info || info->iccProfile.empty()) return nullptr;
+        status.slideProfile = color::profileDescription(info->iccProfile);
+        if (status.slideProfile.empty()) status.slideProfile = "embedded profile without a description";
+        if (!settings.managed) return nullptr;
+        const color::Intent intent = settings.intent == RenderingIntent::RelativeColorimetric
+                                         ? color::Intent::RelativeColorimetric
+                                         : color::Intent::Perceptual;
+        Expected<color::Lut3D> lut = color::bakeLut(info->iccProfile, settings.displayProfile, intent);
+        if (!lut) {
+            status.error = lut.error();
+            log.warn("colour management: " + lut.error().message() + "; the slide is drawn without its profile");
+            return nullptr;
+        }
+        status.applied = true;
+        return std::make_shared<const color::Lut3D>(std::move(lut.value()));
     }
 
     // Applies a view change with the downsample clamped and the numbers sanitised.
@@ -96,6 +129,10 @@ struct Engine::Impl {
     std::unique_ptr<Handover> handover;
     UploadCounters counters;
     uint64_t fieldCounter = 0; // guarded by SharedState's update lock
+    // Colour settings and what they give for the open slide; written under openMutex too.
+    mutable std::mutex colorMutex;
+    ColorSettings color;
+    ColorStatus colorStatus;
     TileCache cache;
     std::unique_ptr<RenderThread> render;
     std::unique_ptr<BufferThread> buffer;
@@ -210,14 +247,21 @@ Result Engine::open(const std::string& path) {
     slide->generation = impl_->generation;
     impl_->cache.dropOtherGenerations(slide->generation);
     impl_->shared.clearErrorForSlide(slide->generation);
+    ColorStatus colorStatus;
+    const std::shared_ptr<const color::Lut3D> lut = impl_->bakeColor(&slide->info, colorSettings(), colorStatus);
     std::shared_ptr<const OpenSlide> previous;
     impl_->shared.update([&](Snapshot& s) {
         previous = std::move(s.slide);
         s.slide = slide;
+        s.colorLut = lut;
         s.fieldId = 0;
         s.viewport.view = iris::fitView(slide->info, s.viewport.width, s.viewport.height);
     });
     if (previous) previous->source->abandon();
+    {
+        std::lock_guard colorLock(impl_->colorMutex);
+        impl_->colorStatus = std::move(colorStatus);
+    }
     impl_->log.info("opened " + path + " (" + slide->info.vendor + ", " + std::to_string(slide->info.width) + "x" +
                     std::to_string(slide->info.height) + ", " + std::to_string(slide->info.levels.size()) + " levels)");
     return {};
@@ -228,7 +272,14 @@ void Engine::close() {
     impl_->shared.update([&](Snapshot& s) {
         previous = std::move(s.slide);
         s.fieldId = 0;
+        s.colorLut.reset();
     });
+    {
+        std::lock_guard colorLock(impl_->colorMutex);
+        impl_->colorStatus.applied = false;
+        impl_->colorStatus.slideProfile.clear();
+        impl_->colorStatus.error = {};
+    }
     if (previous) previous->source->abandon();
 }
 
@@ -357,6 +408,30 @@ void Engine::setEnhance(bool on) {
 }
 
 bool Engine::enhance() const { return impl_->shared.snapshot().enhance; }
+
+void Engine::setColorSettings(const ColorSettings& settings) {
+    std::lock_guard lock(impl_->openMutex); // open() cannot replace the slide meanwhile
+    {
+        std::lock_guard colorLock(impl_->colorMutex);
+        impl_->color = settings;
+    }
+    const Snapshot cur = impl_->shared.snapshot();
+    ColorStatus status;
+    const std::shared_ptr<const color::Lut3D> lut = impl_->bakeColor(cur.slide ? &cur.slide->info : nullptr, settings, status);
+    impl_->shared.update([&](Snapshot& s) { s.colorLut = s.slide ? lut : nullptr; });
+    std::lock_guard colorLock(impl_->colorMutex);
+    impl_->colorStatus = std::move(status);
+}
+
+ColorSettings Engine::colorSettings() const {
+    std::lock_guard lock(impl_->colorMutex);
+    return impl_->color;
+}
+
+ColorStatus Engine::colorStatus() const {
+    std::lock_guard lock(impl_->colorMutex);
+    return impl_->colorStatus;
+}
 
 namespace {
 bool validOverlay(Overlay o) { return int(o) >= 0 && int(o) < kOverlayCount; }

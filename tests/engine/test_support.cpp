@@ -398,7 +398,8 @@ uint64_t countNotOpaque(const iris::Image& img) {
 // ---- OpenSlide reference --------------------------------------------------------------
 
 bool writeOneLevelTiff(const fs::path& path, uint32_t width, uint32_t height,
-                       const std::vector<std::pair<uint32_t, uint32_t>>& broken, std::string* error) {
+                       const std::vector<std::pair<uint32_t, uint32_t>>& broken, std::string* error,
+                       const std::vector<uint8_t>& icc) {
     const auto fail = [&](const std::string& why) {
         if (error) *error = path.string() + ": " + why;
         return false;
@@ -415,6 +416,7 @@ bool writeOneLevelTiff(const fs::path& path, uint32_t width, uint32_t height,
     TIFFSetField(tif, TIFFTAG_PHOTOMETRIC, PHOTOMETRIC_RGB);
     TIFFSetField(tif, TIFFTAG_PLANARCONFIG, PLANARCONFIG_CONTIG);
     TIFFSetField(tif, TIFFTAG_COMPRESSION, COMPRESSION_ADOBE_DEFLATE);
+    if (!icc.empty()) TIFFSetField(tif, TIFFTAG_ICCPROFILE, uint32_t(icc.size()), icc.data());
     std::vector<uint8_t> tile(size_t(kTile) * kTile * 3);
     // Not a zlib stream: the header check fails (a reserved compression method).
     const std::vector<uint8_t> garbage(1024, 0x5a);

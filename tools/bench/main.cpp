@@ -47,6 +47,7 @@ struct Options {
     uint64_t seed = 1;
     bool validation = false;
     iris::EngineTuning tuning; // from the IRIS_* environment variables
+    std::string colorManaged = "on"; // on, off, or both (an A/B of the colour transform's cost)
 };
 
 // --size: "WxH", whole numbers from 64 to 16384.
@@ -89,6 +90,8 @@ struct TracePoint {
 
 struct SizeResult {
     uint32_t w = 0, h = 0;
+    bool colorManaged = true; // asked for
+    bool colorApplied = false; // a transform was applied (the slide has a usable profile)
     std::string device;
     std::string mipSchedule;
     std::vector<double> lrTefov, hrTefov, lrTpt, hrTpt, rate, frameMs;
@@ -105,11 +108,13 @@ struct SizeResult {
 
 bool progressTty() { return isatty(2); }
 
-SizeResult runSize(const Options& o, uint32_t W, uint32_t H) {
+SizeResult runSize(const Options& o, uint32_t W, uint32_t H, bool colorManaged) {
     SizeResult res;
     res.w = W;
     res.h = H;
+    res.colorManaged = colorManaged;
     iris::EngineConfig cfg;
+    cfg.color.managed = colorManaged;
     cfg.validation = o.validation;
     cfg.tuning = o.tuning;
     cfg.perimeterTiles = 1;
@@ -136,6 +141,7 @@ SizeResult runSize(const Options& o, uint32_t W, uint32_t H) {
         return res;
     }
     const iris::SlideInfo info = *e.slideInfo();
+    res.colorApplied = e.colorStatus().applied;
     std::mutex traceMutex;
     const auto start = Clock::now();
     // While > 0: frames of a settled field are being drawn; the first ones still report the GPU
@@ -281,6 +287,8 @@ Json resultJson(const Options& o, const SizeResult& r) {
     Json j;
     j["device"] = r.device;
     j["size"] = std::to_string(r.w) + "x" + std::to_string(r.h);
+    j["color_managed"] = r.colorManaged;
+    j["color_applied"] = r.colorApplied;
     j["source"] = o.source;
     j["baseline_slide"] = o.baseline.empty() ? o.slide : o.baseline;
     j["lr_tefov_ms"] = jsonQuartiles(quartiles(r.lrTefov));
@@ -320,7 +328,8 @@ void printTable(const SizeResult& r) {
         const Quartiles q = quartiles(v);
         std::printf("  %-28s %10.3f %10.3f %10.3f  %-4s n=%zu\n", name, q.p25, q.median, q.p75, unit, q.n);
     };
-    std::printf("\n%ux%u on %s — %d moves (%d timed out, %d not timed: already resident)\n", r.w, r.h, r.device.c_str(),
+    std::printf("\n%ux%u on %s, colour management %s — %d moves (%d timed out, %d not timed: already resident)\n", r.w,
+                r.h, r.device.c_str(), r.colorApplied ? "on" : (r.colorManaged ? "on (the slide has no usable profile)" : "off"),
                 r.movesDone, r.timeouts, r.untimed);
     std::printf("  %-28s %10s %10s %10s\n", "", "p25", "median", "p75");
     row("LR TeFOV", r.lrTefov, "ms");
@@ -356,7 +365,8 @@ bool writePlots(const std::string& dir, const std::vector<SizeResult>& results, 
 
     for (const SizeResult& r : results) {
         for (size_t i = 0; i < r.condition.size(); ++i) {
-            const std::string label = std::to_string(r.w) + "x" + std::to_string(r.h) + " " + r.condition[i];
+            std::string label = std::to_string(r.w) + "x" + std::to_string(r.h) + " " + r.condition[i];
+            if (!r.colorManaged) label += " (colour off)";
             fields << '"' << label << "\" " << r.condHr[i] << " " << r.condTpt[i] << "\n"; // a gnuplot string
         }
     }
@@ -448,6 +458,11 @@ int main(int argc, char** argv) {
         ->option_text("N")
         ->check(iris::tools::wholeNumber<uint64_t>(0, std::numeric_limits<uint64_t>::max()));
     app.add_flag("--validation", o.validation, "Run with the Vulkan validation layer");
+    app.add_option("--color-managed", o.colorManaged,
+                   "Colour management (docs/COLOR.md); both: each size\n"
+                   "is run off, then on, in this run (its cost)")
+        ->option_text("on|off|both")
+        ->check(CLI::IsMember({"on", "off", "both"}).description(""));
     app.footer(std::string("Exit status: 0 done; 1 the engine, slide or an output failed; 2 bad arguments.") +
                iris::tools::kTuningEnvironmentHelp);
     if (const int status = iris::tools::parseArguments(app, argc, argv); status >= 0) return status;
@@ -461,8 +476,11 @@ int main(int argc, char** argv) {
     o.mags = parseList(mags);
 
     std::vector<SizeResult> results;
-    for (auto [w, h] : o.sizes) {
-        results.push_back(runSize(o, w, h));
+    std::vector<bool> colorModes;
+    if (o.colorManaged != "on") colorModes.push_back(false);
+    if (o.colorManaged != "off") colorModes.push_back(true);
+    for (auto [w, h] : o.sizes) for (bool colorManaged : colorModes) {
+        results.push_back(runSize(o, w, h, colorManaged));
         if (results.back().device.empty() || results.back().movesDone == 0) {
             std::fprintf(stderr, "iris-bench: %s\n", results.back().notes.empty() ? "no move could be run" : results.back().notes.c_str());
             return 1;

@@ -2,12 +2,15 @@
 // and writes it as PNG.
 //
 //   iris-render SLIDE --out FILE.png [--size WxH] [--center X,Y] [--downsample D]
-//               [--enhance on|off] [--timeout S] [--validation] [--verbose]
+//               [--enhance on|off] [--color-managed on|off] [--display-profile FILE.icc]
+//               [--intent perceptual|relative] [--timeout S] [--validation] [--verbose]
 //
 // --center is in level-0 pixels and --downsample is level-0 pixels per output pixel, so the
 // output's top-left pixel covers level-0 (X − W/2·D, Y − H/2·D). Without them the whole slide
 // is fitted into the output.
 #include <chrono>
+#include <fstream>
+#include <iterator>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -43,7 +46,8 @@ bool parseSize(const std::string& s, double& w, double& h) {
 } // namespace
 
 int main(int argc, char** argv) {
-    std::string slide, out, size = "1920x1080", center, enhance = "on";
+    std::string slide, out, size = "1920x1080", center, enhance = "on", colorManaged = "on", displayProfile,
+        intent = "perceptual";
     double ds = 0, timeout = 60;
     bool validation = false, verbose = false;
     CLI::App app{"Render one frame of a slide headless and write it as PNG.\n"
@@ -75,6 +79,19 @@ int main(int argc, char** argv) {
                    "area average); off gives the exact area average")
         ->option_text("on|off")
         ->check(CLI::IsMember({"on", "off"}).description(""));
+    app.add_option("--color-managed", colorManaged,
+                   "Apply the slide's embedded ICC profile, converting\n"
+                   "to the display profile (docs/COLOR.md); off writes\n"
+                   "the slide's stored bytes")
+        ->option_text("on|off")
+        ->check(CLI::IsMember({"on", "off"}).description(""));
+    app.add_option("--display-profile", displayProfile, "ICC profile of the output's colour space")
+        ->option_text("FILE.icc")
+        ->default_str("sRGB")
+        ->check(CLI::ExistingFile.description(""));
+    app.add_option("--intent", intent, "Rendering intent of the colour transform\n(relative: relative colorimetric with\nblack-point compensation)")
+        ->option_text("perceptual|relative")
+        ->check(CLI::IsMember({"perceptual", "relative"}).description(""));
     app.add_option("--timeout", timeout, "Seconds to wait for the complete frame")
         ->option_text("S")
         ->check(iris::tools::textCheck([](const std::string& v) { double t = 0; return parseNumber(v, t) && t > 0; },
@@ -105,6 +122,18 @@ int main(int argc, char** argv) {
     }
     iris::Engine& e = **engine;
     e.setEnhance(enhance == "on");
+    iris::ColorSettings color;
+    color.managed = colorManaged == "on";
+    color.intent = intent == "relative" ? iris::RenderingIntent::RelativeColorimetric : iris::RenderingIntent::Perceptual;
+    if (!displayProfile.empty()) {
+        std::ifstream in(displayProfile, std::ios::binary);
+        color.displayProfile.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+        if (!in.good() && !in.eof()) {
+            std::fprintf(stderr, "iris-render: cannot read the display profile %s\n", displayProfile.c_str());
+            return 1;
+        }
+    }
+    e.setColorSettings(color);
     if (iris::Result r = e.bindOffscreen(uint32_t(w), uint32_t(h)); !r.ok()) {
         std::fprintf(stderr, "iris-render: %s\n", r.message().c_str());
         return 1;
@@ -112,6 +141,12 @@ int main(int argc, char** argv) {
     if (iris::Result r = e.open(slide); !r.ok()) {
         std::fprintf(stderr, "iris-render: %s\n", r.message().c_str());
         return 1;
+    }
+    if (verbose) {
+        const iris::ColorStatus cs = e.colorStatus();
+        std::fprintf(stderr, "iris-render: colour: %s (slide profile: %s; display: %s)\n",
+                     cs.applied ? "the slide's profile is applied" : "no transform",
+                     cs.slideProfile.empty() ? "none" : cs.slideProfile.c_str(), cs.displayProfile.c_str());
     }
     iris::View v = e.fitView();
     if (haveCenter) {

@@ -12,6 +12,8 @@
 
 #include <charconv>
 #include <chrono>
+#include <fstream>
+#include <iterator>
 #include <cstdint>
 #include <cstdio>
 #include <limits>
@@ -50,10 +52,19 @@ int main(int argc, char** argv) {
         ->option_text("N")
         ->check(iris::tools::wholeNumber(1))
         ->default_str("all cores");
+    std::string iccPath;
+    app.add_option("--icc-profile", iccPath, "Embed this ICC profile (TIFF tag 34675), as scanners\ndo")
+        ->option_text("FILE.icc")
+        ->check(CLI::ExistingFile.description(""));
     app.footer("Exit status: 0 written, 1 the slide could not be written, 2 bad arguments.");
     if (const int status = iris::tools::parseArguments(app, argc, argv); status >= 0) return status;
     if (auto check = iris::sample::validateOptions(options); !check.ok)
         return iris::tools::usageError(app, check.message);
+    if (!iccPath.empty()) {
+        std::ifstream in(iccPath, std::ios::binary);
+        options.iccProfile.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+        if (options.iccProfile.empty()) return iris::tools::usageError(app, "cannot read the ICC profile " + iccPath);
+    }
 
     const bool tty = isatty(STDERR_FILENO) != 0;
     const auto start = std::chrono::steady_clock::now();

@@ -635,6 +635,8 @@ bool setDirectoryFields(TIFF* tif, const Level& L, int levelIndex, const Options
         std::snprintf(description, sizeof description, "Iris View sample slide, seed %llu, 40x, %.2f mpp, quality %d",
                       static_cast<unsigned long long>(o.seed), kMicronsPerPixel, o.quality);
         ok &= TIFFSetField(tif, TIFFTAG_IMAGEDESCRIPTION, description) == 1;
+        if (!o.iccProfile.empty())
+            ok &= TIFFSetField(tif, TIFFTAG_ICCPROFILE, static_cast<uint32_t>(o.iccProfile.size()), o.iccProfile.data()) == 1;
     }
     return ok;
 }

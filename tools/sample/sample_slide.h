@@ -25,6 +25,7 @@ struct Options {
     uint64_t seed = 1;
     int quality = 90; // JPEG quality, 1..100
     int threads = 0;  // 0: std::thread::hardware_concurrency()
+    std::vector<uint8_t> iccProfile; // embedded in level 0 (TIFF tag 34675) when not empty
 };
 
 struct Result {

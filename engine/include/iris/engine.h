@@ -61,6 +61,7 @@ struct EngineConfig {
     // Receives log lines from any engine thread; must be thread-safe and quick.
     LogCallback log;
     EngineTuning tuning;
+    ColorSettings color; // colour management, on by default (Engine::setColorSettings)
 };
 
 class IRIS_API Engine {
@@ -141,6 +142,14 @@ public:
     // (docs/ENHANCEMENT.md); off gives the exact area average. A change re-buffers the tiles.
     void setEnhance(bool on);
     bool enhance() const;
+    // Colour management (docs/COLOR.md): the open slide's embedded ICC profile is converted to
+    // the display profile in the tile shader, through a lookup table baked with LittleCMS, for
+    // the slide's tiles and the overview's thumbnail (never the HUD). On by default
+    // (EngineConfig::color). A profile that cannot be used is reported in colorStatus() and
+    // the slide is drawn untransformed. Takes effect with the next frame.
+    void setColorSettings(const ColorSettings& settings);
+    ColorSettings colorSettings() const;
+    ColorStatus colorStatus() const;
 
     // --- overlays ------------------------------------------------------------------
     // The render thread draws the scale bar, the magnification readout and the overview map

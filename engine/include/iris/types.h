@@ -163,6 +163,31 @@ struct Image {
     std::vector<uint8_t> rgba;
 };
 
+// --- colour management (docs/COLOR.md) -------------------------------------------------
+
+// ICC rendering intent of the slide → display transform.
+enum class RenderingIntent {
+    Perceptual,           // the default
+    RelativeColorimetric, // with black-point compensation
+};
+
+struct ColorSettings {
+    // Apply the slide's embedded ICC profile (on by default). Off, or for a slide without a
+    // profile, the slide's bytes are drawn as they are stored.
+    bool managed = true;
+    // The display's ICC profile (for example X11's _ICC_PROFILE); empty: sRGB.
+    std::vector<uint8_t> displayProfile;
+    RenderingIntent intent = RenderingIntent::Perceptual;
+};
+
+// What the engine applies now (Engine::colorStatus).
+struct ColorStatus {
+    bool applied = false;       // the slide's pixels go through a transform
+    std::string slideProfile;   // the slide profile's description ("" when it has no profile)
+    std::string displayProfile; // the display profile's description
+    Result error;               // why a profile could not be used (the slide is then drawn untransformed)
+};
+
 // --- overlays -------------------------------------------------------------------------
 // What the render thread can draw over the slide (Engine::setOverlayVisible).
 enum class Overlay : int {

@@ -14,6 +14,7 @@
 #include <memory>
 #include <mutex>
 
+#include "color/color_lut.h"
 #include "core/published.h"
 #include "iris/engine.h"
 #include "iris/types.h"
@@ -36,6 +37,10 @@ struct Snapshot {
     bool visible = true;
     std::array<float, 3> background = EngineConfig{}.background; // until create() sets the host's
     bool enhance = true;
+    // The colour transform of the open slide (its ICC profile → the display's), baked by the API
+    // call that opened the slide or changed the colour settings; null: none (no profile, colour
+    // management off, or a profile that could not be used).
+    std::shared_ptr<const color::Lut3D> colorLut;
     overlay::OverlaySettings overlays; // which overlays are on, where, the device pixel ratio, the font
     // The newest move to an entirely new field of view (0: none being timed). Set by the API
     // call that made the move; the render thread times the field from fieldStart.

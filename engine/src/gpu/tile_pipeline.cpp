@@ -10,47 +10,34 @@
 
 namespace iris::gpu {
 
-TilePipeline::~TilePipeline() {
+Result TilePipeline::init(uint32_t frameSlots) {
     VkDevice dev = device_.device();
-    if (!dev) return;
-    for (auto& [f, p] : pipelines_) vkDestroyPipeline(dev, p, nullptr);
-    for (auto& [f, p] : seamPipelines_) vkDestroyPipeline(dev, p, nullptr);
-    if (pool_) vkDestroyDescriptorPool(dev, pool_, nullptr);
-    if (layout_) vkDestroyPipelineLayout(dev, layout_, nullptr);
-    if (setLayout_) vkDestroyDescriptorSetLayout(dev, setLayout_, nullptr);
-    if (vert_) vkDestroyShaderModule(dev, vert_, nullptr);
-    if (frag_) vkDestroyShaderModule(dev, frag_, nullptr);
-    if (seamVert_) vkDestroyShaderModule(dev, seamVert_, nullptr);
-    if (seamFrag_) vkDestroyShaderModule(dev, seamFrag_, nullptr);
+    const auto module = [&](const uint32_t* code, size_t bytes, vk::ShaderModule& out) {
+        return vk::createShaderModule(dev, code, bytes, *out.replace(dev));
+    };
+    if (Result r = module(tile_vert_spv, sizeof(tile_vert_spv), vert_); !r.ok()) return r;
+    if (Result r = module(tile_frag_spv, sizeof(tile_frag_spv), frag_); !r.ok()) return r;
+    if (Result r = module(tile_seam_vert_spv, sizeof(tile_seam_vert_spv), seamVert_); !r.ok()) return r;
+    if (Result r = module(tile_seam_frag_spv, sizeof(tile_seam_frag_spv), seamFrag_); !r.ok()) return r;
+
+    if (Result r = colorLut_.init(frameSlots); !r.ok()) return r;
+    const vk::SampledImage images[2] = {{atlas_.sampler(), atlas_.view(), VK_IMAGE_LAYOUT_GENERAL},
+                                        {colorLut_.sampler(), colorLut_.view(), ColorLutTexture::kLayout}};
+    return vk::createSampledImageSet(dev, sizeof(TilePush), images, *setLayout_.replace(dev), *layout_.replace(dev),
+                                     *pool_.replace(dev), set_);
 }
 
-Result TilePipeline::init() {
-    VkDevice dev = device_.device();
-    if (Result r = vk::createShaderModule(dev, tile_vert_spv, sizeof(tile_vert_spv), vert_); !r.ok()) return r;
-    if (Result r = vk::createShaderModule(dev, tile_frag_spv, sizeof(tile_frag_spv), frag_); !r.ok()) return r;
-    if (Result r = vk::createShaderModule(dev, tile_seam_vert_spv, sizeof(tile_seam_vert_spv), seamVert_); !r.ok())
-        return r;
-    if (Result r = vk::createShaderModule(dev, tile_seam_frag_spv, sizeof(tile_seam_frag_spv), seamFrag_); !r.ok())
-        return r;
-
-    if (Result r = vk::createSampledImageSet(dev, sizeof(TilePush), atlas_.sampler(), atlas_.view(), VK_IMAGE_LAYOUT_GENERAL,
-                                             setLayout_, layout_, pool_, set_);
-        !r.ok())
-        return r;
-    return {};
+Expected<VkPipeline> TilePipeline::pipelineFor(VkFormat format, bool colorManaged) {
+    return create(format, false, colorManaged);
 }
 
-Expected<VkPipeline> TilePipeline::pipelineFor(VkFormat format) {
-    return pipelineFor(format, false);
+Expected<VkPipeline> TilePipeline::seamPipelineFor(VkFormat format, bool colorManaged) {
+    return create(format, true, colorManaged);
 }
 
-Expected<VkPipeline> TilePipeline::seamPipelineFor(VkFormat format) {
-    return pipelineFor(format, true);
-}
-
-Expected<VkPipeline> TilePipeline::pipelineFor(VkFormat format, bool seams) {
-    auto& cache = seams ? seamPipelines_ : pipelines_;
-    if (auto it = cache.find(int(format)); it != cache.end()) return it->second;
+Expected<VkPipeline> TilePipeline::create(VkFormat format, bool seams, bool colorManaged) {
+    const int key = int(format) * 4 + (seams ? 2 : 0) + (colorManaged ? 1 : 0);
+    if (auto it = pipelines_.find(key); it != pipelines_.end()) return it->second.get();
     // The tile pass reads the sides (to leave the seam bands out); the seam pass also the corners.
     const VkVertexInputAttributeDescription attrs[5] = {
         {.location = 0, .binding = 0, .format = VK_FORMAT_R32G32B32A32_SFLOAT, .offset = offsetof(TileInstance, rect)},
@@ -60,10 +47,14 @@ Expected<VkPipeline> TilePipeline::pipelineFor(VkFormat format, bool seams) {
         {.location = 4, .binding = 0, .format = VK_FORMAT_R32G32B32A32_SFLOAT, .offset = offsetof(TileInstance, corners)},
     };
     // Premultiplied "over": tiles are premultiplied RGBA; the target stays opaque.
-    Expected<VkPipeline> p = vk::createInstancedQuadPipeline(device_.device(), layout_, seams ? seamVert_ : vert_,
-                                                             seams ? seamFrag_ : frag_, sizeof(TileInstance), attrs,
-                                                             seams ? 5 : 4, format);
-    if (p) cache[int(format)] = *p;
+    // shaders/color_lut.glsl: constant_id 0, COLOR_MANAGED.
+    const VkBool32 managed = colorManaged ? VK_TRUE : VK_FALSE;
+    const VkSpecializationMapEntry entry{.constantID = 0, .offset = 0, .size = sizeof(VkBool32)};
+    const VkSpecializationInfo spec{.mapEntryCount = 1, .pMapEntries = &entry, .dataSize = sizeof(managed), .pData = &managed};
+    Expected<VkPipeline> p = vk::createInstancedQuadPipeline(
+        device_.device(), layout_.get(), (seams ? seamVert_ : vert_).get(), (seams ? seamFrag_ : frag_).get(),
+        sizeof(TileInstance), attrs, seams ? 5 : 4, format, &spec);
+    if (p) pipelines_.emplace(key, vk::Pipeline(device_.device(), *p));
     return p;
 }
 

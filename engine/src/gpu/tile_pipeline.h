@@ -2,14 +2,18 @@
 // premultiplied over what is below (base level, then LR, then HR); and the seam pass, which
 // draws the half-texel bands along the sides of tiles drawn at LOD 0 where a neighbour is
 // resident, filtering across the seam (shaders/tile_bands.glsl). Dynamic rendering, so one
-// pipeline of each per colour-attachment format (offscreen RGBA8, swapchain BGRA8 …).
+// pipeline of each per colour-attachment format (offscreen RGBA8, swapchain BGRA8 …), and per
+// colour management (on: the fragment shaders apply the colour table, binding 1; off: that
+// step is compiled out by a specialization constant).
 #pragma once
 
 #include <unordered_map>
 
+#include "gpu/color_lut_texture.h"
 #include "gpu/device.h"
 #include "gpu/tile_atlas.h"
 #include "gpu/tile_instance.h"
+#include "gpu/vk_handle.h"
 
 namespace iris::gpu {
 
@@ -20,31 +24,32 @@ struct TilePush {
 
 class TilePipeline {
 public:
-    TilePipeline(Device& device, TileAtlas& atlas) : device_(device), atlas_(atlas) {}
-    ~TilePipeline();
-    Result init();
-    // The tile pass's and the seam pass's pipelines for a colour format, created on first use
-    // (render thread only). Both use layout() and descriptorSet().
-    Expected<VkPipeline> pipelineFor(VkFormat format);
-    Expected<VkPipeline> seamPipelineFor(VkFormat format);
-    VkPipelineLayout layout() const { return layout_; }
+    TilePipeline(Device& device, TileAtlas& atlas) : device_(device), atlas_(atlas), colorLut_(device) {}
+    ~TilePipeline() = default;
+    // frameSlots: frames in flight (the colour table's staging buffers).
+    Result init(uint32_t frameSlots);
+    // The tile pass's and the seam pass's pipelines for a colour format, with or without the
+    // colour transform, created on first use (render thread only). All use layout() and
+    // descriptorSet().
+    Expected<VkPipeline> pipelineFor(VkFormat format, bool colorManaged = false);
+    Expected<VkPipeline> seamPipelineFor(VkFormat format, bool colorManaged = false);
+    // The colour table the pipelines sample (binding 1); the render thread updates it.
+    ColorLutTexture& colorLut() { return colorLut_; }
+    VkPipelineLayout layout() const { return layout_.get(); }
     VkDescriptorSet descriptorSet() const { return set_; }
 
 private:
-    Expected<VkPipeline> pipelineFor(VkFormat format, bool seams);
+    Expected<VkPipeline> create(VkFormat format, bool seams, bool colorManaged);
 
     Device& device_;
     TileAtlas& atlas_;
-    VkShaderModule vert_ = VK_NULL_HANDLE;
-    VkShaderModule frag_ = VK_NULL_HANDLE;
-    VkShaderModule seamVert_ = VK_NULL_HANDLE;
-    VkShaderModule seamFrag_ = VK_NULL_HANDLE;
-    VkDescriptorSetLayout setLayout_ = VK_NULL_HANDLE;
-    VkPipelineLayout layout_ = VK_NULL_HANDLE;
-    VkDescriptorPool pool_ = VK_NULL_HANDLE;
-    VkDescriptorSet set_ = VK_NULL_HANDLE;
-    std::unordered_map<int, VkPipeline> pipelines_;
-    std::unordered_map<int, VkPipeline> seamPipelines_;
+    ColorLutTexture colorLut_;
+    vk::ShaderModule vert_, frag_, seamVert_, seamFrag_;
+    vk::DescriptorSetLayout setLayout_;
+    vk::PipelineLayout layout_;
+    vk::DescriptorPool pool_;
+    VkDescriptorSet set_ = VK_NULL_HANDLE;           // freed with pool_
+    std::unordered_map<int, vk::Pipeline> pipelines_; // key: format × 4 + seams × 2 + colour
 };
 
 } // namespace iris::gpu

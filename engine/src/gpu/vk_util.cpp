@@ -196,12 +196,13 @@ Result createShaderModule(VkDevice dev, const uint32_t* code, size_t bytes, VkSh
 Expected<VkPipeline> createInstancedQuadPipeline(VkDevice dev, VkPipelineLayout layout, VkShaderModule vert,
                                                  VkShaderModule frag, uint32_t instanceStride,
                                                  const VkVertexInputAttributeDescription* attributes,
-                                                 uint32_t attributeCount, VkFormat format) {
+                                                 uint32_t attributeCount, VkFormat format,
+                                                 const VkSpecializationInfo* fragSpecialization) {
     const VkPipelineShaderStageCreateInfo stages[2] = {
         {.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, .pNext = nullptr, .flags = 0,
          .stage = VK_SHADER_STAGE_VERTEX_BIT, .module = vert, .pName = "main", .pSpecializationInfo = nullptr},
         {.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, .pNext = nullptr, .flags = 0,
-         .stage = VK_SHADER_STAGE_FRAGMENT_BIT, .module = frag, .pName = "main", .pSpecializationInfo = nullptr},
+         .stage = VK_SHADER_STAGE_FRAGMENT_BIT, .module = frag, .pName = "main", .pSpecializationInfo = fragSpecialization},
     };
     const VkVertexInputBindingDescription vib{.binding = 0, .stride = instanceStride, .inputRate = VK_VERTEX_INPUT_RATE_INSTANCE};
     const VkPipelineVertexInputStateCreateInfo vi{
@@ -271,18 +272,25 @@ Expected<VkPipeline> createInstancedQuadPipeline(VkDevice dev, VkPipelineLayout 
     return p;
 }
 
-Result createSampledImageSet(VkDevice dev, uint32_t pushBytes, VkSampler sampler, VkImageView view,
-                             VkImageLayout imageLayout, VkDescriptorSetLayout& setLayout,
-                             VkPipelineLayout& pipelineLayout, VkDescriptorPool& pool, VkDescriptorSet& set) {
-    const VkDescriptorSetLayoutBinding binding{
-        .binding = 0,
-        .descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
-        .descriptorCount = 1,
-        .stageFlags = VK_SHADER_STAGE_FRAGMENT_BIT,
-        .pImmutableSamplers = nullptr,
-    };
+Result createSampledImageSet(VkDevice dev, uint32_t pushBytes, std::span<const SampledImage> images,
+                             VkDescriptorSetLayout& setLayout, VkPipelineLayout& pipelineLayout, VkDescriptorPool& pool,
+                             VkDescriptorSet& set) {
+    const uint32_t n = uint32_t(images.size());
+    std::vector<VkDescriptorSetLayoutBinding> bindings(n);
+    std::vector<VkDescriptorImageInfo> infos(n);
+    std::vector<VkWriteDescriptorSet> writes(n);
+    for (uint32_t i = 0; i < n; ++i) {
+        bindings[i] = VkDescriptorSetLayoutBinding{
+            .binding = i,
+            .descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
+            .descriptorCount = 1,
+            .stageFlags = VK_SHADER_STAGE_FRAGMENT_BIT,
+            .pImmutableSamplers = nullptr,
+        };
+        infos[i] = VkDescriptorImageInfo{.sampler = images[i].sampler, .imageView = images[i].view, .imageLayout = images[i].layout};
+    }
     const VkDescriptorSetLayoutCreateInfo dslci{
-        .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO, .pNext = nullptr, .flags = 0, .bindingCount = 1, .pBindings = &binding};
+        .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO, .pNext = nullptr, .flags = 0, .bindingCount = n, .pBindings = bindings.data()};
     IRIS_VK_TRY(vkCreateDescriptorSetLayout(dev, &dslci, nullptr, &setLayout));
     const VkPushConstantRange push{.stageFlags = VK_SHADER_STAGE_VERTEX_BIT, .offset = 0, .size = pushBytes};
     const VkPipelineLayoutCreateInfo plci{
@@ -295,27 +303,28 @@ Result createSampledImageSet(VkDevice dev, uint32_t pushBytes, VkSampler sampler
         .pPushConstantRanges = &push,
     };
     IRIS_VK_TRY(vkCreatePipelineLayout(dev, &plci, nullptr, &pipelineLayout));
-    const VkDescriptorPoolSize ps{.type = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, .descriptorCount = 1};
+    const VkDescriptorPoolSize ps{.type = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, .descriptorCount = n};
     const VkDescriptorPoolCreateInfo dpci{
         .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO, .pNext = nullptr, .flags = 0, .maxSets = 1, .poolSizeCount = 1, .pPoolSizes = &ps};
     IRIS_VK_TRY(vkCreateDescriptorPool(dev, &dpci, nullptr, &pool));
     const VkDescriptorSetAllocateInfo dsai{
         .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO, .pNext = nullptr, .descriptorPool = pool, .descriptorSetCount = 1, .pSetLayouts = &setLayout};
     IRIS_VK_TRY(vkAllocateDescriptorSets(dev, &dsai, &set));
-    const VkDescriptorImageInfo ii{.sampler = sampler, .imageView = view, .imageLayout = imageLayout};
-    const VkWriteDescriptorSet w{
-        .sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET,
-        .pNext = nullptr,
-        .dstSet = set,
-        .dstBinding = 0,
-        .dstArrayElement = 0,
-        .descriptorCount = 1,
-        .descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
-        .pImageInfo = &ii,
-        .pBufferInfo = nullptr,
-        .pTexelBufferView = nullptr,
-    };
-    vkUpdateDescriptorSets(dev, 1, &w, 0, nullptr);
+    for (uint32_t i = 0; i < n; ++i) {
+        writes[i] = VkWriteDescriptorSet{
+            .sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET,
+            .pNext = nullptr,
+            .dstSet = set,
+            .dstBinding = i,
+            .dstArrayElement = 0,
+            .descriptorCount = 1,
+            .descriptorType = VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER,
+            .pImageInfo = &infos[i],
+            .pBufferInfo = nullptr,
+            .pTexelBufferView = nullptr,
+        };
+    }
+    vkUpdateDescriptorSets(dev, n, writes.data(), 0, nullptr);
     return {};
 }
 

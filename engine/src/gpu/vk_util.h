@@ -3,6 +3,8 @@
 
 #include <string>
 
+#include <span>
+
 #include <vulkan/vulkan.h>
 
 #include "iris/types.h"
@@ -165,13 +167,26 @@ Result createImageView(VkDevice dev, VkImage image, VkImageViewType type, VkForm
 // A shader module from SPIR-V words (the generated iris_shaders headers).
 Result createShaderModule(VkDevice dev, const uint32_t* code, size_t bytes, VkShaderModule& out);
 
-// The descriptor state of a pipeline that samples one image in its fragment shader (binding 0,
-// a combined image sampler) and takes `pushBytes` of vertex push constants: the set layout,
-// the pipeline layout, a pool of one set and that set, written with (sampler, view, layout).
+// One image a fragment shader samples (a combined image sampler binding).
+struct SampledImage {
+    VkSampler sampler = VK_NULL_HANDLE;
+    VkImageView view = VK_NULL_HANDLE;
+    VkImageLayout layout = VK_IMAGE_LAYOUT_UNDEFINED;
+};
+
+// The descriptor state of a pipeline that samples `images` in its fragment shader (bindings 0,
+// 1, … in that order, combined image samplers) and takes `pushBytes` of vertex push constants:
+// the set layout, the pipeline layout, a pool of one set and that set, written with the images.
 // On failure what was made stays in the out-parameters for the caller's destructor.
-Result createSampledImageSet(VkDevice dev, uint32_t pushBytes, VkSampler sampler, VkImageView view,
-                             VkImageLayout imageLayout, VkDescriptorSetLayout& setLayout,
-                             VkPipelineLayout& pipelineLayout, VkDescriptorPool& pool, VkDescriptorSet& set);
+Result createSampledImageSet(VkDevice dev, uint32_t pushBytes, std::span<const SampledImage> images,
+                             VkDescriptorSetLayout& setLayout, VkPipelineLayout& pipelineLayout, VkDescriptorPool& pool,
+                             VkDescriptorSet& set);
+inline Result createSampledImageSet(VkDevice dev, uint32_t pushBytes, VkSampler sampler, VkImageView view,
+                                    VkImageLayout imageLayout, VkDescriptorSetLayout& setLayout,
+                                    VkPipelineLayout& pipelineLayout, VkDescriptorPool& pool, VkDescriptorSet& set) {
+    const SampledImage image{sampler, view, imageLayout};
+    return createSampledImageSet(dev, pushBytes, std::span(&image, 1), setLayout, pipelineLayout, pool, set);
+}
 
 // A graphics pipeline that draws one quad per instance (a 4-vertex triangle strip whose
 // corners the vertex shader makes from gl_VertexIndex) into one colour attachment of
@@ -180,7 +195,8 @@ Result createSampledImageSet(VkDevice dev, uint32_t pushBytes, VkSampler sampler
 Expected<VkPipeline> createInstancedQuadPipeline(VkDevice dev, VkPipelineLayout layout, VkShaderModule vert,
                                                  VkShaderModule frag, uint32_t instanceStride,
                                                  const VkVertexInputAttributeDescription* attributes,
-                                                 uint32_t attributeCount, VkFormat format);
+                                                 uint32_t attributeCount, VkFormat format,
+                                                 const VkSpecializationInfo* fragSpecialization = nullptr);
 
 // A host-visible buffer, persistently mapped.
 struct MappedBuffer {

@@ -61,8 +61,9 @@ public:
     // when none): a hit test applies the layout only to the slide it was made for.
     OverlayLayout overlayLayout(std::shared_ptr<const SlideSource>* source = nullptr) const;
 
-private:
     static constexpr uint32_t kFramesInFlight = 2;
+
+private:
     static constexpr uint32_t kMaxInstances = 16384;
     struct FrameSlot {
         VkCommandPool pool = VK_NULL_HANDLE;

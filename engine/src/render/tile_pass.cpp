@@ -16,12 +16,19 @@ Result TilePass::prepare(FrameContext& frame) {
     first_ = frame.instances.used;
     count_ = 0;
     pipe_ = seamPipe_ = VK_NULL_HANDLE;
-    Expected<VkPipeline> pipe = pipeline_.pipelineFor(frame.format);
+    // The colour transform: the snapshot's table into the GPU's, and the pipelines with the step.
+    Result colorError;
+    bool managed = frame.snap.colorLut != nullptr;
+    if (Result r = pipeline_.colorLut().prepare(frame.slot, frame.snap.colorLut); !r.ok()) {
+        colorError = Result(r.status(), "colour transform: " + r.message() + "; drawing without it");
+        managed = false;
+    }
+    Expected<VkPipeline> pipe = pipeline_.pipelineFor(frame.format, managed);
     if (!pipe) {
         frame.complete = false;
         return pipe.error();
     }
-    Expected<VkPipeline> seamPipe = pipeline_.seamPipelineFor(frame.format);
+    Expected<VkPipeline> seamPipe = pipeline_.seamPipelineFor(frame.format, managed);
     if (!seamPipe) {
         frame.complete = false;
         return seamPipe.error();
@@ -30,7 +37,7 @@ Result TilePass::prepare(FrameContext& frame) {
     seamPipe_ = *seamPipe;
     if (!frame.snap.slide) {
         frame.complete = false; // nothing to show is not a shown view (waitForFrame needs a slide)
-        return {};
+        return colorError;
     }
     const DrawOptions options{
         .drawCovered = drawCovered_, .sizeMatches = frame.sizeMatches, .maxInstances = frame.instances.remaining()};
@@ -45,7 +52,11 @@ Result TilePass::prepare(FrameContext& frame) {
                                        .lrTiles = drawList_.lrTiles,
                                        .hrTiles = drawList_.hrTiles};
     if (!drawList_.hrComplete) frame.complete = false;
-    return {};
+    return colorError;
+}
+
+void TilePass::recordUploads(VkCommandBuffer cmd, const FrameContext& frame) {
+    pipeline_.colorLut().recordUpload(cmd, frame.slot);
 }
 
 Result TilePass::recordDraws(VkCommandBuffer cmd, const FrameContext& frame) {

@@ -16,7 +16,9 @@ public:
     TilePass(gpu::TilePipeline& pipeline, bool drawCovered) : pipeline_(pipeline), drawCovered_(drawCovered) {}
 
     const char* name() const override { return "tiles"; }
+    // Also stages a new colour table (the snapshot's) for upload.
     Result prepare(FrameContext& frame) override;
+    void recordUploads(VkCommandBuffer cmd, const FrameContext& frame) override;
     Result recordDraws(VkCommandBuffer cmd, const FrameContext& frame) override;
 
     // What the last prepared frame showed of its view's field (metrics/field_metrics.h).

@@ -24,7 +24,8 @@ inline constexpr const char* kTuningEnvironmentHelp =
     "  IRIS_DRAW_COVERED=0|1          draw tiles hidden under finer ones\n"
     "  IRIS_MIP_SCHEDULE=wide|serial  mip compute schedule (default: by device type)\n"
     "  IRIS_DEVICE=TEXT               use the Vulkan device whose name contains TEXT\n"
-    "  IRIS_QUEUES=single|auto        every role on the graphics queue";
+    "  IRIS_QUEUES=single|auto        every role on the graphics queue\n"
+    "  IRIS_TILE_RESOLVE=quads|compute  tiles drawn as quads, or resolved per pixel";
 
 // "  -o, --output FILE       text (default: x)" within 80 columns.
 class HelpFormatter : public CLI::Formatter {

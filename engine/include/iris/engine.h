@@ -44,6 +44,13 @@ struct EngineTuning {
     // Every role (draw, mips, uploads) on the graphics queue even where the device has separate
     // compute and transfer families: to run the single-queue path on any device.
     bool singleQueue = false;
+    // How the slide's tiles become pixels (docs/ARCHITECTURE.md, "Per-tile quads or a
+    // per-pixel resolve"). Quads: one instanced quad per tile and layer, then the seam bands
+    // (every target). Compute: one compute pass resolves every pixel through a page table of the
+    // frame's resident tiles, finest layer first, filtering across tiles at LOD 0 (offscreen
+    // targets only; a swapchain keeps quads). An evaluation, measured by iris-bench.
+    enum class TileResolve { Quads, Compute };
+    TileResolve tileResolve = TileResolve::Quads;
 };
 
 struct EngineConfig {

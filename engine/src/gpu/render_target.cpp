@@ -13,12 +13,14 @@ OffscreenTarget::~OffscreenTarget() {
     vk::destroyMappedBuffer(dev, readback_);
 }
 
-Result OffscreenTarget::init(uint32_t width, uint32_t height) {
+Result OffscreenTarget::init(uint32_t width, uint32_t height, bool storage) {
     VkDevice dev = device_.device();
     width_ = width;
     height_ = height;
-    const VkImageCreateInfo ici = vk::image2D(kFormat, width, height, 1, 1,
-                                              VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT);
+    const VkImageCreateInfo ici =
+        vk::image2D(kFormat, width, height, 1, 1,
+                    VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT |
+                        (storage ? VkImageUsageFlags(VK_IMAGE_USAGE_STORAGE_BIT) : VkImageUsageFlags(0)));
     IRIS_VK_TRY(vk::createDeviceImage(device_.physical(), dev, ici, image_, memory_));
     if (Result r = vk::createImageView(dev, image_, VK_IMAGE_VIEW_TYPE_2D, kFormat, vk::colorRange(0, 1, 0, 1), view_); !r.ok()) return r;
     return vk::createMappedBuffer(device_.physical(), dev, VkDeviceSize(width) * height * 4,

@@ -13,7 +13,8 @@ class OffscreenTarget {
 public:
     OffscreenTarget(Device& device) : device_(device) {}
     ~OffscreenTarget();
-    Result init(uint32_t width, uint32_t height);
+    // storage: the image can also be written by a compute shader (the per-pixel resolve).
+    Result init(uint32_t width, uint32_t height, bool storage = false);
     static constexpr VkFormat kFormat = VK_FORMAT_R8G8B8A8_UNORM;
     VkImage image() const { return image_; }
     VkImageView view() const { return view_; }

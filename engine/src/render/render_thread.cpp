@@ -73,6 +73,11 @@ Result RenderThread::init() {
     }
     log_.info(std::string("frame pacing: ") + (paceFrames_ ? "on" : "off"));
     if (Result r = hudPass_.init(kFramesInFlight); !r.ok()) return r;
+    if (tuning_.tileResolve == EngineTuning::TileResolve::Compute) {
+        resolvePass_ = std::make_unique<render::ResolvePass>(device_, atlas_, pipeline_);
+        if (Result r = resolvePass_->init(kFramesInFlight); !r.ok()) return r;
+        log_.info("tile resolve: compute (offscreen targets; a swapchain draws quads)");
+    }
     if (Result r = vk::createTimestampPool(device_.physical(), dev, device_.queueFamily(), 2 * kFramesInFlight,
                                            timestamps_, timestampPeriodNs_);
         !r.ok())
@@ -228,7 +233,7 @@ void RenderThread::applyTargetRequest() {
     reqHeight_ = req.height;
     if (kind_ == TargetKind::Offscreen) {
         offscreen_ = std::make_unique<gpu::OffscreenTarget>(device_);
-        if (Result r = offscreen_->init(req.width, req.height); !r.ok()) {
+        if (Result r = offscreen_->init(req.width, req.height, resolvePass_ != nullptr); !r.ok()) {
             shared_.setError(r);
             log_.error("offscreen target: " + r.message());
             offscreen_.reset();
@@ -436,12 +441,16 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
     // Tiles whose mips were made on another queue family: record the acquire half of their
     // compute → graphics ownership transfer (the buffer thread recorded the release), wait on
     // the upload timeline value that covered the release, and only then let them be drawn.
+    // The per-pixel resolve samples the atlas in a compute shader, the quads in fragment shaders.
+    const bool resolve = resolvePass_ && kind_ == TargetKind::Offscreen;
+    const VkPipelineStageFlags2 sampleStages =
+        VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | (resolve ? VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT : VkPipelineStageFlags2(0));
     std::vector<VkImageMemoryBarrier2> acquires;
     uint64_t uploadWait = 0;
     if (handover_.needed) {
         handover_.drain([&](const HandoverItem& h) {
             VkImageMemoryBarrier2 b = vk::imageBarrier(
-                atlas_.image(), VK_PIPELINE_STAGE_2_NONE, VK_ACCESS_2_NONE, VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT,
+                atlas_.image(), VK_PIPELINE_STAGE_2_NONE, VK_ACCESS_2_NONE, sampleStages,
                 VK_ACCESS_2_SHADER_SAMPLED_READ_BIT, VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_GENERAL,
                 vk::colorRange(0, gpu::kTileMipLevels, uint32_t(h.slot), 1));
             b.srcQueueFamilyIndex = handover_.srcFamily;
@@ -479,8 +488,14 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
         shared_.setError(r);
         log_.error(std::string(pass.name()) + ": " + r.message());
     };
+    tilePass_.setDrawLevels(!resolve);
     for (render::FramePass* pass : passes_)
         if (Result r = pass->prepare(frame); !r.ok()) passFailed(*pass, r); // the frame goes on without it
+    if (resolve) {
+        const std::array<float, 4> bg{clearUnorm(snap.background[0]), clearUnorm(snap.background[1]),
+                                      clearUnorm(snap.background[2]), 1.0f};
+        if (Result r = resolvePass_->prepare(frame, tilePass_.drawList(), bg, target.view); !r.ok()) return r;
+    }
     if (tilePass_.progress().lrComplete) lrWholeViewSerial_ = snap.viewSerial;
     metrics_.frameDrawn(snap, tilePass_.progress());
 
@@ -497,15 +512,37 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
         vkCmdResetQueryPool(cmd, timestamps_, query, 2);
         vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_TOP_OF_PIPE_BIT, timestamps_, query);
     }
-    // Previous contents are discarded (UNDEFINED); the wait on the previous frame's copy
-    // (offscreen) or on the acquire semaphore (swapchain) is covered by the source stages.
-    const VkImageMemoryBarrier2 toColor = vk::imageBarrier(
-        target.image, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT | VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_NONE,
-        VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
-        VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, vk::colorRange(0, 1, 0, 1));
-    vk::pipelineBarrier(cmd, &toColor, 1);
     if (!acquires.empty()) vk::pipelineBarrier(cmd, acquires.data(), uint32_t(acquires.size()));
     for (render::FramePass* pass : passes_) pass->recordUploads(cmd, frame);
+    if (resolve) {
+        // The atlas's tiles (and a new colour table) were written by earlier submissions and
+        // commands; the quads' fragment reads are covered by their barriers, a compute read is not.
+        const VkMemoryBarrier2 reads{.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER_2,
+                                     .pNext = nullptr,
+                                     .srcStageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+                                     .srcAccessMask = VK_ACCESS_2_MEMORY_WRITE_BIT,
+                                     .dstStageMask = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                                     .dstAccessMask = VK_ACCESS_2_SHADER_SAMPLED_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_READ_BIT};
+        const VkDependencyInfo dep{.sType = VK_STRUCTURE_TYPE_DEPENDENCY_INFO,
+                                   .pNext = nullptr,
+                                   .dependencyFlags = 0,
+                                   .memoryBarrierCount = 1,
+                                   .pMemoryBarriers = &reads,
+                                   .bufferMemoryBarrierCount = 0,
+                                   .pBufferMemoryBarriers = nullptr,
+                                   .imageMemoryBarrierCount = 0,
+                                   .pImageMemoryBarriers = nullptr};
+        vkCmdPipelineBarrier2(cmd, &dep);
+        resolvePass_->record(cmd, frame, target.image);
+    } else {
+        // Previous contents are discarded (UNDEFINED); the wait on the previous frame's copy
+        // (offscreen) or on the acquire semaphore (swapchain) is covered by the source stages.
+        const VkImageMemoryBarrier2 toColor = vk::imageBarrier(
+            target.image, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT | VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_NONE,
+            VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
+            VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, vk::colorRange(0, 1, 0, 1));
+        vk::pipelineBarrier(cmd, &toColor, 1);
+    }
     const VkRenderingAttachmentInfo color{
         .sType = VK_STRUCTURE_TYPE_RENDERING_ATTACHMENT_INFO,
         .pNext = nullptr,
@@ -514,7 +551,7 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
         .resolveMode = VK_RESOLVE_MODE_NONE,
         .resolveImageView = VK_NULL_HANDLE,
         .resolveImageLayout = VK_IMAGE_LAYOUT_UNDEFINED,
-        .loadOp = VK_ATTACHMENT_LOAD_OP_CLEAR,
+        .loadOp = resolve ? VK_ATTACHMENT_LOAD_OP_LOAD : VK_ATTACHMENT_LOAD_OP_CLEAR,
         .storeOp = VK_ATTACHMENT_STORE_OP_STORE,
         .clearValue = {.color = {{clearUnorm(snap.background[0]), clearUnorm(snap.background[1]),
                                   clearUnorm(snap.background[2]), 1.0f}}},
@@ -596,7 +633,11 @@ Result RenderThread::submitFrame(FrameSlot& f, const TargetImage& target, uint64
     uint32_t waitCount = 0;
     if (surface) waits[waitCount++] = vk::semaphoreInfo(f.acquired, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT);
     if (uploadWait)
-        waits[waitCount++] = vk::semaphoreInfo(handover_.uploadTimeline, uploadWait, VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT);
+        waits[waitCount++] = vk::semaphoreInfo(handover_.uploadTimeline, uploadWait,
+                                               VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT |
+                                                   (resolvePass_ && kind_ == TargetKind::Offscreen
+                                                        ? VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT
+                                                        : VkPipelineStageFlags2(0)));
     const VkSemaphoreSubmitInfo sigDone = vk::semaphoreInfo(
         surface ? swapchain_->renderDone(target.index) : VK_NULL_HANDLE, 0, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT);
     const VkSubmitInfo2 si = vk::submitInfo(&cbi, waits, waitCount, &sigDone, surface ? 1u : 0u);

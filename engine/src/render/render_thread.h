@@ -27,6 +27,7 @@
 #include "metrics/field_metrics.h"
 #include "render/frame_pass.h"
 #include "render/hud_pass.h"
+#include "render/resolve_pass.h"
 #include "render/tile_pass.h"
 
 namespace iris {
@@ -144,6 +145,9 @@ private:
     render::TilePass tilePass_;
     render::HudPass hudPass_;
     std::array<render::FramePass*, 2> passes_{&tilePass_, &hudPass_};
+    // EngineTuning::TileResolve::Compute: offscreen frames resolve the tiles per pixel in a
+    // compute pass instead of the tile pass's quads (null otherwise).
+    std::unique_ptr<render::ResolvePass> resolvePass_;
     // Frame pacing (CPU devices, where drawing takes the cores the loaders decode on): a frame
     // that only adds tiles to the view already drawn waits until kPaceFactor × the last
     // frame's GPU time has passed since the previous one was submitted, unless it shows a

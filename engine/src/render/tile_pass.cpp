@@ -60,7 +60,7 @@ void TilePass::recordUploads(VkCommandBuffer cmd, const FrameContext& frame) {
 }
 
 Result TilePass::recordDraws(VkCommandBuffer cmd, const FrameContext& frame) {
-    if (count_ == 0) return {};
+    if (count_ == 0 || !drawLevels_) return {};
     const VkRect2D scissor{{0, 0}, frame.extent};
     vkCmdSetScissor(cmd, 0, 1, &scissor);
     // Level by level in painter's order: a level's seam bands go on before finer levels.

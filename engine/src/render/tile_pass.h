@@ -25,6 +25,11 @@ public:
     const metrics::FieldProgress& progress() const { return progress_; }
     // Tiles the last prepared frame draws.
     uint32_t tilesDrawn() const { return count_; }
+    // The last prepared frame's draw list (the per-pixel resolve's page table comes from it).
+    const DrawList& drawList() const { return drawList_; }
+    // Off: the frame's levels are resolved elsewhere (render/resolve_pass.h); recordDraws then
+    // draws nothing, and drawSpan still serves the HUD's thumbnail.
+    void setDrawLevels(bool on) { drawLevels_ = on; }
 
     // Records instances [first, first + n) of the frame's arena as tile quads; with `seams`,
     // then the seam pass's four bands of each. Binds its own pipeline and state. Only after
@@ -34,6 +39,7 @@ public:
 private:
     gpu::TilePipeline& pipeline_;
     const bool drawCovered_;
+    bool drawLevels_ = true;
     DrawList drawList_; // reused from frame to frame
     metrics::FieldProgress progress_;
     uint32_t first_ = 0, count_ = 0;                               // this frame's span of the arena

@@ -401,6 +401,25 @@ private slots:
         CHECKED(expectSameLevels(*dicom, *ref, 1, 1, 128, 2.5, "CMU-1-Small-Region, JPEG q95 re-encoded at 120 px"));
     }
 
+    // iris-encode converts a DICOM series (given as its folder) like any slide: the .iris file
+    // has the DICOM's levels, and its tiles are the DICOM's within JPEG re-encoding error.
+    void encodeToIris() {
+        auto dir = slidesDir("unsupported/dicom-boxes");
+        if (!dir) QSKIP("no test data");
+        const fs::path out = dicomOut() / "boxes.iris";
+        fs::remove(out);
+        const std::string cmd = std::string(IRIS_ENCODE_EXE) + " '" + dir->string() + "' -o '" + out.string() +
+                                "' > '" + out.string() + ".log' 2>&1";
+        QVERIFY2(std::system(cmd.c_str()) == 0, ("iris-encode failed: " + cmd).c_str());
+        std::string why;
+        auto dicom = openOrFail(*dir, &why);
+        auto iris = openOrFail(out, &why);
+        QVERIFY2(dicom && iris, why.c_str());
+        QCOMPARE(iris->info().width, dicom->info().width);
+        QCOMPARE(iris->info().levels.size(), dicom->info().levels.size());
+        CHECKED(expectSameLevels(*iris, *dicom, 99, 1, 40, 3.0, "boxes.iris vs the DICOM series"));
+    }
+
     // Many threads read the same tiles at once (the loader pool's pattern): same pixels.
     void concurrentReads() {
         if (!sampleJpeg_) QSKIP("sampleJpegCopied did not run");

@@ -79,6 +79,7 @@ struct DicomSource::Instance {
     std::unique_ptr<DcmFileFormat> file;
     DcmDataset* ds = nullptr;
     std::string seriesUid;
+    std::string sopInstanceUid;
     std::string flavour; // Image Type value 3: VOLUME, LABEL, OVERVIEW, THUMBNAIL
     std::string transferSyntax;
     std::string concatenationUid;
@@ -330,6 +331,7 @@ Expected<std::unique_ptr<Instance>> parseInstance(const std::string& path) {
     }
     in->transferSyntax = str(meta, DCM_TransferSyntaxUID);
     in->seriesUid = str(in->ds, DCM_SeriesInstanceUID);
+    in->sopInstanceUid = str(in->ds, DCM_SOPInstanceUID);
     in->flavour = str(in->ds, DCM_ImageType, 2);
     if (in->flavour.empty()) in->flavour = "VOLUME"; // Orthanc's dicomizer writes no Image Type
     in->concatenationUid = str(in->ds, DCM_ConcatenationUID);
@@ -433,11 +435,13 @@ Expected<std::unique_ptr<SlideSource>> DicomSource::open(const std::string& path
     const fs::path folder = isFolder ? fs::path(path) : fs::path(path).parent_path();
 
     std::vector<std::unique_ptr<Instance>> found;
+    std::set<std::string> sopInstances; // a copy of a file in the folder is not another part
     std::string series;
     if (!isFolder) {
         auto first = parseInstance(path);
         if (!first.ok()) return first.error();
         series = (*first)->seriesUid;
+        sopInstances.insert((*first)->sopInstanceUid);
         found.push_back(std::move(*first));
     }
     // The other files of the folder (not its subfolders), in name order.
@@ -459,6 +463,7 @@ Expected<std::unique_ptr<SlideSource>> DicomSource::open(const std::string& path
         auto in = parseInstance(f.string());
         if (!in.ok()) continue; // another kind of DICOM file, or a broken one of another series
         if (!series.empty() && (*in)->seriesUid != series) continue;
+        if (!(*in)->sopInstanceUid.empty() && !sopInstances.insert((*in)->sopInstanceUid).second) continue;
         found.push_back(std::move(*in));
     }
     if (isFolder) {

@@ -16,6 +16,7 @@
 #include <QtTest>
 
 #include <cstdlib>
+#include <algorithm>
 #include <fstream>
 
 #include <dcmtk/config/osconfig.h>
@@ -300,6 +301,75 @@ private slots:
         QCOMPARE(one->info().levels.size(), dicom->info().levels.size());
     }
 
+    // TILED_FULL: Orthanc's dicomizer places frames explicitly (Plane Position (Slide)), in
+    // row-major order and with Concatenation Frame Offset Number on split levels. The same files
+    // with the positions removed and TILED_FULL declared are a valid TILED_FULL series whose
+    // level 0 is a 4-part concatenation: frames placed by order alone give the same tiles.
+    void tiledFullConcatenation() {
+        if (!sampleJpeg_) QSKIP("sampleJpegCopied did not run");
+        auto s = sample();
+        const fs::path out = dicomOut() / "sample-tiled-full";
+        fs::remove_all(out);
+        fs::create_directories(out);
+        const auto toTiledFull = [](DcmDataset* ds) {
+            ds->findAndDeleteElement(DCM_PerFrameFunctionalGroupsSequence);
+            ds->putAndInsertString(DCM_DimensionOrganizationType, "TILED_FULL");
+        };
+        for (const auto& e : fs::directory_iterator(*sampleJpeg_))
+            QVERIFY(editCopy(e.path(), out / e.path().filename(), toTiledFull));
+        std::string why;
+        auto dicom = openOrFail(out, &why);
+        auto tiff = iris::TiffTileSource::tryOpen(s->string());
+        QVERIFY2(dicom && tiff.ok(), why.c_str());
+        CHECKED(expectSameLevels(*dicom, **tiff, 99, 1, 0, 0, "sample as TILED_FULL"));
+
+        // Without its last part, level 0 lacks frames: refused, as TILED_FULL cannot have holes.
+        fs::remove(out / "wsi-000003.dcm");
+        CHECKED(expectOpenFails(out, iris::Status::CorruptData, "sample-tiled-full", "frames are missing"));
+    }
+
+    // Sparse tiling: a position with no frame is background (opaque white); a frame off the
+    // frame grid is refused.
+    void sparseHoleAndOffGrid() {
+        if (!sampleJpeg_) QSKIP("sampleJpegCopied did not run");
+        auto s = sample();
+        // wsi-000007.dcm: the 375×250 level, frames at columns 1 and 257 of row 1.
+        const fs::path in = *sampleJpeg_ / "wsi-000007.dcm";
+        const auto movedTo = [](Sint32 column) {
+            return [column](DcmDataset* ds) {
+                DcmItem* frame = nullptr;
+                DcmItem* pos = nullptr;
+                if (ds->findAndGetSequenceItem(DCM_PerFrameFunctionalGroupsSequence, frame, 1).good() &&
+                    frame->findAndGetSequenceItem(DCM_PlanePositionSlideSequence, pos, 0).good()) {
+                    pos->putAndInsertSint32(DCM_ColumnPositionInTotalImagePixelMatrix, column);
+                }
+            };
+        };
+        const fs::path hole = dicomOut() / "sparse-hole", offGrid = dicomOut() / "sparse-off-grid";
+        for (const auto& d : {hole, offGrid}) {
+            fs::remove_all(d);
+            fs::create_directories(d);
+        }
+        QVERIFY(editCopy(in, hole / "hole.dcm", movedTo(1))); // frame 2 drawn over frame 1: (1, 0) empty
+        QVERIFY(editCopy(in, offGrid / "off-grid.dcm", movedTo(100)));
+        std::string why;
+        auto dicom = openOrFail(hole, &why);
+        auto tiff = iris::TiffTileSource::tryOpen(s->string());
+        QVERIFY2(dicom && tiff.ok(), why.c_str());
+        QCOMPARE(dicom->info().width, int64_t(375));
+        std::vector<uint8_t> a(kTileBytes), b(kTileBytes);
+        int rl = -1;
+        for (size_t k = 0; k < (*tiff)->info().levels.size(); ++k)
+            if ((*tiff)->info().levels[k].width == 375) rl = int(k);
+        QVERIFY(rl >= 0);
+        QVERIFY(dicom->readTile(0, 0, 0, a.data()).ok());
+        QVERIFY((*tiff)->readTile(rl, 0, 0, b.data()).ok());
+        QVERIFY2(a == b, "the tile with its frame differs from the TIFF's");
+        QVERIFY(dicom->readTile(0, 1, 0, a.data()).ok());
+        QVERIFY2(std::all_of(a.begin(), a.end(), [](uint8_t v) { return v == 255; }), "the hole is not opaque white");
+        CHECKED(expectOpenFails(offGrid, iris::Status::CorruptData, "off-grid.dcm", "not on the 256x256 frame grid"));
+    }
+
     // CMU-1-Small-Region: 240×240 frames (RGB photometric), copied from the SVS.
     void cmuJpegCopied240() {
         auto svs = slidesDir("aperio");
@@ -418,6 +488,65 @@ private slots:
         QCOMPARE(iris->info().width, dicom->info().width);
         QCOMPARE(iris->info().levels.size(), dicom->info().levels.size());
         CHECKED(expectSameLevels(*iris, *dicom, 99, 1, 40, 3.0, "boxes.iris vs the DICOM series"));
+    }
+
+    // Label, overview and thumbnail instances are the associated images label, macro, thumbnail.
+    void associatedKinds() {
+        auto dir = slidesDir("unsupported/dicom-boxes");
+        if (!dir) QSKIP("no test data");
+        const fs::path out = dicomOut() / "associated";
+        fs::remove_all(out);
+        fs::create_directories(out);
+        fs::copy_file(*dir / "boxes_0.dcm", out / "boxes_0.dcm");
+        const auto as = [](const char* type, const char* uid) {
+            return [type, uid](DcmDataset* ds) {
+                ds->putAndInsertString(DCM_ImageType, type);
+                ds->putAndInsertString(DCM_SOPInstanceUID, uid);
+            };
+        };
+        QVERIFY(editCopy(*dir / "boxes_1.dcm", out / "label.dcm", as("ORIGINAL\\PRIMARY\\LABEL\\NONE", "1.2.3.4.1")));
+        QVERIFY(
+            editCopy(*dir / "boxes_1.dcm", out / "overview.dcm", as("ORIGINAL\\PRIMARY\\OVERVIEW\\NONE", "1.2.3.4.2")));
+        std::string why;
+        auto src = openOrFail(out, &why);
+        QVERIFY2(src, why.c_str());
+        QCOMPARE(src->info().associatedImages, (std::vector<std::string>{"label", "macro"}));
+        QCOMPARE(src->info().levels.size(), size_t(1));
+        for (const char* name : {"label", "macro"}) {
+            auto img = src->readAssociatedImage(name);
+            QVERIFY2(img.ok(), describe(img.error()).c_str());
+            QCOMPARE(img->width, 16u);
+        }
+    }
+
+    // Through the public Engine: the DICOM folder renders, at level 0 and at a level's
+    // downsample, exactly as the TIFF it was made from.
+    void engineRendersLikeTiff() {
+        if (!sampleJpeg_) QSKIP("sampleJpegCopied did not run");
+        auto s = sample();
+        constexpr uint32_t kW = 320, kH = 240;
+        TestEngine e = createTestEngine();
+        QVERIFY2(e, describe(e.error).c_str());
+        QVERIFY(e->bindOffscreen(kW, kH).ok());
+        e.beginTest();
+        for (const double ds : {1.0, 4.0}) {
+            const iris::View view = viewWithOrigin(1234, 987, ds, kW, kH);
+            std::string why;
+            QVERIFY2(e->open(s->string()).ok(), "the TIFF does not open");
+            auto a = renderView(*e.engine, view, kW, kH, std::chrono::seconds(60), &why);
+            QVERIFY2(a, why.c_str());
+            const iris::Result r = e->open(sampleJpeg_->string());
+            QVERIFY2(r.ok(), describe(r).c_str());
+            auto b = renderView(*e.engine, view, kW, kH, std::chrono::seconds(60), &why);
+            QVERIFY2(b, why.c_str());
+            const DiffStats st = compareImages(b->image, a->image);
+            qInfo("engine frame at downsample %.0f: %s", ds, st.summary().c_str());
+            QVERIFY2(st.differing == 0, saveFailureArtefacts("dicom.engine", b->image, a->image, nullptr).c_str());
+        }
+        const std::string endWhy = e.endTest();
+        QVERIFY2(endWhy.empty(), endWhy.c_str());
+        const std::string finishWhy = e.finish();
+        QVERIFY2(finishWhy.empty(), finishWhy.c_str());
     }
 
     // Many threads read the same tiles at once (the loader pool's pattern): same pixels.

@@ -80,10 +80,13 @@ struct TileDiff {
     int maxAbs = 0;    // largest channel difference
     double sumAbs = 0; // over every compared channel
     uint64_t channels = 0;
+    double dicomSeconds = 0, refSeconds = 0; // time in each source's readTile
     double meanAbs() const { return channels ? sumAbs / double(channels) : 0; }
     std::string summary() const {
         return std::to_string(tiles) + " tiles, " + std::to_string(differingTiles) + " differ, max " +
-               std::to_string(maxAbs) + ", mean " + std::to_string(meanAbs());
+               std::to_string(maxAbs) + ", mean " + std::to_string(meanAbs()) + "; read " +
+               std::to_string(int(dicomSeconds * 1e6 / double(tiles ? tiles : 1))) + " us/tile (reference " +
+               std::to_string(int(refSeconds * 1e6 / double(tiles ? tiles : 1))) + ")";
     }
 };
 
@@ -103,14 +106,18 @@ bool compareLevel(iris::SlideSource& dicom, int dl, iris::SlideSource& ref, int 
         if (ty % step != 0 && ty != a.tilesY - 1) continue;
         for (int64_t tx = 0; tx < a.tilesX; ++tx) {
             if (tx % step != 0 && tx != a.tilesX - 1) continue;
+            const auto t0 = std::chrono::steady_clock::now();
             if (auto r = dicom.readTile(dl, tx, ty, ta.data()); !r.ok()) {
                 *why = "DICOM tile (" + std::to_string(tx) + ", " + std::to_string(ty) + "): " + describe(r);
                 return false;
             }
+            const auto t1 = std::chrono::steady_clock::now();
             if (auto r = ref.readTile(rl, tx, ty, tb.data()); !r.ok()) {
                 *why = "reference tile: " + describe(r);
                 return false;
             }
+            d->dicomSeconds += std::chrono::duration<double>(t1 - t0).count();
+            d->refSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
             const int w = int(std::min<int64_t>(kTileSize, a.width - tx * kTileSize));
             const int h = int(std::min<int64_t>(kTileSize, a.height - ty * kTileSize));
             bool differs = false;

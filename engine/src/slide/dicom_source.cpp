@@ -411,6 +411,208 @@ void fillWhite(uint8_t* dst, size_t pitch, int w, int h) {
     for (int y = 0; y < h; ++y) std::memset(dst + size_t(y) * pitch, 0xff, size_t(w) * 4);
 }
 
+using InstanceList = std::vector<std::unique_ptr<Instance>>;
+
+// The series' instances: the file given (which must be a whole-slide instance itself) and the
+// files beside it of its series; or, for a folder, its whole-slide instances, which must be of
+// one series. Other DICOM files, broken ones and copies of an instance are skipped.
+Result gatherSeries(const std::string& path, bool isFolder, InstanceList* found) {
+    const std::string shown = fileNameOf(path);
+    const fs::path folder = isFolder ? fs::path(path) : fs::path(path).parent_path();
+    std::set<std::string> sopInstances;
+    std::string series;
+    if (!isFolder) {
+        auto first = parseInstance(path);
+        if (!first.ok()) return first.error();
+        series = (*first)->seriesUid;
+        sopInstances.insert((*first)->sopInstanceUid);
+        found->push_back(std::move(*first));
+    }
+    // The other files of the folder (not its subfolders), in name order.
+    std::vector<fs::path> files;
+    std::error_code ec;
+    for (fs::directory_iterator it(folder.empty() ? fs::path(".") : folder, ec), end; !ec && it != end;
+         it.increment(ec)) {
+        if (files.size() >= kMaxFolderEntries) break;
+        std::error_code fe;
+        if (!it->is_regular_file(fe)) continue;
+        if (!isFolder && fs::equivalent(it->path(), path, fe)) continue;
+        files.push_back(it->path());
+    }
+    if (ec && isFolder) return Result(Status::IoError, "Cannot list folder '" + shown + "': " + ec.message());
+    std::sort(files.begin(), files.end());
+    size_t dicomFiles = found->size();
+    for (const fs::path& f : files) {
+        if (!DicomSource::detect(f.string())) continue;
+        ++dicomFiles;
+        auto in = parseInstance(f.string());
+        if (!in.ok()) continue; // another kind of DICOM file, or a broken one of another series
+        if (!series.empty() && (*in)->seriesUid != series) continue;
+        if (!(*in)->sopInstanceUid.empty() && !sopInstances.insert((*in)->sopInstanceUid).second) continue;
+        found->push_back(std::move(*in));
+    }
+    if (!isFolder) return {};
+    if (dicomFiles == 0) {
+        return Result(Status::NotAFile, "Cannot open '" + shown +
+                                            "': it is a folder without DICOM files, not a slide (a DICOM series "
+                                            "is opened as its folder or one of its .dcm files)");
+    }
+    std::set<std::string> seriesSeen;
+    for (const auto& in : *found) seriesSeen.insert(in->seriesUid);
+    if (seriesSeen.empty()) {
+        return Result(Status::UnsupportedFormat, "Cannot open folder '" + shown + "': none of its " +
+                                                     std::to_string(dicomFiles) +
+                                                     " DICOM files is a VL Whole Slide Microscopy Image");
+    }
+    if (seriesSeen.size() > 1) {
+        return Result(Status::UnsupportedFormat, "Cannot open folder '" + shown + "': it holds " +
+                                                     std::to_string(seriesSeen.size()) +
+                                                     " whole-slide series; open one file of the one you want");
+    }
+    return {};
+}
+
+// One level from the VOLUME instances of one total pixel matrix size (`members`, indices into
+// `instances`): its frame grid, each cell the frame drawn there.
+Result buildLevel(const InstanceList& instances, std::vector<size_t> members, const std::string& seriesName,
+                  size_t levelIndex, DicomSource::Level* out) {
+    using Level = DicomSource::Level;
+    const Instance& first = *instances[members.front()];
+    const std::string levelName = "level " + std::to_string(levelIndex) + " (" + std::to_string(first.totalW) + "x" +
+                                  std::to_string(first.totalH) + ")";
+    const auto seriesError = [&](const std::string& why) {
+        return Result(Status::CorruptData, "Cannot open DICOM series of '" + seriesName + "': " + why);
+    };
+    // Concatenation parts, then instance numbers, then file names.
+    std::sort(members.begin(), members.end(), [&](size_t a, size_t b) {
+        const Instance& x = *instances[a];
+        const Instance& y = *instances[b];
+        return std::tie(x.concatenationUid, x.inConcatenationNumber, x.instanceNumber, x.name) <
+               std::tie(y.concatenationUid, y.inConcatenationNumber, y.instanceNumber, y.name);
+    });
+    Level L;
+    L.width = first.totalW;
+    L.height = first.totalH;
+    L.frameW = first.frameW;
+    L.frameH = first.frameH;
+    L.across = (L.width + L.frameW - 1) / L.frameW;
+    L.down = (L.height + L.frameH - 1) / L.frameH;
+    if (L.across * L.down > kMaxGridCells) {
+        return corrupt(first.name, levelName + " has " + std::to_string(L.across * L.down) + " frame positions");
+    }
+    L.cells.resize(size_t(L.across * L.down));
+    bool tiledFull = false;
+    std::map<std::string, std::vector<uint32_t>> parts; // concatenation → its parts' numbers
+    for (size_t idx : members) {
+        const Instance& in = *instances[idx];
+        if (in.frameW != L.frameW || in.frameH != L.frameH) {
+            return corrupt(in.name, "its frames are " + std::to_string(in.frameW) + "x" + std::to_string(in.frameH) +
+                                        " but other files of " + levelName + " have " + std::to_string(L.frameW) + "x" +
+                                        std::to_string(L.frameH));
+        }
+        if (!in.concatenationUid.empty()) parts[in.concatenationUid].push_back(in.inConcatenationNumber);
+        tiledFull = tiledFull || in.positions.empty();
+        for (uint32_t f = 0; f < in.frames; ++f) {
+            uint64_t cell = 0;
+            std::string why;
+            if (!frameCell(in, f, L.across, L.down, &cell, &why)) {
+                if (!why.empty()) return Result(Status::CorruptData, "Cannot open DICOM series: " + why);
+                continue; // another focal plane or optical path
+            }
+            if (L.cells[cell].instance < 0) L.cells[cell] = {int32_t(idx), f}; // the first focal plane wins
+        }
+    }
+    for (const auto& [uid, numbers] : parts) {
+        const uint32_t total = instances[members.front()]->inConcatenationTotal;
+        for (size_t k = 0; k < numbers.size(); ++k) {
+            if (numbers[k] != k + 1 || (total && numbers.size() != total)) {
+                return seriesError(levelName + " is a concatenation of " +
+                                   (total ? std::to_string(total) : std::string("several")) + " files but only " +
+                                   std::to_string(numbers.size()) + " are in the folder (a file is missing)");
+            }
+        }
+    }
+    if (tiledFull) {
+        const auto missing =
+            std::count_if(L.cells.begin(), L.cells.end(), [](const Level::Cell& c) { return c.instance < 0; });
+        if (missing > 0) {
+            return seriesError(levelName + " is TILED_FULL but " + std::to_string(missing) + " of its " +
+                               std::to_string(L.cells.size()) +
+                               " frames are missing (a file of the level is missing, or Number of Frames is wrong)");
+        }
+    }
+    *out = std::move(L);
+    return {};
+}
+
+// Whether a value of this VR reads as text: strings and numbers, not sequences, binary values
+// (OB, OW, UN, …) or pixel data.
+bool hasTextValue(DcmEVR vr) {
+    static constexpr DcmEVR kNumbers[] = {EVR_US, EVR_SS, EVR_UL, EVR_SL, EVR_FL, EVR_FD, EVR_AT, EVR_SV, EVR_UV};
+    return DcmVR(vr).isaString() || std::find(std::begin(kNumbers), std::end(kNumbers), vr) != std::end(kNumbers);
+}
+
+// mpp, objective power, ICC profile, vendor and properties, from the base instance.
+void readMetadata(const Instance& base, SlideInfo* info) {
+    DcmDataset* ds = base.ds;
+    const std::string manufacturer = str(ds, DCM_Manufacturer);
+    info->vendor = manufacturer.empty() ? std::string("dicom") : manufacturer;
+    DcmItem* shared = nullptr;
+    DcmItem* measures = nullptr;
+    Float64 rowSpacing = 0, colSpacing = 0;
+    if (ds->findAndGetSequenceItem(DCM_SharedFunctionalGroupsSequence, shared, 0).good() && shared &&
+        shared->findAndGetSequenceItem(DCM_PixelMeasuresSequence, measures, 0).good() && measures &&
+        measures->findAndGetFloat64(DCM_PixelSpacing, rowSpacing, 0).good() &&
+        measures->findAndGetFloat64(DCM_PixelSpacing, colSpacing, 1).good() && std::isfinite(rowSpacing) &&
+        std::isfinite(colSpacing) && rowSpacing > 0 && colSpacing > 0) {
+        // Pixel Spacing is (row spacing, column spacing) in mm: the distance between rows is the
+        // height of a pixel.
+        info->mppX = colSpacing * 1000.0;
+        info->mppY = rowSpacing * 1000.0;
+    }
+    const auto icc = [&](DcmItem* item) {
+        const Uint8* bytes = nullptr;
+        unsigned long length = 0;
+        if (info->iccProfile.empty() && item->findAndGetUint8Array(DCM_ICCProfile, bytes, &length).good() && bytes &&
+            length > 0) {
+            info->iccProfile.assign(bytes, bytes + length);
+        }
+    };
+    DcmItem* path0 = nullptr;
+    if (ds->findAndGetSequenceItem(DCM_OpticalPathSequence, path0, 0).good() && path0) {
+        Float64 power = 0;
+        if (path0->findAndGetFloat64(DCM_ObjectiveLensPower, power).good() && std::isfinite(power) && power > 0) {
+            info->objectivePower = power;
+        }
+        icc(path0);
+    }
+    icc(ds);
+
+    // Every attribute with a text or number value, by keyword.
+    std::map<std::string, std::string> props;
+    for (unsigned long i = 0; i < ds->card(); ++i) {
+        DcmElement* el = ds->getElement(i);
+        if (!el) continue;
+        if (!hasTextValue(el->ident())) continue;
+        DcmTag tag = el->getTag();
+        std::string key = tag.getTagName();
+        if (key.empty() || key == DcmTag_ERROR_TagName) {
+            char hex[16];
+            std::snprintf(hex, sizeof hex, "%04X,%04X", unsigned(tag.getGTag()), unsigned(tag.getETag()));
+            key = hex;
+        }
+        OFString value;
+        if (el->getOFStringArray(value).good()) props["dicom." + key] = value.c_str();
+    }
+    props["dicom.TransferSyntaxUID"] = base.transferSyntax;
+    DcmItem* specimen = nullptr;
+    if (ds->findAndGetSequenceItem(DCM_SpecimenDescriptionSequence, specimen, 0).good() && specimen) {
+        const std::string id = str(specimen, DCM_SpecimenIdentifier);
+        if (!id.empty()) props["dicom.SpecimenIdentifier"] = id;
+    }
+    info->properties.assign(props.begin(), props.end());
+}
+
 } // namespace
 
 bool DicomSource::detect(const std::string& path) {
@@ -432,71 +634,8 @@ Expected<std::unique_ptr<SlideSource>> DicomSource::open(const std::string& path
     }
     std::error_code ec;
     const bool isFolder = fs::is_directory(path, ec);
-    const fs::path folder = isFolder ? fs::path(path) : fs::path(path).parent_path();
-
-    std::vector<std::unique_ptr<Instance>> found;
-    std::set<std::string> sopInstances; // a copy of a file in the folder is not another part
-    std::string series;
-    if (!isFolder) {
-        auto first = parseInstance(path);
-        if (!first.ok()) return first.error();
-        series = (*first)->seriesUid;
-        sopInstances.insert((*first)->sopInstanceUid);
-        found.push_back(std::move(*first));
-    }
-    // The other files of the folder (not its subfolders), in name order.
-    std::vector<fs::path> files;
-    for (fs::directory_iterator it(folder.empty() ? fs::path(".") : folder, ec), end; !ec && it != end;
-         it.increment(ec)) {
-        if (files.size() >= kMaxFolderEntries) break;
-        std::error_code fe;
-        if (!it->is_regular_file(fe)) continue;
-        if (!isFolder && fs::equivalent(it->path(), path, fe)) continue;
-        files.push_back(it->path());
-    }
-    if (ec && isFolder) return Result(Status::IoError, "Cannot list folder '" + shown + "': " + ec.message());
-    std::sort(files.begin(), files.end());
-    size_t dicomFiles = found.size();
-    for (const fs::path& f : files) {
-        if (!detect(f.string())) continue;
-        ++dicomFiles;
-        auto in = parseInstance(f.string());
-        if (!in.ok()) continue; // another kind of DICOM file, or a broken one of another series
-        if (!series.empty() && (*in)->seriesUid != series) continue;
-        if (!(*in)->sopInstanceUid.empty() && !sopInstances.insert((*in)->sopInstanceUid).second) continue;
-        found.push_back(std::move(*in));
-    }
-    if (isFolder) {
-        if (dicomFiles == 0) {
-            return Result(Status::NotAFile, "Cannot open '" + shown +
-                                                "': it is a folder without DICOM files, not a slide (a DICOM series "
-                                                "is opened as its folder or one of its .dcm files)");
-        }
-        std::set<std::string> seriesSeen;
-        for (const auto& in : found) seriesSeen.insert(in->seriesUid);
-        if (seriesSeen.empty()) {
-            return Result(Status::UnsupportedFormat, "Cannot open folder '" + shown + "': none of its " +
-                                                         std::to_string(dicomFiles) +
-                                                         " DICOM files is a VL Whole Slide Microscopy Image");
-        }
-        if (seriesSeen.size() > 1) {
-            return Result(Status::UnsupportedFormat, "Cannot open folder '" + shown + "': it holds " +
-                                                         std::to_string(seriesSeen.size()) +
-                                                         " whole-slide series; open one file of the one you want");
-        }
-    }
-
     std::unique_ptr<DicomSource> src(new DicomSource());
-    src->instances_ = std::move(found);
-    std::vector<Instance*> volumes;
-    for (size_t i = 0; i < src->instances_.size(); ++i) {
-        Instance* in = src->instances_[i].get();
-        if (in->flavour == "VOLUME") volumes.push_back(in);
-    }
-    if (volumes.empty()) {
-        return Result(Status::CorruptData, "Cannot open DICOM series of '" + shown +
-                                               "': it has no VOLUME instance (only labels, overviews or thumbnails)");
-    }
+    if (Result r = gatherSeries(path, isFolder, &src->instances_); !r.ok()) return r;
 
     // Levels: VOLUME instances grouped by total pixel matrix, largest first.
     std::map<std::pair<uint64_t, uint64_t>, std::vector<size_t>, std::greater<>> bySize;
@@ -504,76 +643,16 @@ Expected<std::unique_ptr<SlideSource>> DicomSource::open(const std::string& path
         const Instance& in = *src->instances_[i];
         if (in.flavour == "VOLUME") bySize[{in.totalW * in.totalH, (in.totalW << 24) | in.totalH}].push_back(i);
     }
+    if (bySize.empty()) {
+        return Result(Status::CorruptData, "Cannot open DICOM series of '" + shown +
+                                               "': it has no VOLUME instance (only labels, overviews or thumbnails)");
+    }
     for (auto& [key, members] : bySize) {
-        const Instance& first = *src->instances_[members.front()];
-        const std::string levelName = "level " + std::to_string(src->levels_.size()) + " (" +
-                                      std::to_string(first.totalW) + "x" + std::to_string(first.totalH) + ")";
-        // Concatenation parts, then instance numbers, then file names.
-        std::sort(members.begin(), members.end(), [&](size_t a, size_t b) {
-            const Instance& x = *src->instances_[a];
-            const Instance& y = *src->instances_[b];
-            return std::tie(x.concatenationUid, x.inConcatenationNumber, x.instanceNumber, x.name) <
-                   std::tie(y.concatenationUid, y.inConcatenationNumber, y.instanceNumber, y.name);
-        });
         Level L;
-        L.width = first.totalW;
-        L.height = first.totalH;
-        L.frameW = first.frameW;
-        L.frameH = first.frameH;
-        L.across = (L.width + L.frameW - 1) / L.frameW;
-        L.down = (L.height + L.frameH - 1) / L.frameH;
-        if (L.across * L.down > kMaxGridCells) {
-            return corrupt(first.name, levelName + " has " + std::to_string(L.across * L.down) + " frame positions");
-        }
-        L.cells.resize(size_t(L.across * L.down));
-        bool tiledFull = false;
-        std::map<std::string, std::vector<uint32_t>> parts; // concatenation → part numbers
-        for (size_t idx : members) {
-            const Instance& in = *src->instances_[idx];
-            if (in.frameW != L.frameW || in.frameH != L.frameH) {
-                return corrupt(in.name, "its frames are " + std::to_string(in.frameW) + "x" +
-                                            std::to_string(in.frameH) + " but other files of " + levelName + " have " +
-                                            std::to_string(L.frameW) + "x" + std::to_string(L.frameH));
-            }
-            if (!in.concatenationUid.empty()) parts[in.concatenationUid].push_back(in.inConcatenationNumber);
-            tiledFull = tiledFull || in.positions.empty();
-            for (uint32_t f = 0; f < in.frames; ++f) {
-                uint64_t cell = 0;
-                std::string why;
-                if (!frameCell(in, f, L.across, L.down, &cell, &why)) {
-                    if (!why.empty()) return Result(Status::CorruptData, "Cannot open DICOM series: " + why);
-                    continue;
-                }
-                if (L.cells[cell].instance < 0) L.cells[cell] = {int32_t(idx), f}; // the first focal plane wins
-            }
-        }
-        for (const auto& [uid, numbers] : parts) {
-            const uint32_t total = src->instances_[members.front()]->inConcatenationTotal;
-            for (size_t k = 0; k < numbers.size(); ++k) {
-                if (numbers[k] != k + 1 || (total && numbers.size() != total)) {
-                    return Result(Status::CorruptData, "Cannot open DICOM series of '" + shown + "': " + levelName +
-                                                           " is a concatenation of " +
-                                                           (total ? std::to_string(total) : std::string("several")) +
-                                                           " files but only " + std::to_string(numbers.size()) +
-                                                           " are in the folder (a file is missing)");
-                }
-            }
-        }
-        if (tiledFull) {
-            const auto missing =
-                std::count_if(L.cells.begin(), L.cells.end(), [](const Level::Cell& c) { return c.instance < 0; });
-            if (missing > 0) {
-                return Result(Status::CorruptData, "Cannot open DICOM series of '" + shown + "': " + levelName +
-                                                       " is TILED_FULL but " + std::to_string(missing) + " of its " +
-                                                       std::to_string(L.cells.size()) +
-                                                       " frames are missing (a file of the level is missing, or "
-                                                       "Number of Frames is wrong)");
-            }
-        }
+        if (Result r = buildLevel(src->instances_, members, shown, src->levels_.size(), &L); !r.ok()) return r;
         src->levels_.push_back(std::move(L));
     }
 
-    // SlideInfo.
     SlideInfo& info = src->info_;
     info.path = path;
     const Level& L0 = src->levels_[0];
@@ -588,104 +667,14 @@ Expected<std::unique_ptr<SlideSource>> DicomSource::open(const std::string& path
         info.levels.push_back(li);
     }
     // The base instance: the one holding level 0's first frame (its first file).
-    size_t baseIndex = 0;
+    size_t base = 0;
     for (const Level::Cell& c : L0.cells) {
         if (c.instance >= 0) {
-            baseIndex = size_t(c.instance);
+            base = size_t(c.instance);
             break;
         }
     }
-    const Instance& base = *src->instances_[baseIndex];
-    DcmDataset* ds = base.ds;
-    const std::string manufacturer = str(ds, DCM_Manufacturer);
-    info.vendor = manufacturer.empty() ? std::string("dicom") : manufacturer;
-    {
-        DcmItem* shared = nullptr;
-        DcmItem* measures = nullptr;
-        Float64 rowSpacing = 0, colSpacing = 0;
-        if (ds->findAndGetSequenceItem(DCM_SharedFunctionalGroupsSequence, shared, 0).good() && shared &&
-            shared->findAndGetSequenceItem(DCM_PixelMeasuresSequence, measures, 0).good() && measures &&
-            measures->findAndGetFloat64(DCM_PixelSpacing, rowSpacing, 0).good() &&
-            measures->findAndGetFloat64(DCM_PixelSpacing, colSpacing, 1).good() && std::isfinite(rowSpacing) &&
-            std::isfinite(colSpacing) && rowSpacing > 0 && colSpacing > 0) {
-            // Pixel Spacing is (row spacing, column spacing) in mm: the distance between rows is
-            // the height of a pixel.
-            info.mppX = colSpacing * 1000.0;
-            info.mppY = rowSpacing * 1000.0;
-        }
-        DcmItem* path0 = nullptr;
-        if (ds->findAndGetSequenceItem(DCM_OpticalPathSequence, path0, 0).good() && path0) {
-            Float64 power = 0;
-            if (path0->findAndGetFloat64(DCM_ObjectiveLensPower, power).good() && std::isfinite(power) && power > 0) {
-                info.objectivePower = power;
-            }
-            const Uint8* icc = nullptr;
-            unsigned long iccLength = 0;
-            if (path0->findAndGetUint8Array(DCM_ICCProfile, icc, &iccLength).good() && icc && iccLength > 0) {
-                info.iccProfile.assign(icc, icc + iccLength);
-            }
-        }
-        if (info.iccProfile.empty()) {
-            const Uint8* icc = nullptr;
-            unsigned long iccLength = 0;
-            if (ds->findAndGetUint8Array(DCM_ICCProfile, icc, &iccLength).good() && icc && iccLength > 0) {
-                info.iccProfile.assign(icc, icc + iccLength);
-            }
-        }
-    }
-    // Every attribute of the base instance with a text or number value, by keyword.
-    std::map<std::string, std::string> props;
-    for (unsigned long i = 0; i < ds->card(); ++i) {
-        DcmElement* el = ds->getElement(i);
-        if (!el) continue;
-        switch (el->ident()) {
-        case EVR_AE:
-        case EVR_AS:
-        case EVR_CS:
-        case EVR_DA:
-        case EVR_DS:
-        case EVR_DT:
-        case EVR_IS:
-        case EVR_LO:
-        case EVR_LT:
-        case EVR_PN:
-        case EVR_SH:
-        case EVR_ST:
-        case EVR_TM:
-        case EVR_UC:
-        case EVR_UI:
-        case EVR_UR:
-        case EVR_UT:
-        case EVR_US:
-        case EVR_SS:
-        case EVR_UL:
-        case EVR_SL:
-        case EVR_FL:
-        case EVR_FD:
-        case EVR_AT:
-        case EVR_SV:
-        case EVR_UV: break;
-        default: continue; // sequences and binary values
-        }
-        DcmTag tag = el->getTag();
-        std::string key = tag.getTagName();
-        if (key.empty() || key == DcmTag_ERROR_TagName) {
-            char hex[16];
-            std::snprintf(hex, sizeof hex, "%04X,%04X", unsigned(tag.getGTag()), unsigned(tag.getETag()));
-            key = hex;
-        }
-        OFString value;
-        if (el->getOFStringArray(value).good()) props["dicom." + key] = value.c_str();
-    }
-    props["dicom.TransferSyntaxUID"] = base.transferSyntax;
-    {
-        DcmItem* specimen = nullptr;
-        if (ds->findAndGetSequenceItem(DCM_SpecimenDescriptionSequence, specimen, 0).good() && specimen) {
-            const std::string id = str(specimen, DCM_SpecimenIdentifier);
-            if (!id.empty()) props["dicom.SpecimenIdentifier"] = id;
-        }
-    }
-    info.properties.assign(props.begin(), props.end());
+    readMetadata(*src->instances_[base], &info);
 
     // Associated images: the first instance of each kind.
     const std::pair<const char*, const char*> kinds[] = {

@@ -19,6 +19,7 @@
 #include <cstdlib>
 #include <algorithm>
 #include <fstream>
+#include <random>
 
 #include <dcmtk/config/osconfig.h>
 
@@ -604,6 +605,59 @@ private slots:
         }
         for (auto& th : threads) th.join();
         QCOMPARE(bad.load(), 0);
+    }
+
+    // Random byte corruption of a small series file (a few bytes at a time, fixed seed): open()
+    // either fails with a message naming the file or succeeds, and then every tile and the
+    // associated images read or fail clearly. Nothing crashes (the asan preset runs this too).
+    void corruptedBytes() {
+        auto dir = slidesDir("unsupported/dicom-boxes");
+        if (!dir) QSKIP("no test data");
+        std::ifstream in(*dir / "boxes_0.dcm", std::ios::binary);
+        const std::vector<char> original((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        QVERIFY(original.size() > 1000);
+        const fs::path sub = dicomOut() / "corrupted";
+        fs::remove_all(sub);
+        fs::create_directories(sub);
+        const fs::path p = sub / "corrupt.dcm";
+        std::mt19937 rng(15);
+        constexpr int kRounds = 1500;
+        int opened = 0, refused = 0, tileErrors = 0;
+        std::vector<uint8_t> tile(kTileBytes);
+        for (int round = 0; round < kRounds; ++round) {
+            std::vector<char> bytes = original;
+            const int n = 1 + int(rng() % 8);
+            for (int k = 0; k < n; ++k) {
+                // Mostly the header (where the structure is), sometimes anywhere.
+                const size_t at = (rng() % 4 ? 132 + rng() % 2000 : rng() % bytes.size()) % bytes.size();
+                bytes[at] = char(rng() % 4 ? rng() : (rng() % 2 ? 0xff : 0x00));
+            }
+            {
+                std::ofstream out(p, std::ios::binary | std::ios::trunc);
+                out.write(bytes.data(), std::streamsize(bytes.size()));
+            }
+            auto r = iris::openSlideSource(p.string());
+            if (!r.ok()) {
+                ++refused;
+                QVERIFY2(r.error().message().find("corrupt.dcm") != std::string::npos, r.error().message().c_str());
+                continue;
+            }
+            ++opened;
+            for (size_t l = 0; l < (*r)->info().levels.size(); ++l) {
+                const auto& L = (*r)->info().levels[l];
+                for (int64_t ty = 0; ty < std::min<int64_t>(L.tilesY, 4); ++ty)
+                    for (int64_t tx = 0; tx < std::min<int64_t>(L.tilesX, 4); ++tx) {
+                        auto t = (*r)->readTile(int(l), tx, ty, tile.data());
+                        if (!t.ok()) {
+                            ++tileErrors;
+                            QVERIFY2(!t.message().empty(), "an empty tile error");
+                        }
+                    }
+            }
+            for (const std::string& name : (*r)->info().associatedImages) (void)(*r)->readAssociatedImage(name);
+        }
+        qInfo("%d corrupted copies: %d refused at open, %d opened (%d tile errors)", kRounds, refused, opened, tileErrors);
+        QVERIFY(refused > 0 && opened > 0);
     }
 
     void errors() {

@@ -656,7 +656,8 @@ private slots:
             }
             for (const std::string& name : (*r)->info().associatedImages) (void)(*r)->readAssociatedImage(name);
         }
-        qInfo("%d corrupted copies: %d refused at open, %d opened (%d tile errors)", kRounds, refused, opened, tileErrors);
+        qInfo("%d corrupted copies: %d refused at open, %d opened (%d tile errors)", kRounds, refused, opened,
+              tileErrors);
         QVERIFY(refused > 0 && opened > 0);
     }
 
@@ -769,6 +770,25 @@ private slots:
             }
             QVERIFY(copied > 0);
             CHECKED(expectOpenFails(sub, iris::Status::CorruptData, "missing-part", "a file is missing"));
+        }
+
+        // Two series in one folder: a file opens its own series; the folder is ambiguous.
+        if (sampleJpeg_) {
+            const fs::path sub = out / "two-series";
+            fs::create_directories(sub);
+            for (const auto& e : fs::directory_iterator(*sampleJpeg_))
+                fs::copy_file(e.path(), sub / e.path().filename());
+            fs::copy_file(boxes0, sub / "boxes_0.dcm");
+            fs::copy_file(boxes1, sub / "boxes_1.dcm");
+            std::string why;
+            auto boxes = openOrFail(sub / "boxes_1.dcm", &why);
+            QVERIFY2(boxes, why.c_str());
+            QCOMPARE(boxes->info().width, int64_t(16));
+            auto sampleSeries = openOrFail(sub / "wsi-000000.dcm", &why);
+            QVERIFY2(sampleSeries, why.c_str());
+            QCOMPARE(sampleSeries->info().width, int64_t(6000));
+            QCOMPARE(sampleSeries->info().levels.size(), size_t(6)); // all its files, none of the boxes
+            CHECKED(expectOpenFails(sub, iris::Status::UnsupportedFormat, "two-series", "2 whole-slide series"));
         }
 
         // A folder without DICOM files is not a slide.

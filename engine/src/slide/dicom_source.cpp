@@ -413,6 +413,19 @@ void fillWhite(uint8_t* dst, size_t pitch, int w, int h) {
 
 using InstanceList = std::vector<std::unique_ptr<Instance>>;
 
+// A file's Series Instance UID, read without parsing past it (a folder may hold many series,
+// whose per-frame groups are costly to parse); empty when the file cannot say.
+std::string seriesOf(const fs::path& file) {
+    DcmFileFormat ff;
+    const DcmTagKey afterSeriesUid(0x0020, 0x000f); // parsing stops before the first tag at or after it
+    if (ff.loadFileUntilTag(OFFilename(file.c_str()), EXS_Unknown, EGL_noChange, kMaxReadLength, ERM_fileOnly,
+                            afterSeriesUid)
+            .bad()) {
+        return {};
+    }
+    return str(ff.getDataset(), DCM_SeriesInstanceUID);
+}
+
 // The series' instances: the file given (which must be a whole-slide instance itself) and the
 // files beside it of its series; or, for a folder, its whole-slide instances, which must be of
 // one series. Other DICOM files, broken ones and copies of an instance are skipped.
@@ -445,6 +458,7 @@ Result gatherSeries(const std::string& path, bool isFolder, InstanceList* found)
     for (const fs::path& f : files) {
         if (!DicomSource::detect(f.string())) continue;
         ++dicomFiles;
+        if (!series.empty() && seriesOf(f) != series) continue;
         auto in = parseInstance(f.string());
         if (!in.ok()) continue; // another kind of DICOM file, or a broken one of another series
         if (!series.empty() && (*in)->seriesUid != series) continue;

@@ -326,11 +326,13 @@ QString MainWindow::droppedSlide(const QMimeData *mime)
 {
     if (!mime || !mime->hasUrls())
         return {};
-    // A slide by its extension first; otherwise any file, and the engine judges it.
+    // A slide by its extension first; otherwise any file or folder (a DICOM series), and the
+    // engine judges it.
     QString anyFile;
     for (const QUrl &url : mime->urls()) {
         const QString path = url.toLocalFile();
-        if (!url.isLocalFile() || !QFileInfo(path).isFile())
+        const QFileInfo info(path);
+        if (!url.isLocalFile() || !(info.isFile() || info.isDir()))
             continue;
         if (SlideFormats::looksLikeSlide(path))
             return path;

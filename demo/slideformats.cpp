@@ -17,6 +17,8 @@ const QList<Format> &formats()
     static const QList<Format> table{
         {QT_TRANSLATE_NOOP("SlideFormats", "Iris File Extension"), {QStringLiteral("iris")}},
         {QT_TRANSLATE_NOOP("SlideFormats", "Aperio"), {QStringLiteral("svs"), QStringLiteral("tif")}},
+        // Any one file of a series opens the whole series (the files beside it).
+        {QT_TRANSLATE_NOOP("SlideFormats", "DICOM whole-slide image"), {QStringLiteral("dcm")}},
         {QT_TRANSLATE_NOOP("SlideFormats", "Hamamatsu"),
          {QStringLiteral("ndpi"), QStringLiteral("vms"), QStringLiteral("vmu")}},
         {QT_TRANSLATE_NOOP("SlideFormats", "Leica"), {QStringLiteral("scn")}},

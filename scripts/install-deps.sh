@@ -10,7 +10,10 @@ PACKAGES=(
   qt6-base-dev qt6-base-dev-tools qt6-tools-dev qt6-tools-dev-tools libgl-dev
   libvulkan-dev vulkan-tools mesa-vulkan-drivers vulkan-validationlayers glslang-tools
   libopenslide-dev openslide-tools libturbojpeg0-dev libtiff-dev libopenjp2-7-dev libpng-dev
-  liblcms2-dev
+  liblcms2-dev  # colour management (engine/src/color): the ICC transform, baked into a table
+  # DICOM WSI (engine/src/slide/dicom_source): DCMTK parses, libjpeg decodes frames whose colour
+  # space the dataset states; the tests make DICOM slides with OrthancWSIDicomizer.
+  libdcmtk-dev libjpeg62-turbo-dev orthanc-wsi
   libfreetype-dev libfontconfig-dev fonts-dejavu-core
   xvfb xauth gnuplot-nox
   # The fuzz preset (clang, libFuzzer). lld: configuring with clang, CMake picks ld.lld as

@@ -128,7 +128,8 @@ private slots:
     }
 
     // Every file under testdata/slides/bad/ (but unreadable.svs, see below) and under
-    // testdata/slides/unsupported/.
+    // testdata/slides/unsupported/ (but dicom-boxes/, a DICOM series Iris View reads since
+    // issue 15: dicomBoxesOpen below).
     void badFiles_data() {
         QTest::addColumn<QString>("path");
         auto bad = slidesDir("bad");
@@ -140,6 +141,7 @@ private slots:
         for (const auto& dir : {*bad, *unsupported}) {
             for (const auto& f : filesUnder(dir, true)) {
                 if (f.filename() == "unreadable.svs") continue;
+                if (f.parent_path().filename() == "dicom-boxes") continue;
                 const std::string row = std::filesystem::relative(f, dir.parent_path()).string();
                 QTest::newRow(row.c_str()) << QString::fromStdString(f.string());
             }
@@ -149,6 +151,37 @@ private slots:
         QFETCH(QString, path);
         if (path.isEmpty()) QSKIP("no test data (set IRIS_TESTDATA or IRIS_TESTDATA_DEFAULT)");
         CHECKED(expectOpenFails(path.toStdString(), {iris::Status::UnsupportedFormat, iris::Status::CorruptData}));
+        CHECKED(checkStillUsable());
+    }
+
+    // The DICOM series that once was "unsupported" opens as a folder and as either of its files,
+    // and its 16×16 pixels (small.svs's JPEG tile, copied into a DICOM frame) render as
+    // small.svs's read_region does.
+    void dicomBoxesOpen() {
+        auto dir = slidesDir("unsupported/dicom-boxes");
+        auto svs = slidesDir("aperio");
+        if (!dir || !svs) QSKIP("no test data");
+        std::string err;
+        auto os = OpenSlideRef::open(*svs / "small.svs", &err);
+        QVERIFY2(os, err.c_str());
+        auto ref = os->readLevel0(0, 0, 16, 16, &err);
+        QVERIFY2(ref.has_value(), err.c_str());
+        for (const auto& p : {*dir, *dir / "boxes_0.dcm", *dir / "boxes_1.dcm"}) {
+            const iris::Result r = e_->open(p.string());
+            QVERIFY2(r.ok(), (p.string() + ": " + describe(r)).c_str());
+            auto info = e_->slideInfo();
+            QVERIFY(info.has_value());
+            QCOMPARE(info->width, int64_t(16));
+            QCOMPARE(info->height, int64_t(16));
+            auto frame = renderView(*e_.engine, viewWithOrigin(0, 0, 1.0, kW, kH), kW, kH, 30s, &err);
+            QVERIFY2(frame.has_value(), err.c_str());
+            iris::Image crop = makeImage(16, 16);
+            for (uint32_t y = 0; y < 16; ++y)
+                std::memcpy(pixel(crop, 0, y), pixel(frame->image, 0, y), 16 * 4);
+            const DiffStats st = compareImages(crop, *ref);
+            QVERIFY2(st.differing == 0, (p.string() + ": " + st.summary()).c_str());
+        }
+        e_->close();
         CHECKED(checkStillUsable());
     }
 

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "slide/dicom_source.h"
 #include "slide/iris_file.h"
 #include "slide/openslide_source.h"
 #include "slide/synthetic_source.h"
@@ -30,6 +31,8 @@ const SlideFormat kFormats[] = {
     // Aperio SVS and generic tiled TIFF decoded from the file's own tiles: exact pixels on
     // every level (OpenSlide resamples levels with non-integer downsamples) and faster.
     {"tiff", &TiffTileSource::detect, &TiffTileSource::tryOpen, true},
+    // DICOM VL Whole Slide Microscopy: one file of a series (the rest is found beside it).
+    {"dicom", &DicomSource::detect, &DicomSource::open, false},
     {"openslide", &OpenSlideSource::detect, &OpenSlideSource::open, false},
 };
 
@@ -45,6 +48,8 @@ Expected<std::unique_ptr<SlideSource>> openSlideSource(const std::string& path, 
         return Result(Status::NotFound, "Cannot open '" + path + "': no such file");
     }
     if (fs::is_directory(st)) {
+        // A folder is a slide only as a DICOM series; one without DICOM files is NotAFile.
+        if (preference == SourcePreference::Auto) return DicomSource::open(path);
         return Result(Status::NotAFile, "Cannot open '" + path + "': it is a directory, not a slide file");
     }
     if (!fs::is_regular_file(st)) {

@@ -41,7 +41,8 @@ public:
 };
 
 // Opens `path` with the first format that recognises it, after checking that the path is
-// an existing, readable regular file. Errors name the file and the reason.
+// an existing, readable regular file, or a folder (a DICOM series: DicomSource). Errors name
+// the file and the reason.
 // `preference` restricts the table to one reader (EngineConfig::source).
 Expected<std::unique_ptr<SlideSource>> openSlideSource(const std::string& path,
                                                        SourcePreference preference = SourcePreference::Auto);

@@ -8,12 +8,17 @@ set -euo pipefail
 PACKAGES=(
   build-essential cmake ninja-build ccache pkg-config
   qt6-base-dev qt6-base-dev-tools qt6-tools-dev qt6-tools-dev-tools libgl-dev
+  libxcb1-dev  # the widget reads the X11 display's ICC profile (_ICC_PROFILE) on Qt's connection
   libvulkan-dev vulkan-tools mesa-vulkan-drivers vulkan-validationlayers glslang-tools
   libopenslide-dev openslide-tools libturbojpeg0-dev libtiff-dev libopenjp2-7-dev libpng-dev
   liblcms2-dev  # colour management (engine/src/color): the ICC transform, baked into a table
   # DICOM WSI (engine/src/slide/dicom_source): DCMTK parses, libjpeg decodes frames whose colour
   # space the dataset states; the tests make DICOM slides with OrthancWSIDicomizer.
   libdcmtk-dev libjpeg62-turbo-dev orthanc-wsi
+  # DICOMweb (engine/src/slide/dicomweb_source, engine/src/net): libcurl speaks HTTP(S). Its tests
+  # (tests/dicomweb) run a real Orthanc with the DICOMweb plugin, make a CA and certificates with
+  # openssl, and terminate TLS in their own proxy with libssl (Debian 12's Orthanc cannot serve HTTPS).
+  libcurl4-openssl-dev orthanc orthanc-dicomweb openssl libssl-dev
   libfreetype-dev libfontconfig-dev fonts-dejavu-core
   xvfb xauth gnuplot-nox
   # The fuzz preset (clang, libFuzzer). lld: configuring with clang, CMake picks ld.lld as

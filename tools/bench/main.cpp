@@ -417,7 +417,10 @@ int main(int argc, char** argv) {
                  "JSON.\n",
                  "iris-bench"};
     iris::tools::setUpApp(app, "iris-bench");
-    app.add_option("SLIDE", o.slide, "The slide to benchmark")->required();
+    app.add_option("SLIDE", o.slide,
+                   "The slide to benchmark: a file, a DICOM folder, or a\n"
+                   "DICOMweb series URL (then --baseline names a file)")
+        ->required();
     app.add_option("--size", sizes,
                    "Window size, whole numbers from 64 to 16384; repeat\n"
                    "for several (2774x1750 is the paper's window)")

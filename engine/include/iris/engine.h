@@ -69,6 +69,7 @@ struct EngineConfig {
     LogCallback log;
     EngineTuning tuning;
     ColorSettings color; // colour management, on by default (Engine::setColorSettings)
+    NetworkOptions network; // credentials, TLS and timeouts for DICOMweb series URLs given to open()
 };
 
 class IRIS_API Engine {

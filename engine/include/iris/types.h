@@ -188,6 +188,26 @@ struct ColorStatus {
     Result error;               // why a profile could not be used (the slide is then drawn untransformed)
 };
 
+// --- network sources (DICOMweb; docs/DICOM.md) ------------------------------------------
+
+// How the engine talks to a DICOMweb server when open() is given a series URL,
+// http(s)://host[:port]/<prefix>/studies/<StudyUID>/series/<SeriesUID> (EngineConfig::network).
+// Credentials go only to the URL's own scheme, host and port (redirects are not followed) and
+// are never logged; a URL with credentials in it (user:password@host) is refused.
+struct NetworkOptions {
+    std::string username;    // HTTP basic authentication, when not empty
+    std::string password;
+    std::string bearerToken; // "Authorization: Bearer <token>", when not empty (instead of basic)
+    std::string caFile;      // PEM file of the certificate authorities to trust; empty: the system's
+    bool verifyTls = true;   // check the server's certificate and host name (off only to debug a server)
+    // Plain http:// is accepted for loopback hosts (localhost, 127.0.0.0/8, ::1) only, unless
+    // this is set: pixels and credentials then cross the network unencrypted.
+    bool allowPlainHttp = false;
+    uint32_t connectTimeoutMs = 10000;
+    uint32_t requestTimeoutMs = 30000; // one request, from start to the last byte
+    uint32_t maxConnections = 6;       // per server over HTTP/1.1 (HTTP/2 multiplexes over one)
+};
+
 // --- overlays -------------------------------------------------------------------------
 // What the render thread can draw over the slide (Engine::setOverlayVisible).
 enum class Overlay : int {

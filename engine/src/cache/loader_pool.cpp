@@ -9,7 +9,10 @@ LoaderPool::LoaderPool(SharedState& shared, TileCache& cache, const Log& log, un
     for (unsigned i = 0; i < threads; ++i) threads_.emplace_back([this] { run(); });
 }
 
-LoaderPool::~LoaderPool() { stop(); }
+LoaderPool::~LoaderPool() {
+    stop();
+    if (plan_) retire(*plan_);
+}
 
 void LoaderPool::stop() {
     if (threads_.empty()) return;
@@ -37,24 +40,83 @@ std::shared_ptr<LoaderPool::Plan> LoaderPool::planFor(const Snapshot& snap) {
     plan->viewSerial = snap.viewSerial;
     plan->scannedEpoch.store(cache_.releaseEpoch(), std::memory_order_relaxed);
     plan->tiles = bufferRegion(snap.slide->info, snap.slide->generation, snap.viewport, perimeter_);
-    std::lock_guard lock(planMutex_);
-    if (!plan_ || plan_->slide != plan->slide || plan_->viewSerial < plan->viewSerial) plan_ = plan;
-    return plan_;
+    std::shared_ptr<Plan> replaced, current;
+    {
+        std::lock_guard lock(planMutex_);
+        if (!plan_ || plan_->slide != plan->slide || plan_->viewSerial < plan->viewSerial) {
+            replaced = std::move(plan_);
+            plan_ = plan;
+        }
+        current = plan_;
+    }
+    if (current != plan) return current;
+    if (replaced) retire(*replaced);
+    SlideSource& source = *snap.slide->source;
+    if (source.readsOverNetwork()) {
+        // The whole region in one batch, in the plan's order (base, LR, HR, perimeters; each
+        // centre out), less what is decoded already.
+        std::vector<TileAddress> wanted;
+        wanted.reserve(plan->tiles.size());
+        for (const TileRef& t : plan->tiles)
+            if (!cache_.isReady(t.key)) wanted.push_back({t.level, t.tx, t.ty});
+        source.prefetch(wanted, [this] {
+            arrivals_.fetch_add(1, std::memory_order_release);
+            shared_.bump();
+        });
+    }
+    return plan;
 }
 
-void LoaderPool::decode(const Snapshot& snap, const TileRef& t) {
+void LoaderPool::retire(Plan& plan) {
+    std::vector<TileRef> back;
+    {
+        std::lock_guard lock(plan.heldMutex);
+        if (plan.retired) return;
+        plan.retired = true;
+        back = std::move(plan.waiting);
+        back.insert(back.end(), plan.ready.begin(), plan.ready.end());
+        back.insert(back.end(), plan.failed.begin(), plan.failed.end());
+        plan.ready.clear();
+        plan.failed.clear();
+    }
+    // Claimable again (the cache bumps its release epoch): the new plan asks for those it needs.
+    for (const TileRef& t : back) cache_.abandon(t.key, nullptr);
+}
+
+void LoaderPool::hold(Plan& plan, const TileRef& t, std::vector<TileRef> Plan::*list) {
+    {
+        std::lock_guard lock(plan.heldMutex);
+        if (!plan.retired) {
+            (plan.*list).push_back(t);
+            return;
+        }
+    }
+    cache_.abandon(t.key, nullptr);
+}
+
+void LoaderPool::decode(const Snapshot& snap, Plan& plan, const TileRef& t) {
+    SlideSource& source = *snap.slide->source;
     std::unique_ptr<uint8_t[]> buf = cache_.acquireBuffer();
-    const Result r = snap.slide->source->readTile(t.level, t.tx, t.ty, buf.get());
+    const Result r = source.readTile(t.level, t.tx, t.ty, buf.get());
     const bool failed = !r.ok();
     if (r.status() == Status::Cancelled) {
         // The slide was let go of (SlideSource::abandon) while this tile was being read: no
-        // error to report, and nobody wants the tile. It is published as failed so that its
-        // claim ends; its generation is no longer drawn.
-        fillFailedTilePlaceholder(buf.get());
-    } else if (failed) {
+        // error to report, and nobody wants the tile. Its claim ends without a result.
+        cache_.abandon(t.key, std::move(buf));
+        shared_.bump();
+        return;
+    }
+    if (failed) {
         shared_.setSlideError(snap.slide->generation, r);
         log_.error(r.message());
-        if (!snap.slide->source->keepsPartialTiles(t.level)) fillFailedTilePlaceholder(buf.get());
+        if (source.readsOverNetwork() && (r.status() == Status::IoError || r.status() == Status::Timeout)) {
+            // Perhaps only for now (no connection, a timeout, a server error): no placeholder
+            // (the layers below show through), and the claim stays with the plan until it is
+            // replaced; a later view that needs the tile asks for it again.
+            hold(plan, t, &Plan::failed);
+            return;
+        }
+        if (!source.keepsPartialTiles(t.level)) fillFailedTilePlaceholder(buf.get());
     }
     cache_.publish(t.key, std::move(buf), failed);
     shared_.bump(); // the buffer thread may now upload it
@@ -69,6 +131,7 @@ bool LoaderPool::loadOne() {
         if (i >= plan->tiles.size()) break;
         if (tryLoad(snap, *plan, plan->tiles[i])) return true;
     }
+    if (snap.slide->source->readsOverNetwork() && loadArrived(snap, *plan)) return true;
     // Every tile of the plan has been tried. One the cache gave back since (evicted before it
     // was uploaded, dropped), or a synthetic tile left for later, is claimable again: scan the
     // region in priority order for it.
@@ -82,6 +145,33 @@ bool LoaderPool::loadOne() {
     return false;
 }
 
+bool LoaderPool::loadArrived(const Snapshot& snap, Plan& plan) {
+    TileRef t;
+    {
+        std::lock_guard lock(plan.heldMutex);
+        if (plan.retired) return false;
+        if (plan.ready.empty()) {
+            // acquire: pairs with the arrival callback's release (see arrivals_).
+            const uint64_t arrivals = arrivals_.load(std::memory_order_acquire);
+            if (arrivals == plan.arrivalsSeen) return false;
+            plan.arrivalsSeen = arrivals;
+            std::vector<TileRef> still;
+            for (const TileRef& w : plan.waiting) {
+                if (snap.slide->source->requestTile(w.level, w.tx, w.ty))
+                    plan.ready.push_back(w);
+                else
+                    still.push_back(w);
+            }
+            plan.waiting.swap(still);
+            if (plan.ready.empty()) return false;
+        }
+        t = plan.ready.front();
+        plan.ready.pop_front();
+    }
+    decode(snap, plan, t);
+    return true;
+}
+
 bool LoaderPool::tryLoad(const Snapshot& snap, Plan& plan, const TileRef& t) {
     const bool synthetic = snap.slide->info.levels[size_t(t.level)].synthetic;
     if (synthetic && syntheticBusy_.fetch_add(1, std::memory_order_relaxed) >= syntheticCap_) {
@@ -91,8 +181,16 @@ bool LoaderPool::tryLoad(const Snapshot& snap, Plan& plan, const TileRef& t) {
         plan.scannedEpoch.store(Plan::kScanAgain, std::memory_order_relaxed);
         return false;
     }
-    const bool claimed = cache_.tryClaim(t.key);
-    if (claimed) decode(snap, t);
+    bool claimed = cache_.tryClaim(t.key);
+    if (claimed) {
+        SlideSource& source = *snap.slide->source;
+        if (source.readsOverNetwork() && !source.requestTile(t.level, t.tx, t.ty)) {
+            hold(plan, t, &Plan::waiting); // read once it lands (loadArrived)
+            claimed = false;               // nothing decoded: the caller goes on to the next tile
+        } else {
+            decode(snap, plan, t);
+        }
+    }
     if (synthetic) syntheticBusy_.fetch_sub(1, std::memory_order_relaxed);
     return claimed;
 }

@@ -1,9 +1,11 @@
 #include "slide/slide_source.h"
 
+#include <cctype>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <string_view>
 
 #include "slide/dicom_source.h"
 #include "slide/iris_file.h"
@@ -26,6 +28,17 @@ struct SlideFormat {
     bool fallThrough; // UnsupportedFormat from open() means "not mine": try the next format
 };
 
+// http:// or https://, in any case: a DICOMweb series URL (the network source checks the rest).
+bool isUrl(const std::string& path) {
+    const auto starts = [&](std::string_view p) {
+        if (path.size() < p.size()) return false;
+        for (size_t i = 0; i < p.size(); ++i)
+            if (std::tolower(static_cast<unsigned char>(path[i])) != p[i]) return false;
+        return true;
+    };
+    return starts("http://") || starts("https://");
+}
+
 const SlideFormat kFormats[] = {
     {"iris", &IrisFileSource::detect, &IrisFileSource::open, false},
     // Aperio SVS and generic tiled TIFF decoded from the file's own tiles: exact pixels on
@@ -38,9 +51,26 @@ const SlideFormat kFormats[] = {
 
 } // namespace
 
-Expected<std::unique_ptr<SlideSource>> openSlideSource(const std::string& path, SourcePreference preference) {
+// The network source (slide/dicomweb_source.cpp). Weak: tests/engine builds tst_dicom from this
+// format table and the local readers without the network code; there the address is null and a
+// URL is refused like any path that names no file.
+[[gnu::weak]] Expected<std::unique_ptr<SlideSource>> openDicomWebSource(const std::string& url,
+                                                                        const NetworkOptions& options);
+
+Expected<std::unique_ptr<SlideSource>> openSlideSource(const std::string& path, SourcePreference preference,
+                                                       const NetworkOptions& network) {
     if (path.empty()) return Result(Status::InvalidArgument, "No slide path given");
     if (SyntheticSource::detect(path)) return SyntheticSource::open(path); // not a file
+    // A DICOMweb series URL: not a file either. Only the Auto table reads it (OpenSlide and
+    // .iris read files).
+    if (isUrl(path) && openDicomWebSource) {
+        if (preference != SourcePreference::Auto) {
+            return Result(Status::UnsupportedFormat,
+                          "Cannot open '" + path + "': a DICOMweb URL is read by the DICOMweb source only, not by " +
+                              (preference == SourcePreference::OpenSlide ? "OpenSlide" : "the .iris reader"));
+        }
+        return openDicomWebSource(path, network);
+    }
     std::error_code ec;
     const fs::path p(path);
     const auto st = fs::status(p, ec);

@@ -7,8 +7,10 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "iris/types.h"
 
@@ -16,6 +18,13 @@ namespace iris {
 
 inline constexpr int kTileSize = 256;                        // the engine's tile grid, every level
 inline constexpr int kTileBytes = kTileSize * kTileSize * 4; // RGBA8
+
+// One tile of the engine's grid.
+struct TileAddress {
+    int level = 0;
+    int64_t tx = 0;
+    int64_t ty = 0;
+};
 
 class SlideSource {
 public:
@@ -38,14 +47,35 @@ public:
     // going away). A read that takes long (a synthetic level's tile: many stored tiles) may
     // stop early and return Status::Cancelled; a one-tile read just finishes.
     virtual void abandon() {}
+
+    // Sources that read over a network (DicomWebSource), so that the loaders never wait on a
+    // round trip (docs/ARCHITECTURE.md, "The network source"). Local sources keep the defaults.
+    //
+    // True when reads go over a network: the loaders then hint each view's tiles with
+    // prefetch(), read a tile only once requestTile() says it is there, and treat a failed read
+    // with Status::IoError or Timeout as passing (the tile is not published; it is tried again
+    // when a later view needs it).
+    virtual bool readsOverNetwork() const { return false; }
+    // The tiles the engine wants now, in priority order (a new view's buffer region, centre
+    // out), replacing the previous list: start fetching them all, concurrently; what an
+    // earlier list asked for and this one does not may be dropped unless it is already on the
+    // wire. `arrived` runs (on any thread, quickly) each time something requested lands or
+    // fails for good, until abandon().
+    virtual void prefetch(const std::vector<TileAddress>& /*tiles*/, std::function<void()> /*arrived*/) {}
+    // True when readTile(level, tx, ty) would return without waiting on the network (its data
+    // is here, or its failure is known); otherwise makes sure the data is on the way (the
+    // prefetch callback runs when it lands) and returns false.
+    virtual bool requestTile(int /*level*/, int64_t /*tx*/, int64_t /*ty*/) { return true; }
 };
 
 // Opens `path` with the first format that recognises it, after checking that the path is
 // an existing, readable regular file, or a folder (a DICOM series: DicomSource). Errors name
 // the file and the reason.
 // `preference` restricts the table to one reader (EngineConfig::source).
+// A DICOMweb series URL (http:// or https://) opens through the network source with `network`.
 Expected<std::unique_ptr<SlideSource>> openSlideSource(const std::string& path,
-                                                       SourcePreference preference = SourcePreference::Auto);
+                                                       SourcePreference preference = SourcePreference::Auto,
+                                                       const NetworkOptions& network = {});
 
 // Fills the LevelInfo tile grid fields (tilesX/Y) from width/height.
 void fillTileGrid(LevelInfo& level);

@@ -1,0 +1,498 @@
+#include "slide/dicomweb_source.h"
+
+#include <algorithm>
+#include <set>
+
+#include "net/multipart.h"
+#include "slide/dicom_json.h"
+
+namespace iris {
+
+namespace {
+
+using Clock = net::HttpClient::Clock;
+
+constexpr const char* kFrameAccept = "multipart/related; type=\"application/octet-stream\"; transfer-syntax=*";
+constexpr const char* kBulkAccept = "multipart/related; type=\"application/octet-stream\"";
+constexpr size_t kMaxMetadataBytes = size_t(512) << 20;
+constexpr size_t kMaxIccBytes = size_t(16) << 20;
+constexpr size_t kFrameBudgetBytes = size_t(64) << 20; // compressed frames kept
+constexpr int kAttempts = 3;                           // per frame, when failures may pass
+constexpr size_t kMaxStreams = 64;                     // in flight over HTTP/2
+
+// Back-off before attempt n + 1 (n ≥ 1).
+std::chrono::milliseconds backoff(int attempts) { return std::chrono::milliseconds(attempts <= 1 ? 250 : 1000); }
+
+// Whether a failed request may succeed when tried again soon.
+bool passing(const net::Response& r) {
+    if (!r.error.ok()) return r.error.status() == Status::IoError || r.error.status() == Status::Timeout;
+    return r.status == 408 || r.status == 429 || (r.status >= 500 && r.status <= 599);
+}
+
+std::string reason(long status) {
+    switch (status) {
+    case 400: return "Bad Request";
+    case 401: return "Unauthorized";
+    case 403: return "Forbidden";
+    case 404: return "Not Found";
+    case 406: return "Not Acceptable";
+    case 408: return "Request Timeout";
+    case 429: return "Too Many Requests";
+    case 500: return "Internal Server Error";
+    case 502: return "Bad Gateway";
+    case 503: return "Service Unavailable";
+    case 504: return "Gateway Timeout";
+    default: return {};
+    }
+}
+
+// An HTTP answer that is not 200, as an error saying what it means for `what`.
+Result httpError(long status, const std::string& context, const std::string& what, bool credentialsGiven) {
+    const std::string code = "HTTP " + std::to_string(status) + (reason(status).empty() ? "" : " " + reason(status));
+    if (status == 401) {
+        return Result(Status::IoError,
+                      context + (credentialsGiven ? "the server refused the credentials given (" + code + ")"
+                                                  : "the server asks for credentials (" + code +
+                                                        "); give them in EngineConfig::network"));
+    }
+    if (status == 403)
+        return Result(Status::IoError, context + "the server refuses access to " + what + " (" + code + ")");
+    if (status == 404) return Result(Status::NotFound, context + what + " is not on the server (" + code + ")");
+    if (status == 408 || status == 429 || (status >= 500 && status <= 599))
+        return Result(Status::IoError, context + "the server failed (" + code + ")");
+    if (status >= 300 && status <= 399)
+        return Result(Status::IoError, context + "the server redirects (" + code + "), which is not followed");
+    return Result(Status::CorruptData, context + "the server answered " + code + " for " + what);
+}
+
+// The transfer syntax of a frame: its part's Content-Type parameter; else the message's
+// transfer-syntax parameter, or one inside its type parameter (Orthanc writes
+// type="image/jpeg; transfer-syntax=…"); else what the media type implies (PS3.18 8.7.3.5.2).
+std::string transferSyntaxOf(const net::MediaType* part, const net::MediaType& message) {
+    if (part) {
+        if (const std::string* ts = part->param("transfer-syntax")) return *ts;
+    }
+    if (const std::string* ts = message.param("transfer-syntax")) return *ts;
+    if (const std::string* type = message.param("type")) {
+        if (auto inner = net::parseMediaType(*type); inner.ok()) {
+            if (const std::string* ts = inner->param("transfer-syntax")) return *ts;
+        }
+    }
+    const std::string type = part ? part->type : std::string();
+    if (type == "application/octet-stream" || type.empty()) return "1.2.840.10008.1.2.1";
+    if (type == "image/jpeg") return "1.2.840.10008.1.2.4.50";
+    if (type == "image/jp2" || type == "image/jpx") return "1.2.840.10008.1.2.4.90";
+    return {};
+}
+
+} // namespace
+
+Expected<std::unique_ptr<SlideSource>> openDicomWebSource(const std::string& url, const NetworkOptions& options) {
+    return DicomWebSource::open(url, options);
+}
+
+Expected<std::unique_ptr<SlideSource>> DicomWebSource::open(const std::string& text, const NetworkOptions& options) {
+    auto url = net::parseUrl(text);
+    if (!url.ok()) return url.error();
+    if (url->scheme == "http" && !url->loopback() && !options.allowPlainHttp) {
+        return Result(Status::InvalidArgument,
+                      "Cannot open '" + text +
+                          "': plain http:// is only used for loopback hosts (pixels and "
+                          "credentials would cross the network unencrypted); use https://, or set "
+                          "NetworkOptions::allowPlainHttp");
+    }
+    // …/studies/<StudyUID>/series/<SeriesUID>[/]
+    std::vector<std::string> segments;
+    for (size_t i = 0; i < url->path.size();) {
+        const size_t j = std::min(url->path.find('/', i), url->path.size());
+        if (j > i) segments.push_back(url->path.substr(i, j - i));
+        i = j + 1;
+    }
+    const size_t n = segments.size();
+    if (n < 4 || segments[n - 4] != "studies" || segments[n - 2] != "series" || !dicom::isUid(segments[n - 3]) ||
+        !dicom::isUid(segments[n - 1])) {
+        return Result(Status::InvalidArgument, "Cannot open '" + text +
+                                                   "': a DICOMweb series URL ends in "
+                                                   "/studies/<Study Instance UID>/series/<Series Instance UID>");
+    }
+    std::string seriesUrl = url->scheme + "://" + url->host + ":" + std::to_string(url->port);
+    for (const std::string& s : segments) seriesUrl += "/" + s;
+    const std::string seriesUid = segments[n - 1];
+    const std::string seriesName =
+        "DICOMweb series " + seriesUid + " on " + url->host + ":" + std::to_string(url->port);
+    std::unique_ptr<DicomWebSource> src(new DicomWebSource(options, seriesUrl, seriesName));
+    auto client = net::HttpClient::create(options, *url);
+    if (!client.ok()) return client.error();
+    src->client_ = std::move(*client);
+    const bool credentials = !options.username.empty() || !options.bearerToken.empty();
+
+    const std::string context = "Cannot open " + seriesName + ": ";
+    const net::Response meta =
+        src->client_->getNow(seriesUrl + "/metadata", "application/dicom+json", kMaxMetadataBytes);
+    if (!meta.error.ok()) return Result(meta.error.status(), context + meta.error.message());
+    if (meta.status != 200) return httpError(meta.status, context, "the series", credentials);
+    const auto type = net::parseMediaType(meta.contentType);
+    if (!type.ok() || (type->type != "application/dicom+json" && type->type != "application/json")) {
+        return Result(Status::UnsupportedFormat, context + "the server answered with Content-Type '" +
+                                                     meta.contentType.substr(0, 100) +
+                                                     "', not DICOM JSON (is this a DICOMweb series URL?)");
+    }
+    auto series = dicom::describeJsonSeries(meta.body.data(), meta.body.size(), seriesUid, seriesName);
+    if (!series.ok()) return series.error();
+    src->instances_ = std::move(series->instances);
+    src->layout_ = std::move(series->layout);
+    if (Result r = src->probeTransferSyntaxes(); !r.ok()) return r;
+    dicom::SeriesMetadata& metadata = series->metadata;
+    if (metadata.iccProfile.empty() && !metadata.iccBulkDataUri.empty()) {
+        auto icc = src->client_->getNow(metadata.iccBulkDataUri.rfind("/", 0) == 0
+                                            ? url->scheme + "://" + url->host + ":" + std::to_string(url->port) +
+                                                  metadata.iccBulkDataUri
+                                            : metadata.iccBulkDataUri,
+                                        kBulkAccept, kMaxIccBytes);
+        // The profile is not needed to show the slide: a failure is kept as a property.
+        std::string why;
+        if (!icc.error.ok()) {
+            why = icc.error.message();
+        } else if (icc.status != 200) {
+            why = httpError(icc.status, "", "the ICC profile", credentials).message();
+        } else if (auto parts = net::parseMultipart(icc.contentType, icc.body.data(), icc.body.size()); !parts.ok()) {
+            why = parts.error().message();
+        } else {
+            metadata.iccProfile.assign(parts->front().data, parts->front().data + parts->front().size);
+        }
+        if (!why.empty()) metadata.properties["dicomweb.ICCProfileError"] = why;
+    }
+    dicom::fillSlideInfo(src->instances_, src->layout_, metadata, &src->info_);
+    src->info_.path = text;
+    return std::unique_ptr<SlideSource>(std::move(src));
+}
+
+DicomWebSource::~DicomWebSource() {
+    abandon();
+    client_.reset(); // joins the client's thread: no answer is handled after this
+}
+
+std::string DicomWebSource::frameUrl(size_t instance, uint32_t frame) const {
+    return seriesUrl_ + "/instances/" + instances_[instance].sopInstanceUid + "/frames/" + std::to_string(frame + 1);
+}
+
+size_t DicomWebSource::maxFrameBytes(size_t instance) const {
+    // A compressed frame is smaller than its samples; twice that and a margin for the
+    // multipart headers bounds any honest answer.
+    const dicom::InstanceDescription& in = instances_[instance];
+    return size_t(in.frameW) * in.frameH * std::max<uint32_t>(in.samplesPerPixel, 1) * 2 + (size_t(1) << 20);
+}
+
+Expected<DicomWebSource::Payload> DicomWebSource::parseFrameAnswer(size_t instance, uint32_t frame,
+                                                                   const net::Response& r) const {
+    const dicom::InstanceDescription& in = instances_[instance];
+    const std::string context = "Cannot read frame " + std::to_string(frame + 1) + " of " + in.name + ": ";
+    if (!r.error.ok()) return Result(r.error.status(), context + r.error.message());
+    if (r.status != 200) {
+        const bool credentials = !options_.username.empty() || !options_.bearerToken.empty();
+        return httpError(r.status, context, "the frame", credentials);
+    }
+    const auto message = net::parseMediaType(r.contentType);
+    if (!message.ok() || message->type != "multipart/related") {
+        return Result(Status::CorruptData, context + "the server answered with Content-Type '" +
+                                               r.contentType.substr(0, 100) + "', not multipart/related");
+    }
+    auto parts = net::parseMultipart(r.contentType, r.body.data(), r.body.size());
+    if (!parts.ok()) return Result(Status::CorruptData, context + parts.error().message());
+    if (parts->size() != 1) {
+        return Result(Status::CorruptData, context + "the answer holds " + std::to_string(parts->size()) +
+                                               " parts, not the one frame asked for");
+    }
+    const net::Part& part = parts->front();
+    std::optional<net::MediaType> partType;
+    if (!part.contentType.empty()) {
+        auto t = net::parseMediaType(part.contentType);
+        if (!t.ok()) return Result(Status::CorruptData, context + "its part's " + t.error().message());
+        partType = std::move(*t);
+    }
+    Payload p;
+    p.transferSyntax = transferSyntaxOf(partType ? &*partType : nullptr, *message);
+    if (p.transferSyntax.empty()) {
+        return Result(Status::UnsupportedFormat, context + "the frame came as '" + part.contentType.substr(0, 100) +
+                                                     "' without a transfer syntax");
+    }
+    if (!in.transferSyntax.empty() && p.transferSyntax != in.transferSyntax) {
+        return Result(Status::CorruptData, context + "it came in transfer syntax " + p.transferSyntax.substr(0, 64) +
+                                               ", the instance's first frame in " + in.transferSyntax);
+    }
+    p.bytes.assign(part.data, part.data + part.size);
+    return p;
+}
+
+Result DicomWebSource::probeTransferSyntaxes() {
+    // Every instance the slide draws from: the levels' frames and the associated images.
+    std::set<size_t> used;
+    for (const dicom::Level& L : layout_.levels)
+        for (const dicom::Level::Cell& c : L.cells)
+            if (c.instance >= 0) used.insert(size_t(c.instance));
+    for (const auto& a : layout_.associated) used.insert(a.second);
+    std::mutex m;
+    std::condition_variable done;
+    size_t pending = used.size();
+    std::vector<std::pair<size_t, net::Response>> answers;
+    for (size_t i : used) {
+        client_->get(frameUrl(i, 0), kFrameAccept, maxFrameBytes(i), [&, i](net::Response&& r) {
+            std::lock_guard lock(m);
+            answers.emplace_back(i, std::move(r));
+            if (--pending == 0) done.notify_all();
+        });
+    }
+    {
+        std::unique_lock lock(m);
+        done.wait(lock, [&] { return pending == 0; }); // every request is answered, at the latest by its timeout
+    }
+    std::sort(answers.begin(), answers.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    for (auto& [i, r] : answers) {
+        auto payload = parseFrameAnswer(i, 0, r);
+        if (!payload.ok()) {
+            const Result& e = payload.error();
+            return Result(e.status(), "Cannot open " + seriesName_ + ": " + e.message());
+        }
+        if (Result c = dicom::choosePixelFormat(instances_[i], payload->transferSyntax); !c.ok()) return c;
+        // The frame itself is kept: it is one the slide shows.
+        std::lock_guard lock(mutex_);
+        const FrameKey key = FrameKey(i) << 32;
+        Frame& f = frames_[key];
+        storeReady(key, f, std::move(payload->bytes));
+    }
+    return {};
+}
+
+void DicomWebSource::storeReady(FrameKey key, Frame& f, std::vector<uint8_t> bytes) {
+    if (f.state == Frame::State::Ready) {
+        readyBytes_ -= f.bytes.size();
+        readyLru_.erase(f.lru);
+    }
+    f.state = Frame::State::Ready;
+    f.bytes = std::move(bytes);
+    f.error = {};
+    f.attempts = 0;
+    f.consumed = false;
+    readyLru_.push_front(key);
+    f.lru = readyLru_.begin();
+    readyBytes_ += f.bytes.size();
+    evict();
+}
+
+void DicomWebSource::evict() {
+    // Oldest first; a frame the current batch wants and nobody has read yet stays.
+    for (auto it = readyLru_.end(); readyBytes_ > kFrameBudgetBytes && it != readyLru_.begin();) {
+        --it;
+        auto f = frames_.find(*it);
+        if (f == frames_.end()) {
+            it = readyLru_.erase(it);
+            continue;
+        }
+        if (f->second.wantedBy == batch_ && !f->second.consumed && batch_ != 0) continue;
+        readyBytes_ -= f->second.bytes.size();
+        it = readyLru_.erase(it);
+        frames_.erase(f);
+    }
+}
+
+void DicomWebSource::send(FrameKey key, Clock::time_point notBefore) {
+    const size_t instance = size_t(key >> 32);
+    const uint32_t frame = uint32_t(key & 0xffffffffu);
+    client_->get(
+        frameUrl(instance, frame), kFrameAccept, maxFrameBytes(instance),
+        [this, key](net::Response&& r) { onFrame(key, std::move(r)); }, notBefore);
+}
+
+void DicomWebSource::pump() {
+    const size_t limit = client_->multiplexing() ? kMaxStreams : std::max<size_t>(1, options_.maxConnections);
+    while (sent_ < limit && !queue_.empty()) {
+        const FrameKey key = queue_.front();
+        queue_.pop_front();
+        const auto it = frames_.find(key);
+        if (it == frames_.end() || it->second.state != Frame::State::Queued) continue; // stale: sent or dropped
+        it->second.state = Frame::State::Sent;
+        ++sent_;
+        send(key, {});
+    }
+}
+
+void DicomWebSource::onFrame(FrameKey key, net::Response&& r) {
+    const size_t instance = size_t(key >> 32);
+    const uint32_t frame = uint32_t(key & 0xffffffffu);
+    // Parsed outside the lock: the multipart body is scanned and the frame copied.
+    auto payload = parseFrameAnswer(instance, frame, r);
+    {
+        std::lock_guard lock(mutex_);
+        if (abandoned_) return;
+        const auto it = frames_.find(key);
+        if (it == frames_.end()) { // cannot happen (a frame on the wire is never dropped); keep the count right
+            --sent_;
+            pump();
+            return;
+        }
+        Frame& f = it->second;
+        if (!payload.ok() && passing(r) && ++f.attempts < kAttempts) {
+            send(key, Clock::now() + backoff(f.attempts)); // still counted in sent_
+            return;
+        }
+        --sent_;
+        if (payload.ok()) {
+            storeReady(key, f, std::move(payload->bytes));
+        } else {
+            f.state = Frame::State::Failed;
+            f.error = payload.error();
+        }
+        landed_.notify_all();
+        pump();
+    }
+    std::lock_guard lock(callbackMutex_);
+    if (arrived_) arrived_();
+}
+
+void DicomWebSource::prefetch(const std::vector<TileAddress>& tiles, std::function<void()> arrived) {
+    {
+        std::lock_guard lock(callbackMutex_);
+        std::lock_guard state(mutex_);
+        if (abandoned_) return;
+        arrived_ = std::move(arrived);
+    }
+    std::lock_guard lock(mutex_);
+    if (abandoned_) return;
+    const uint64_t batch = ++batch_;
+    std::vector<FrameKey> order;
+    for (const TileAddress& t : tiles) {
+        for (const uint64_t cell : cellsOfTile(t.level, t.tx, t.ty)) {
+            const dicom::Level::Cell& c = layout_.levels[size_t(t.level)].cells[size_t(cell)];
+            if (c.instance < 0 || hasDecodedFrame(size_t(t.level), cell)) continue;
+            const FrameKey key = (FrameKey(c.instance) << 32) | c.frame;
+            auto [it, inserted] = frames_.try_emplace(key);
+            Frame& f = it->second;
+            if (!inserted && f.wantedBy == batch) continue; // a frame several tiles share
+            f.wantedBy = batch;
+            if (inserted || f.state == Frame::State::Queued) {
+                order.push_back(key);
+            } else if (f.state == Frame::State::Failed) { // needed again: try again
+                f.state = Frame::State::Queued;
+                f.error = {};
+                f.attempts = 0;
+                order.push_back(key);
+            }
+        }
+    }
+    // The new queue: frames a reader waits for first, then this batch in its order. Queued
+    // frames of earlier batches that this one does not want are dropped.
+    std::deque<FrameKey> next;
+    for (const FrameKey key : queue_) {
+        const auto it = frames_.find(key);
+        if (it == frames_.end() || it->second.state != Frame::State::Queued) continue;
+        if (it->second.urgent)
+            next.push_back(key);
+        else if (it->second.wantedBy != batch)
+            frames_.erase(it);
+    }
+    for (const FrameKey key : order)
+        if (!frames_[key].urgent) next.push_back(key);
+    queue_.swap(next);
+    pump();
+}
+
+bool DicomWebSource::requestTile(int level, int64_t tx, int64_t ty) {
+    const std::vector<uint64_t> cells = cellsOfTile(level, tx, ty);
+    std::lock_guard lock(mutex_);
+    if (abandoned_) return true; // readTile answers Cancelled at once
+    bool ready = true;
+    for (const uint64_t cell : cells) {
+        const dicom::Level::Cell& c = layout_.levels[size_t(level)].cells[size_t(cell)];
+        if (c.instance < 0 || hasDecodedFrame(size_t(level), cell)) continue;
+        const FrameKey key = (FrameKey(c.instance) << 32) | c.frame;
+        auto [it, inserted] = frames_.try_emplace(key);
+        Frame& f = it->second;
+        if (inserted) {
+            f.wantedBy = batch_;
+            queue_.push_back(key);
+        }
+        ready = ready && (f.state == Frame::State::Ready || f.state == Frame::State::Failed);
+    }
+    if (!ready) pump();
+    return ready;
+}
+
+void DicomWebSource::willReadFrames(size_t instance, const std::vector<uint32_t>& frames) {
+    std::lock_guard lock(mutex_);
+    if (abandoned_) return;
+    for (auto f = frames.rbegin(); f != frames.rend(); ++f) { // the first frame ends up first in line
+        const FrameKey key = (FrameKey(instance) << 32) | *f;
+        auto [it, inserted] = frames_.try_emplace(key);
+        it->second.urgent = true;
+        if (inserted || it->second.state == Frame::State::Queued) queue_.push_front(key);
+    }
+    pump();
+}
+
+Result DicomWebSource::readFrame(size_t instance, uint32_t frame, uint8_t* dst, size_t pitch) {
+    const FrameKey key = (FrameKey(instance) << 32) | frame;
+    thread_local std::vector<uint8_t> bytes;
+    {
+        std::unique_lock lock(mutex_);
+        // Each attempt is bounded by the request timeout; the last waits at most that long after
+        // its back-off. A server that never answers cannot hold a reader longer than this.
+        const auto deadline =
+            Clock::now() +
+            kAttempts * std::chrono::milliseconds(options_.connectTimeoutMs + options_.requestTimeoutMs) +
+            std::chrono::seconds(2);
+        for (;;) {
+            if (abandoned_) return Result(Status::Cancelled, "The slide was closed");
+            auto it = frames_.find(key);
+            if (it == frames_.end()) { // never asked for: first in line, and wait
+                it = frames_.try_emplace(key).first;
+                it->second.urgent = true;
+                it->second.wantedBy = batch_;
+                queue_.push_front(key);
+                pump();
+            }
+            Frame& f = it->second;
+            if (f.state == Frame::State::Ready) {
+                bytes = f.bytes;
+                f.consumed = true;
+                readyLru_.splice(readyLru_.begin(), readyLru_, f.lru);
+                break;
+            }
+            if (f.state == Frame::State::Failed) {
+                Result error = f.error;
+                // A failure that may pass is reported once; the next read asks again.
+                const Status s = error.status();
+                if (s == Status::IoError || s == Status::Timeout || s == Status::Cancelled) frames_.erase(it);
+                return error;
+            }
+            if (f.state == Frame::State::Queued && !f.urgent) { // now first in line
+                f.urgent = true;
+                queue_.push_front(key);
+                pump();
+            }
+            f.urgent = true;
+            if (landed_.wait_until(lock, deadline) == std::cv_status::timeout && Clock::now() >= deadline) {
+                return Result(Status::Timeout, "Cannot read frame " + std::to_string(frame + 1) + " of " +
+                                                   instances_[instance].name + ": no answer from " + seriesName_ +
+                                                   " in time");
+            }
+        }
+    }
+    return dicom::decodeFrame(instances_[instance], frame, bytes.data(), bytes.size(), dst, pitch);
+}
+
+void DicomWebSource::abandon() {
+    {
+        std::lock_guard lock(callbackMutex_);
+        arrived_ = nullptr;
+    }
+    {
+        std::lock_guard lock(mutex_);
+        if (abandoned_) return;
+        abandoned_ = true;
+        queue_.clear();
+        landed_.notify_all();
+    }
+    if (client_) client_->cancelAll();
+}
+
+} // namespace iris

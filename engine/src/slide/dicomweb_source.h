@@ -1,0 +1,115 @@
+// SlideSource over a DICOMweb server: a VL Whole Slide Microscopy series given by its URL,
+// http(s)://host[:port]/<prefix>/studies/<StudyUID>/series/<SeriesUID>. docs/DICOM.md
+// ("DICOMweb") lists what is asked of the server; docs/ARCHITECTURE.md ("The network source")
+// how requests are batched and cancelled.
+//
+//   * open(): WADO-RS …/series/<uid>/metadata (DICOM JSON) is mapped to levels by the same code
+//     as local files (slide/dicom_json.h → dicom::layoutSeries); then frame 1 of every instance
+//     the slide uses is fetched, concurrently, to learn its transfer syntax (the metadata does
+//     not carry it), and the ICC profile's bulk data when the metadata only points to it.
+//   * Frames: WADO-RS …/instances/<SOP>/frames/<n>, one frame a request, with
+//     Accept: multipart/related; type="application/octet-stream"; transfer-syntax=*, so that the
+//     server sends each frame as stored (JPEG, JPEG 2000 or native samples) and names its
+//     transfer syntax. Many requests are on the wire at once (net::HttpClient); the frames that
+//     arrive are kept, compressed, in a 64 MiB LRU until read.
+//   * The loaders never wait on the network (SlideSource::prefetch / requestTile): each view's
+//     tiles are requested in one batch in the loaders' priority order, and a newer batch drops
+//     what is still queued of the older one. A frame whose request fails for a reason that may
+//     pass (no connection, a timeout, HTTP 408/429/5xx) is retried twice, 250 ms and 1 s later;
+//     after that its failure is reported once and it is fetched again when next asked for.
+//   * readTile() of a frame that was never requested (iris-encode, readAssociatedImage, a direct
+//     caller) requests it first in line and waits for it, bounded by the request timeouts.
+//
+// Threading: readTile, prefetch and requestTile from any thread; answers are handled on the
+// HttpClient's thread. `mutex_` guards the frame table and the queue; `callbackMutex_` the
+// arrival callback, which runs under it so that abandon() is a barrier: once it returns the
+// callback never runs again.
+#pragma once
+
+#include <condition_variable>
+#include <deque>
+#include <functional>
+#include <list>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "net/http_client.h"
+#include "slide/dicom_source.h"
+
+namespace iris {
+
+class DicomWebSource final : public dicom::SeriesSource {
+public:
+    static Expected<std::unique_ptr<SlideSource>> open(const std::string& url, const NetworkOptions& options);
+    ~DicomWebSource() override;
+
+    bool readsOverNetwork() const override { return true; }
+    void prefetch(const std::vector<TileAddress>& tiles, std::function<void()> arrived) override;
+    bool requestTile(int level, int64_t tx, int64_t ty) override;
+    void abandon() override;
+
+private:
+    using FrameKey = uint64_t; // instance << 32 | frame (0-based)
+    struct Frame {
+        enum class State { Queued, Sent, Ready, Failed };
+        State state = State::Queued;
+        std::vector<uint8_t> bytes; // Ready: the frame as stored
+        Result error;               // Failed
+        bool urgent = false;        // a reader waits for it: never dropped by a newer batch
+        bool consumed = false; // read since it arrived (Ready frames that were not may not be evicted while wanted)
+        uint64_t wantedBy = 0; // the prefetch batch that last asked for it
+        int attempts = 0;
+        std::list<FrameKey>::iterator lru; // Ready
+    };
+    struct Payload {
+        std::vector<uint8_t> bytes;
+        std::string transferSyntax;
+    };
+
+    DicomWebSource(const NetworkOptions& options, std::string seriesUrl, std::string seriesName)
+        : options_(options), seriesUrl_(std::move(seriesUrl)), seriesName_(std::move(seriesName)) {}
+    Result readFrame(size_t instance, uint32_t frame, uint8_t* dst, size_t pitch) override;
+    void willReadFrames(size_t instance, const std::vector<uint32_t>& frames) override;
+
+    std::string frameUrl(size_t instance, uint32_t frame) const;
+    size_t maxFrameBytes(size_t instance) const;
+    // The frame in an answer, checked: HTTP status, content type, one part, transfer syntax.
+    Expected<Payload> parseFrameAnswer(size_t instance, uint32_t frame, const net::Response& r) const;
+    Result probeTransferSyntaxes();
+    void fetchIccProfile(const std::string& uri);
+
+    // With mutex_ held.
+    void pump();
+    void send(FrameKey key, net::HttpClient::Clock::time_point notBefore);
+    void storeReady(FrameKey key, Frame& f, std::vector<uint8_t> bytes);
+    void evict();
+    // On the client's thread.
+    void onFrame(FrameKey key, net::Response&& r);
+
+    const NetworkOptions options_;
+    const std::string seriesUrl_;  // …/studies/<uid>/series/<uid>, no trailing '/'
+    const std::string seriesName_; // "DICOMweb series <uid> on host:port", for messages
+
+    std::mutex mutex_;
+    std::condition_variable landed_; // a frame became Ready or Failed, or the source was abandoned
+    std::unordered_map<FrameKey, Frame> frames_;
+    std::deque<FrameKey> queue_;   // Queued frames in request order (may hold stale keys: pump skips them)
+    size_t sent_ = 0;              // requests on the wire or waiting for a retry
+    uint64_t batch_ = 0;           // the newest prefetch batch
+    std::list<FrameKey> readyLru_; // Ready frames, most recently used first
+    size_t readyBytes_ = 0;
+    bool abandoned_ = false;
+
+    std::mutex callbackMutex_; // guards arrived_, held while it runs
+    std::function<void()> arrived_;
+
+    std::unique_ptr<net::HttpClient> client_;
+};
+
+// The format table's entry (slide_source.cpp).
+Expected<std::unique_ptr<SlideSource>> openDicomWebSource(const std::string& url, const NetworkOptions& options);
+
+} // namespace iris

@@ -1,0 +1,575 @@
+// The DICOMweb source (issue 15, "DICOMweb") against a real Orthanc with its DICOMweb plugin,
+// started by the suite on 127.0.0.1 (orthanc_server.h), holding DICOM slides OrthancWSIDicomizer
+// makes at test time from the sample slide and CMU-1-Small-Region (tests/support/dicomizer.h):
+//   * pixel-exact: the series over DICOMweb reads and renders exactly as the same files do
+//     locally (slide/dicom_source), tile by tile and through the Engine (colour management off);
+//     JPEG frames of 256 (split levels) and 240 px, JPEG 2000 frames of 120×80;
+//   * credentials and transport: basic authentication (a wrong password is a clear 401 error),
+//     TLS with a CA the suite makes with openssl (trusted: works; untrusted: refused), URLs that
+//     are refused before any request;
+//   * faults, through a proxy that misbehaves on purpose (fault_proxy.h): a truncated multipart
+//     body, a wrong content type, a 404 frame (the placeholder is drawn), a slow server (views
+//     keep moving, superseded requests are dropped), the server stopped in the middle of a walk
+//     (clear error, the engine stays usable and recovers when the server is back), and an
+//     instance in a transfer syntax the engine does not decode.
+// Every wait is an engine event (waitForFrame) or bounded by a deadline; nothing sleeps a guess.
+#include <QtTest>
+
+#include <chrono>
+#include <fstream>
+
+#include <dcmtk/config/osconfig.h>
+
+#include <dcmtk/dcmdata/dcdatset.h>
+#include <dcmtk/dcmdata/dcdeftag.h>
+#include <dcmtk/dcmdata/dcfilefo.h>
+#include <dcmtk/dcmdata/dcrleerg.h>
+#include <dcmtk/dcmdata/dcuid.h>
+
+#include "dicomizer.h"
+#include "fault_proxy.h"
+#include "orthanc_server.h"
+#include "slide/slide_source.h"
+#include "test_support.h"
+
+using namespace iristest;
+using namespace dicomwebtest;
+using iris::kTileBytes;
+using iris::kTileSize;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+#define CHECKED(call)                                                                                                  \
+    do {                                                                                                               \
+        call;                                                                                                          \
+        if (QTest::currentTestFailed()) return;                                                                        \
+    } while (0)
+
+constexpr uint32_t kW = 384, kH = 256; // the engine's target
+
+fs::path outDir() {
+    const fs::path d = testOutDir() / "dicomweb";
+    fs::create_directories(d);
+    return d;
+}
+
+// The first .dcm file of a folder (any instance names the series).
+fs::path firstFile(const fs::path& folder) {
+    std::vector<fs::path> files;
+    for (const auto& e : fs::directory_iterator(folder))
+        if (e.is_regular_file()) files.push_back(e.path());
+    std::sort(files.begin(), files.end());
+    return files.empty() ? fs::path() : files.front();
+}
+
+std::unique_ptr<iris::SlideSource> openSource(const std::string& path, const iris::NetworkOptions& o,
+                                              std::string* why) {
+    auto r = iris::openSlideSource(path, iris::SourcePreference::Auto, o);
+    if (!r.ok()) {
+        *why = "cannot open " + path + ": " + describe(r.error());
+        return nullptr;
+    }
+    return std::move(*r);
+}
+
+// open() fails with `status`, and the message holds every one of `words`.
+void expectOpenFails(const std::string& url, const iris::NetworkOptions& o, iris::Status status,
+                     std::initializer_list<std::string> words) {
+    auto r = iris::openSlideSource(url, iris::SourcePreference::Auto, o);
+    QVERIFY2(!r.ok(), ("opened " + url).c_str());
+    const std::string& m = r.error().message();
+    qInfo("%s", describe(r.error()).c_str());
+    QVERIFY2(r.error().status() == status,
+             ("status " + std::string(iris::statusName(r.error().status())) + ", expected " + iris::statusName(status))
+                 .c_str());
+    for (const std::string& w : words)
+        QVERIFY2(m.find(w) != std::string::npos, ("the message does not say '" + w + "': " + m).c_str());
+    if (!o.password.empty()) QVERIFY2(m.find(o.password) == std::string::npos, "the message shows the password");
+}
+
+// Every tile of every level of `web` equals `local`'s, byte for byte. Each level's tiles are
+// hinted first (SlideSource::prefetch, as the loaders do), so that their frames come in parallel.
+void expectSameTiles(iris::SlideSource& web, iris::SlideSource& local, const char* what) {
+    const auto& a = web.info();
+    const auto& b = local.info();
+    QCOMPARE(a.levels.size(), b.levels.size());
+    std::vector<uint8_t> ta(kTileBytes), tb(kTileBytes);
+    uint64_t tiles = 0;
+    for (size_t l = 0; l < a.levels.size(); ++l) {
+        QCOMPARE(a.levels[l].width, b.levels[l].width);
+        QCOMPARE(a.levels[l].height, b.levels[l].height);
+        QCOMPARE(a.levels[l].downsample, b.levels[l].downsample);
+        std::vector<iris::TileAddress> all;
+        for (int64_t ty = 0; ty < a.levels[l].tilesY; ++ty)
+            for (int64_t tx = 0; tx < a.levels[l].tilesX; ++tx) all.push_back({int(l), tx, ty});
+        web.prefetch(all, [] {});
+        for (int64_t ty = 0; ty < a.levels[l].tilesY; ++ty) {
+            for (int64_t tx = 0; tx < a.levels[l].tilesX; ++tx) {
+                const iris::Result ra = web.readTile(int(l), tx, ty, ta.data());
+                QVERIFY2(ra.ok(), describe(ra).c_str());
+                QVERIFY(local.readTile(int(l), tx, ty, tb.data()).ok());
+                QVERIFY2(ta == tb,
+                         qPrintable(QString("%1: level %2 tile (%3, %4) differs").arg(what).arg(l).arg(tx).arg(ty)));
+                ++tiles;
+            }
+        }
+    }
+    qInfo("%s: %llu tiles identical", what, (unsigned long long)tiles);
+}
+
+// openssl, quietly; false when it failed.
+bool openssl(const std::string& args, const fs::path& dir) {
+    const std::string cmd = "cd '" + dir.string() + "' && openssl " + args + " >> openssl.log 2>&1";
+    return std::system(cmd.c_str()) == 0;
+}
+
+// A CA and a server certificate for 127.0.0.1 signed by it (server.pem: certificate and key, as
+// Orthanc wants them), and a second CA that signed nothing here.
+bool makeCertificates(const fs::path& dir) {
+    fs::create_directories(dir);
+    { std::ofstream(dir / "san.cnf") << "subjectAltName=IP:127.0.0.1,DNS:localhost\n"; }
+    const std::string ec = "-newkey ec -pkeyopt ec_paramgen_curve:prime256v1 -nodes";
+    return openssl("req -x509 " + ec + " -keyout ca.key -out ca.pem -days 2 -subj '/CN=Iris test CA'", dir) &&
+           openssl("req -x509 " + ec + " -keyout other.key -out other-ca.pem -days 2 -subj '/CN=Other CA'", dir) &&
+           openssl("req " + ec + " -keyout server.key -out server.csr -subj '/CN=127.0.0.1'", dir) &&
+           openssl("x509 -req -in server.csr -CA ca.pem -CAkey ca.key -CAcreateserial -out server.crt -days 2 "
+                   "-extfile san.cnf",
+                   dir) &&
+           std::system(("cd '" + dir.string() + "' && cat server.crt server.key > server.pem").c_str()) == 0;
+}
+
+// The placeholder the loaders draw for a tile that cannot be read (slide_helpers.cpp).
+std::vector<uint8_t> placeholderTile() {
+    std::vector<uint8_t> t(kTileBytes);
+    iris::fillFailedTilePlaceholder(t.data());
+    return t;
+}
+
+} // namespace
+
+class TestDicomWeb : public QObject {
+    Q_OBJECT
+
+    std::unique_ptr<OrthancServer> server_;  // plain http, no authentication
+    fs::path sampleJpeg_, cmu240_, cmuJp2k_; // the local series folders
+    std::string sampleUrl_, cmu240Url_, cmuJp2kUrl_;
+    TestEngine e_;
+
+    // Renders `view` of `path` (a folder or a URL) through the suite's engine.
+    std::optional<iris::Frame> render(const std::string& path, const iris::View& view, std::string* why) {
+        const iris::Result r = e_->open(path);
+        if (!r.ok()) {
+            *why = "open " + path + ": " + describe(r);
+            return std::nullopt;
+        }
+        return renderView(*e_.engine, view, kW, kH, std::chrono::seconds(60), why);
+    }
+    // The frames of `view` from the local folder and from the URL are identical.
+    void expectSameFrame(const fs::path& local, const std::string& url, const iris::View& view, const char* what) {
+        std::string why;
+        auto a = render(local.string(), view, &why);
+        QVERIFY2(a, why.c_str());
+        auto b = render(url, view, &why);
+        QVERIFY2(b, why.c_str());
+        const DiffStats st = compareImages(b->image, a->image);
+        qInfo("%s at (%.0f, %.0f) downsample %g: %s", what, view.centerX, view.centerY, view.downsample,
+              st.summary().c_str());
+        QVERIFY2(st.differing == 0,
+                 saveFailureArtefacts(std::string("dicomweb.") + what, b->image, a->image, nullptr).c_str());
+    }
+
+private slots:
+    void initTestCase() {
+        if (!dicomizerInstalled())
+            QFAIL("OrthancWSIDicomizer (Debian orthanc-wsi) is not installed: scripts/install-deps.sh");
+        if (std::system("command -v Orthanc > /dev/null 2>&1") != 0)
+            QFAIL("Orthanc (Debian orthanc, orthanc-dicomweb) is not installed: scripts/install-deps.sh installs it");
+        auto sample = sampleSlidePath();
+        auto aperio = slidesDir("aperio");
+        QVERIFY2(sample && fs::exists(*sample), "no sample slide (IRIS_TEST_SAMPLE)");
+        if (!aperio) QSKIP("no test data");
+        std::string why;
+        const fs::path out = outDir();
+        // The sample with its JPEG tiles copied (256 px frames, YBR_FULL_422), level 0 in 4 files;
+        // CMU-1-Small-Region's 240 px RGB JPEG frames; JPEG 2000 frames of 120×80.
+        auto a = dicomize(out / "sample-jpeg", *sample, "--reencode=0 --max-size=1", &why);
+        QVERIFY2(a, why.c_str());
+        auto b = dicomize(out / "cmu-240", *aperio / "CMU-1-Small-Region.svs", "--reencode=0", &why);
+        QVERIFY2(b, why.c_str());
+        auto c = dicomize(out / "cmu-jp2k-120x80", *aperio / "CMU-1-Small-Region.svs",
+                          "--compression=jpeg2000 --tile-width=120 --tile-height=80", &why);
+        QVERIFY2(c, why.c_str());
+        sampleJpeg_ = *a;
+        cmu240_ = *b;
+        cmuJp2k_ = *c;
+        server_ = OrthancServer::start(out / "orthanc", {}, &why);
+        QVERIFY2(server_, why.c_str());
+        for (const fs::path& f : {sampleJpeg_, cmu240_, cmuJp2k_}) QVERIFY2(server_->upload(f, &why), why.c_str());
+        sampleUrl_ = server_->seriesUrl(firstFile(sampleJpeg_));
+        cmu240Url_ = server_->seriesUrl(firstFile(cmu240_));
+        cmuJp2kUrl_ = server_->seriesUrl(firstFile(cmuJp2k_));
+        qInfo("Orthanc on port %d; sample series %s", server_->port(), sampleUrl_.c_str());
+
+        iris::EngineConfig cfg;
+        cfg.color.managed = false; // the slide's stored bytes, as the local pixel-exact suites compare
+        e_ = createTestEngine(cfg);
+        QVERIFY2(e_, describe(e_.error).c_str());
+        QVERIFY(e_->bindOffscreen(kW, kH).ok());
+    }
+
+    void cleanupTestCase() {
+        const std::string why = e_.finish();
+        server_.reset();
+        QVERIFY2(why.empty(), why.c_str());
+    }
+
+    // Tile by tile, every level: the DICOMweb source reads what the local files hold, and its
+    // structure and metadata are the local source's. (The other cases read tiles nobody hinted:
+    // the source's direct path, which requests the frame first in line and waits.)
+    void sourceMatchesLocal_data() {
+        QTest::addColumn<int>("which");
+        QTest::newRow("sample-jpeg-256") << 0;
+        QTest::newRow("cmu-jpeg-240") << 1;
+        QTest::newRow("cmu-jp2k-120x80") << 2;
+    }
+    void sourceMatchesLocal() {
+        QFETCH(int, which);
+        const fs::path& folder = which == 0 ? sampleJpeg_ : which == 1 ? cmu240_ : cmuJp2k_;
+        const std::string& url = which == 0 ? sampleUrl_ : which == 1 ? cmu240Url_ : cmuJp2kUrl_;
+        std::string why;
+        auto local = openSource(folder.string(), {}, &why);
+        auto web = openSource(url, {}, &why);
+        QVERIFY2(local && web, why.c_str());
+        const iris::SlideInfo& a = web->info();
+        const iris::SlideInfo& b = local->info();
+        QCOMPARE(a.path, url);
+        QCOMPARE(a.width, b.width);
+        QCOMPARE(a.vendor, b.vendor);
+        QCOMPARE(a.mppX, b.mppX);
+        QCOMPARE(a.mppY, b.mppY);
+        QCOMPARE(a.objectivePower, b.objectivePower);
+        QCOMPARE(a.associatedImages, b.associatedImages);
+        QVERIFY2(!a.iccProfile.empty(), "the ICC profile (bulk data) was not fetched");
+        QVERIFY2(a.iccProfile == b.iccProfile, "the ICC profile differs");
+        // Properties: the same keys; the values the same apart from numbers the server rewrote.
+        int same = 0, differ = 0;
+        for (const auto& [key, value] : b.properties) {
+            const auto it =
+                std::find_if(a.properties.begin(), a.properties.end(), [&](const auto& p) { return p.first == key; });
+            QVERIFY2(it != a.properties.end(), ("missing property " + key).c_str());
+            if (it->second == value)
+                ++same;
+            else
+                ++differ, qInfo("property %s: '%s' over DICOMweb, '%s' locally", key.c_str(), it->second.c_str(),
+                                value.c_str());
+        }
+        qInfo("%d properties equal, %d differ in their rendering", same, differ);
+        for (const char* key : {"dicom.TransferSyntaxUID", "dicom.SOPInstanceUID", "dicom.TotalPixelMatrixColumns",
+                                "dicom.PhotometricInterpretation", "dicom.Manufacturer", "dicom.SeriesInstanceUID"}) {
+            const auto value = [&](const iris::SlideInfo& info) {
+                for (const auto& [k, v] : info.properties)
+                    if (k == key) return v;
+                return std::string("(absent)");
+            };
+            QCOMPARE(value(a), value(b));
+        }
+        CHECKED(expectSameTiles(*web, *local, QTest::currentDataTag()));
+    }
+
+    // Through the Engine (prefetch batches, the loaders' held claims): frames identical to the
+    // local series', at 1:1 and at a level's downsample, for each frame size.
+    void engineMatchesLocal() {
+        e_.beginTest();
+        CHECKED(expectSameFrame(sampleJpeg_, sampleUrl_, viewWithOrigin(1234, 987, 1, kW, kH), "sample"));
+        CHECKED(expectSameFrame(sampleJpeg_, sampleUrl_, viewWithOrigin(4000, 2500, 1, kW, kH), "sample"));
+        CHECKED(expectSameFrame(sampleJpeg_, sampleUrl_, viewWithOrigin(512, 256, 4, kW, kH), "sample"));
+        CHECKED(expectSameFrame(cmu240_, cmu240Url_, viewWithOrigin(700, 900, 1, kW, kH), "cmu-240"));
+        CHECKED(expectSameFrame(cmuJp2k_, cmuJp2kUrl_, viewWithOrigin(700, 900, 1, kW, kH), "cmu-jp2k"));
+        const std::string why = e_.endTest();
+        QVERIFY2(why.empty(), why.c_str());
+    }
+
+    // Basic authentication on a second Orthanc, reached over TLS through the suite's proxy
+    // (Debian 12's Orthanc cannot serve HTTPS itself: fault_proxy.h); URLs refused before any
+    // request.
+    void credentialsAndTls() {
+        const fs::path dir = outDir() / "tls";
+        QVERIFY2(makeCertificates(dir / "certs"),
+                 ("openssl failed: see " + (dir / "certs" / "openssl.log").string()).c_str());
+        OrthancOptions o;
+        o.user = "pathologist";
+        o.password = "correct-horse";
+        std::string why;
+        auto server = OrthancServer::start(dir / "orthanc", o, &why);
+        QVERIFY2(server, why.c_str());
+        QVERIFY2(server->upload(cmu240_, &why), why.c_str());
+        const FaultProxy::Tls tls{(dir / "certs" / "server.crt").string(), (dir / "certs" / "server.key").string()};
+        auto proxy = FaultProxy::start(server->port(), &why, &tls);
+        QVERIFY2(proxy, why.c_str());
+        const std::string plainUrl = server->seriesUrl(firstFile(cmu240_));
+        const std::string origin = "http://127.0.0.1:" + std::to_string(server->port());
+        const std::string url = "https://127.0.0.1:" + std::to_string(proxy->port()) + plainUrl.substr(origin.size());
+
+        iris::NetworkOptions good;
+        good.username = o.user;
+        good.password = o.password;
+        good.caFile = (dir / "certs" / "ca.pem").string();
+        for (const std::string& u : {url, plainUrl}) { // over TLS, and plain http on loopback
+            auto web = openSource(u, good, &why);
+            QVERIFY2(web, why.c_str());
+            auto local = openSource(cmu240_.string(), {}, &why);
+            std::vector<uint8_t> a(kTileBytes), b(kTileBytes);
+            QVERIFY(web->readTile(0, 3, 4, a.data()).ok());
+            QVERIFY(local->readTile(0, 3, 4, b.data()).ok());
+            QVERIFY(a == b);
+        }
+        iris::NetworkOptions wrong = good;
+        wrong.password = "tr0ub4dor";
+        CHECKED(expectOpenFails(url, wrong, iris::Status::IoError, {"HTTP 401", "refused the credentials"}));
+        CHECKED(expectOpenFails(plainUrl, wrong, iris::Status::IoError, {"HTTP 401", "refused the credentials"}));
+        iris::NetworkOptions none = good;
+        none.username.clear();
+        none.password.clear();
+        CHECKED(expectOpenFails(url, none, iris::Status::IoError, {"HTTP 401", "asks for credentials"}));
+        iris::NetworkOptions bearer = none;
+        bearer.bearerToken = "not-a-token-this-server-knows";
+        CHECKED(expectOpenFails(url, bearer, iris::Status::IoError, {"HTTP 401", "refused the credentials"}));
+        // Untrusted certificates: the system's CAs (which never signed it), and another CA.
+        iris::NetworkOptions systemCas = good;
+        systemCas.caFile.clear();
+        CHECKED(expectOpenFails(url, systemCas, iris::Status::IoError, {"TLS failed", "not trusted"}));
+        iris::NetworkOptions otherCa = good;
+        otherCa.caFile = (dir / "certs" / "other-ca.pem").string();
+        CHECKED(expectOpenFails(url, otherCa, iris::Status::IoError, {"TLS failed", "not trusted"}));
+        iris::NetworkOptions missingCa = good;
+        missingCa.caFile = (dir / "certs" / "no-such-ca.pem").string();
+        CHECKED(expectOpenFails(url, missingCa, iris::Status::NotFound, {"no-such-ca.pem"}));
+        // Plain http to the TLS port is not DICOMweb: a clear error, not a hang.
+        {
+            std::string plain = url;
+            plain.replace(0, 5, "http");
+            auto r = iris::openSlideSource(plain, iris::SourcePreference::Auto, good);
+            QVERIFY(!r.ok());
+            qInfo("plain http to the TLS port: %s", describe(r.error()).c_str());
+        }
+
+        // Refused before any request: plain http to a host that is not loopback, credentials
+        // in the URL, a URL that is not a series; and a series the server does not have.
+        CHECKED(expectOpenFails("http://192.0.2.7/dicom-web/studies/1.2.3/series/1.2.4", {},
+                                iris::Status::InvalidArgument, {"plain http://", "allowPlainHttp"}));
+        CHECKED(expectOpenFails("https://user:secret@127.0.0.1:9/dicom-web/studies/1.2/series/1.3", {},
+                                iris::Status::InvalidArgument, {"credentials in the URL"}));
+        {
+            auto r = iris::openSlideSource("https://user:secret@127.0.0.1:9/dicom-web/studies/1.2/series/1.3");
+            QVERIFY(!r.ok() && r.error().message().find("secret") == std::string::npos);
+        }
+        CHECKED(expectOpenFails(server_->dicomWebRoot() + "/studies/1.2.3", {}, iris::Status::InvalidArgument,
+                                {"/studies/<Study Instance UID>/series/<Series Instance UID>"}));
+        CHECKED(expectOpenFails(server_->dicomWebRoot() + "/studies/1.2.3/series/4.5.6", {}, iris::Status::NotFound,
+                                {"is not on the server", "HTTP 404"}));
+        proxy.reset();
+        QVERIFY(server->stop());
+    }
+
+    // Broken answers for frames 2 and later (frame 1 of each instance is read at open): each a
+    // clear error for the tile that needs the frame; the tiles around it still read.
+    void brokenAnswers_data() {
+        QTest::addColumn<int>("fault");
+        QTest::addColumn<int>("status");
+        QTest::addColumn<QString>("words");
+        QTest::newRow("truncated multipart")
+            << int(FaultProxy::Fault::Truncate) << int(iris::Status::CorruptData) << "cut short";
+        QTest::newRow("wrong content type") << int(FaultProxy::Fault::WrongType) << int(iris::Status::CorruptData)
+                                            << "Content-Type 'text/html; charset=utf-8', not multipart/related";
+        QTest::newRow("404 frame") << int(FaultProxy::Fault::NotFound) << int(iris::Status::NotFound)
+                                   << "is not on the server (HTTP 404 Not Found)";
+    }
+    void brokenAnswers() {
+        QFETCH(int, fault);
+        QFETCH(int, status);
+        QFETCH(QString, words);
+        std::string why;
+        auto proxy = FaultProxy::start(server_->port(), &why);
+        QVERIFY2(proxy, why.c_str());
+        proxy->setRule({.fault = FaultProxy::Fault(fault), .fromFrame = 2});
+        std::string url = sampleUrl_;
+        url.replace(url.find(std::to_string(server_->port())), std::to_string(server_->port()).size(),
+                    std::to_string(proxy->port()));
+        auto web = openSource(url, {}, &why);
+        QVERIFY2(web, why.c_str());
+        auto local = openSource(sampleJpeg_.string(), {}, &why);
+        std::vector<uint8_t> a(kTileBytes), b(kTileBytes);
+        // Level 0's tile (0, 0) is frame 1 of its first instance; (1, 0) is frame 2.
+        QVERIFY(web->readTile(0, 0, 0, a.data()).ok());
+        QVERIFY(local->readTile(0, 0, 0, b.data()).ok());
+        QVERIFY(a == b);
+        const iris::Result r = web->readTile(0, 1, 0, a.data());
+        qInfo("%s", describe(r).c_str());
+        QVERIFY(!r.ok());
+        QCOMPARE(int(r.status()), status);
+        QVERIFY2(r.message().find(words.toStdString()) != std::string::npos, r.message().c_str());
+        QVERIFY2(r.message().find("frame 2 of DICOMweb instance") != std::string::npos, r.message().c_str());
+    }
+
+    // Through the Engine: a frame the server does not have is drawn as the placeholder, the
+    // frame completes, and the engine reports the error; the other tiles are the slide's.
+    void missingFrameDrawsPlaceholder() {
+        std::string why;
+        auto proxy = FaultProxy::start(server_->port(), &why);
+        QVERIFY2(proxy, why.c_str());
+        // Level 0's frames 2..: at the view below every tile but (0, 0) is missing.
+        proxy->setRule({.fault = FaultProxy::Fault::NotFound, .fromFrame = 2});
+        std::string url = sampleUrl_;
+        url.replace(url.find(std::to_string(server_->port())), std::to_string(server_->port()).size(),
+                    std::to_string(proxy->port()));
+        e_.beginTest();
+        const iris::View view = viewWithOrigin(0, 0, 1, kW, kH);
+        auto local = render(sampleJpeg_.string(), view, &why);
+        QVERIFY2(local, why.c_str());
+        auto web = render(url, view, &why);
+        QVERIFY2(web, why.c_str());
+        const iris::Result err = e_->error();
+        qInfo("engine error: %s", describe(err).c_str());
+        QCOMPARE(err.status(), iris::Status::NotFound);
+        // Tile (0, 0) is the slide's; tile (1, 0) (frame pixels 256…383 of row 0) the placeholder.
+        const std::vector<uint8_t> ph = placeholderTile();
+        for (uint32_t y = 0; y < kTileSize; ++y) {
+            for (uint32_t x = 0; x < kTileSize; ++x) {
+                QVERIFY(std::memcmp(pixel(web->image, x, y), pixel(local->image, x, y), 4) == 0);
+                if (x + kTileSize < kW) {
+                    const uint8_t* p = pixel(web->image, x + kTileSize, y);
+                    QVERIFY2(std::memcmp(p, ph.data() + (size_t(y) * kTileSize + x) * 4, 3) == 0,
+                             qPrintable(QString("pixel (%1, %2) is not the placeholder's").arg(x + kTileSize).arg(y)));
+                }
+            }
+        }
+        const std::string lines = e_.endTest(TestEngine::ErrorLines::Show);
+        QVERIFY2(lines.empty(), lines.c_str());
+        e_->close();
+    }
+
+    // A slow server (every frame answered 150 ms late): the API never waits, the views move on,
+    // and what a superseded view still had queued is dropped; the last view renders exactly.
+    void slowServerViewsKeepMoving() {
+        std::string why;
+        auto proxy = FaultProxy::start(server_->port(), &why);
+        QVERIFY2(proxy, why.c_str());
+        proxy->setRule({.fault = FaultProxy::Fault::Delay, .delayMs = 150, .fromFrame = 1});
+        std::string url = sampleUrl_;
+        url.replace(url.find(std::to_string(server_->port())), std::to_string(server_->port()).size(),
+                    std::to_string(proxy->port()));
+        e_.beginTest();
+        const iris::View last = viewWithOrigin(5000, 3000, 1, kW, kH);
+        auto expected = render(sampleJpeg_.string(), last, &why);
+        QVERIFY2(expected, why.c_str());
+        QVERIFY(e_->open(url).ok());
+        proxy->resetCount();
+        // A walk along level 0, one field after the other, without waiting for any.
+        int walkTiles = 0;
+        double slowestMs = 0;
+        for (int i = 0; i < 10; ++i) {
+            const auto t0 = Clock::now();
+            e_->setView(viewWithOrigin(400.0 + 450 * i, 300.0 + 250 * i, 1, kW, kH));
+            slowestMs = std::max(slowestMs, std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
+            walkTiles += 3 * 3; // the visible level-0 tiles of each field, at least
+        }
+        e_->setView(last);
+        auto frame = renderView(*e_.engine, last, kW, kH, std::chrono::seconds(60), &why);
+        QVERIFY2(frame, why.c_str());
+        const DiffStats st = compareImages(frame->image, expected->image);
+        QVERIFY2(st.differing == 0,
+                 saveFailureArtefacts("dicomweb.slow", frame->image, expected->image, nullptr).c_str());
+        const int requests = proxy->frameRequests();
+        qInfo("slowest setView %.2f ms; %d frame requests for a walk over %d+ tiles and the last view", slowestMs,
+              requests, walkTiles);
+        QVERIFY2(slowestMs < 100, "an API call waited on the network");
+        // Each field's own tiles (visible and perimeter at two levels) alone are more than this.
+        QVERIFY2(requests < walkTiles + 60, "superseded views' requests were not dropped");
+        const std::string lines = e_.endTest();
+        QVERIFY2(lines.empty(), lines.c_str());
+        e_->close();
+    }
+
+    // The server goes away in the middle of a walk: tiles fail with a clear error and the
+    // engine stays usable; when the server is back, new fields load and the field that failed
+    // loads when it is needed again.
+    void serverStoppedMidWalk() {
+        std::string why;
+        e_.beginTest();
+        const iris::View first = viewWithOrigin(100, 100, 1, kW, kH);
+        const iris::View lost = viewWithOrigin(3000, 1500, 1, kW, kH);
+        const iris::View after = viewWithOrigin(4500, 3300, 1, kW, kH);
+        std::vector<iris::Frame> expected;
+        for (const iris::View& v : {lost, after}) {
+            auto f = render(sampleJpeg_.string(), v, &why);
+            QVERIFY2(f, why.c_str());
+            expected.push_back(*f);
+        }
+        auto start = render(sampleUrl_, first, &why);
+        QVERIFY2(start, why.c_str());
+        QVERIFY(server_->stop());
+        e_->setView(lost);
+        // Bounded: each frame is tried three times within about 1.3 s, then reported.
+        const auto deadline = Clock::now() + std::chrono::seconds(30);
+        while (e_->error().ok() && Clock::now() < deadline) (void)e_->waitForFrame(std::chrono::milliseconds(100));
+        const iris::Result err = e_->error();
+        qInfo("with the server stopped: %s", describe(err).c_str());
+        QCOMPARE(err.status(), iris::Status::IoError);
+        QVERIFY2(err.message().find("Cannot read frame") != std::string::npos, err.message().c_str());
+        // Still usable: frames are drawn (incomplete: the layers below show through), views move.
+        auto shown = e_->readFrame();
+        QVERIFY(shown.ok());
+        e_->setView(first);
+        QVERIFY2(e_->waitForFrame(std::chrono::seconds(30)).ok(), "the field loaded before the stop is not drawn");
+
+        QVERIFY2(server_->restart(&why), why.c_str());
+        e_->clearError();
+        for (size_t i = 0; i < 2; ++i) {
+            const iris::View& v = i == 0 ? after : lost; // a new field, then the one that failed
+            auto f = renderView(*e_.engine, v, kW, kH, std::chrono::seconds(60), &why);
+            QVERIFY2(f, why.c_str());
+            const DiffStats st = compareImages(f->image, expected[i == 0 ? 1 : 0].image);
+            QVERIFY2(
+                st.differing == 0,
+                saveFailureArtefacts("dicomweb.recovered", f->image, expected[i == 0 ? 1 : 0].image, nullptr).c_str());
+        }
+        QVERIFY2(e_->error().ok(), describe(e_->error()).c_str());
+        const std::string lines = e_.endTest(TestEngine::ErrorLines::Show);
+        QVERIFY2(lines.empty(), lines.c_str());
+        e_->close();
+    }
+
+    // An instance stored in a transfer syntax the engine does not decode (RLE Lossless): open
+    // names it, from the first frame's answer.
+    void unsupportedTransferSyntax() {
+        auto aperio = slidesDir("aperio");
+        if (!aperio) QSKIP("no test data");
+        std::string why;
+        const fs::path out = outDir() / "rle";
+        auto native = dicomize(out / "native", *aperio / "CMU-1-Small-Region.svs", "--compression=none", &why);
+        QVERIFY2(native, why.c_str());
+        // Its smallest file, re-encoded as RLE Lossless into a series of its own.
+        fs::path smallest;
+        for (const auto& e : fs::directory_iterator(*native))
+            if (smallest.empty() || fs::file_size(e.path()) < fs::file_size(smallest)) smallest = e.path();
+        DcmRLEEncoderRegistration::registerCodecs();
+        DcmFileFormat ff;
+        QVERIFY(ff.loadFile(OFFilename(smallest.c_str())).good());
+        char uid[100];
+        ff.getDataset()->putAndInsertString(DCM_SeriesInstanceUID,
+                                            dcmGenerateUniqueIdentifier(uid, SITE_SERIES_UID_ROOT));
+        ff.getDataset()->putAndInsertString(DCM_SOPInstanceUID,
+                                            dcmGenerateUniqueIdentifier(uid, SITE_INSTANCE_UID_ROOT));
+        QVERIFY(ff.getDataset()->chooseRepresentation(EXS_RLELossless, nullptr).good());
+        const fs::path rle = out / "rle.dcm";
+        QVERIFY(ff.saveFile(OFFilename(rle.c_str()), EXS_RLELossless).good());
+        DcmRLEEncoderRegistration::cleanup();
+        QVERIFY2(server_->upload(rle, &why), why.c_str());
+        CHECKED(expectOpenFails(server_->seriesUrl(rle), {}, iris::Status::UnsupportedFormat,
+                                {"transfer syntax 1.2.840.10008.1.2.5", "is not supported", "DICOMweb instance"}));
+    }
+};
+
+QTEST_GUILESS_MAIN(TestDicomWeb)
+#include "tst_dicomweb.moc"

@@ -67,6 +67,7 @@ private slots:
     void slideWithoutProfileIsUnchanged();
     void brokenProfileFallsBackToNoTransform();
     void switchingAtRuntime();
+    void associatedImagesForDisplay();
 
 private:
     // A frame of `path` at level 0, top-left corner (x0, y0), with `settings`.
@@ -266,6 +267,53 @@ void TestColor::switchingAtRuntime() {
     const auto back = e.readFrame();
     QVERIFY(back.ok());
     QVERIFY(back.value().image.rgba == a->image.rgba);
+}
+
+// Engine::readAssociatedImage(…, ForDisplay): the same transform as the tiles (LittleCMS on
+// the stored pixels, within one 8-bit step), the stored pixels when colour management is off
+// or the slide has no profile. Needs a slide with a profile and associated images: the TCGA SVS.
+void TestColor::associatedImagesForDisplay() {
+    const auto slides = slidesDir();
+    const fs::path tcga = slides ? *slides / "aperio/tcga-cr-7395-01a-01-ts1.svs" : fs::path();
+    if (!slides || !fs::exists(tcga)) QSKIP("the shared test slide aperio/tcga-cr-7395-01a-01-ts1.svs is not here");
+    const std::vector<uint8_t> profile = tiffIccProfile(tcga);
+    QVERIFY(!profile.empty());
+    iris::Engine& e = *engine_.engine;
+    iris::ColorSettings settings;
+    settings.displayProfile = ref::wideGamma18Profile(); // sRGB → sRGB would change little
+    e.setColorSettings(settings);
+    QVERIFY(e.open(tcga.string()).ok());
+    QVERIFY(e.colorStatus().applied);
+    const auto names = e.slideInfo()->associatedImages;
+    QVERIFY(!names.empty());
+    std::string error;
+    const auto xf = ref::Transform::create(profile, settings.displayProfile, settings.intent, &error);
+    QVERIFY2(xf, error.c_str());
+    for (const std::string& name : names) {
+        const auto stored = e.readAssociatedImage(name);
+        const auto shown = e.readAssociatedImage(name, iris::ImageColors::ForDisplay);
+        QVERIFY2(stored.ok() && shown.ok(), name.c_str());
+        QCOMPARE(shown->width, stored->width);
+        QCOMPARE(shown->height, stored->height);
+        int worst = 0;
+        for (size_t i = 0; i < stored->rgba.size(); i += 4) {
+            QCOMPARE(stored->rgba[i + 3], uint8_t(255)); // scanners' associated images are opaque
+            const auto want = xf->apply8(stored->rgba[i], stored->rgba[i + 1], stored->rgba[i + 2]);
+            for (int c = 0; c < 3; ++c) worst = std::max(worst, std::abs(int(shown->rgba[i + c]) - int(want[c])));
+        }
+        qInfo("%s: %ux%u, largest difference from LittleCMS %d", name.c_str(), stored->width, stored->height, worst);
+        QVERIFY2(worst <= 1, name.c_str());
+        QVERIFY(shown->rgba != stored->rgba);
+    }
+    iris::ColorSettings off = settings;
+    off.managed = false;
+    e.setColorSettings(off);
+    const auto stored = e.readAssociatedImage(names.front());
+    const auto shown = e.readAssociatedImage(names.front(), iris::ImageColors::ForDisplay);
+    QVERIFY(stored.ok() && shown.ok());
+    QVERIFY(shown->rgba == stored->rgba);
+    e.setColorSettings(iris::ColorSettings{});
+    e.close();
 }
 
 QTEST_GUILESS_MAIN(TestColor)

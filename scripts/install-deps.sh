@@ -8,6 +8,7 @@ set -euo pipefail
 PACKAGES=(
   build-essential cmake ninja-build ccache pkg-config
   qt6-base-dev qt6-base-dev-tools qt6-tools-dev qt6-tools-dev-tools libgl-dev
+  libxcb1-dev  # the widget reads the X11 display's ICC profile (_ICC_PROFILE) on Qt's connection
   libvulkan-dev vulkan-tools mesa-vulkan-drivers vulkan-validationlayers glslang-tools
   libopenslide-dev openslide-tools libturbojpeg0-dev libtiff-dev libopenjp2-7-dev libpng-dev
   liblcms2-dev  # colour management (engine/src/color): the ICC transform, baked into a table

@@ -2,7 +2,8 @@
 // LittleCMS applied on the CPU to the same source pixels.
 //
 //   * For slides with an embedded profile (the TCGA SVS and the generic TIFF of the shared test
-//     data when they carry one, and a generated slide with a profile of strong curves), a 1:1
+//     data when they carry one, and a generated slide with a profile of strong curves, as TIFF
+//     and encoded as .iris), a 1:1
 //     integer-aligned frame with colour management on is compared pixel by pixel with the same
 //     frame off (the slide's stored bytes, which the pixel-exact suites check against
 //     OpenSlide) passed through LittleCMS: CIEDE2000, as the display shows both colours, at
@@ -18,6 +19,8 @@
 #include <algorithm>
 #include <filesystem>
 #include <tiffio.h>
+
+#include <iris/encoder.h>
 
 #include "color_reference.h"
 #include "test_support.h"
@@ -92,6 +95,11 @@ void TestColor::initTestCase() {
     QVERIFY2(writeOneLevelTiff(dir_ / "strong-curves.tiff", 2048, 1536, {}, &error, ref::strongCurvesProfile()),
              error.c_str());
     QVERIFY2(writeOneLevelTiff(dir_ / "no-profile.tiff", 2048, 1536, {}, &error), error.c_str());
+    // The same slide as .iris: the profile goes through the encoder's ICC_PROFILE block and the
+    // .iris reader (the reference encoders' fixtures in the shared test data carry none).
+    const auto encoded =
+        iris::encodeIris((dir_ / "strong-curves.tiff").string(), (dir_ / "strong-curves.iris").string());
+    QVERIFY2(encoded.ok(), describe(encoded.error()).c_str());
     std::vector<uint8_t> truncated = ref::strongCurvesProfile();
     truncated.resize(truncated.size() / 2);
     QVERIFY2(writeOneLevelTiff(dir_ / "broken-profile.tiff", 2048, 1536, {}, &error, truncated), error.c_str());
@@ -163,6 +171,8 @@ void TestColor::profiledSlidesMatchLittleCms_data() {
     QTest::newRow("strong curves, perceptual, sRGB") << strong << 512.0 << 256.0 << 0 << false;
     QTest::newRow("strong curves, relative, sRGB") << strong << 512.0 << 256.0 << 1 << false;
     QTest::newRow("strong curves, perceptual, wide gamut display") << strong << 512.0 << 256.0 << 0 << true;
+    const QString strongIris = QString::fromStdString((dir_ / "strong-curves.iris").string());
+    QTest::newRow("strong curves as .iris, perceptual, sRGB") << strongIris << 512.0 << 256.0 << 0 << false;
     if (auto slides = slidesDir()) {
         for (const char* f :
              {"aperio/tcga-cr-7395-01a-01-ts1.svs", "aperio/CMU-1-Small-Region.svs", "generic-tiff/boxes.tiff"}) {
@@ -199,7 +209,10 @@ void TestColor::profiledSlidesMatchLittleCms() {
     QVERIFY(!status.slideProfile.empty());
     // The strong curves change every colour; a scanner's sRGB-like profile shown on an sRGB
     // display may change none (the table then reproduces the stored bytes exactly).
-    if (slide.contains(QLatin1String("strong-curves"))) QVERIFY(a->image.rgba != b->image.rgba);
+    if (slide.contains(QLatin1String("strong-curves"))) {
+        QVERIFY(a->image.rgba != b->image.rgba);
+        QCOMPARE(status.slideProfile, std::string("Iris test: strong curves"));
+    }
 
     const std::vector<uint8_t> profile = engine_->slideInfo()->iccProfile;
     const auto intentRef = intent ? iris::color::Intent::RelativeColorimetric : iris::color::Intent::Perceptual;

@@ -175,7 +175,8 @@ void buildDrawList(const SlideInfo& info, uint32_t generation, const Viewport& v
                 d.instances.push_back(instanceOf(placeTile(level, vp, tx, ty), 0, 0, layer, lod));
             }
         }
-        if (lod == 0.0 && !d.instances.empty()) {
+        // Every drawn level filters across its tile seams (the seam pass), enlarged or shrunk.
+        if (!d.instances.empty()) {
             linkNeighbours(level, li, generation, tiles, d);
             d.linked = true;
         }

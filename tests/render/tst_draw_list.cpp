@@ -69,6 +69,7 @@ public:
         return it->second;
     }
     bool isActive(uint64_t key) const override { return layers_.count(key) != 0; }
+    uint64_t uploadSeq(int layer) const override { return uint64_t(layer) + 1000; } // a stamp per tile
     uint64_t keyOf(int layer) const { return keys_[size_t(layer)]; }
     int pins = 0;
 
@@ -171,6 +172,12 @@ void TestDrawList::allResidentCullsWhatHrCovers() {
     QCOMPARE(uint32_t(culled.levels[2].instances.size()), culled.hrTiles);
     // Culled tiles are not pinned either: only HR's and, for its seams, their neighbours.
     QCOMPARE(map.pins, pinsOf(culled.levels[2], s.levels[0], map));
+    // The newest upload among the drawn LR and HR tiles (what tells a revisit from a field
+    // that loaded before its first frame: metrics/field_metrics).
+    uint64_t newest = 0;
+    for (const iris::gpu::TileInstance& t : culled.levels[2].instances)
+        newest = std::max(newest, uint64_t(t.texel[2]) + 1000);
+    QCOMPARE(culled.newestUpload, newest);
 
     const DrawList all = build(s, vp, map, DrawOptions{.drawCovered = true});
     QCOMPARE(all.instanceCount(), uint32_t(iris::visibleTiles(s.levels[0], vp, 0).count() +

@@ -27,6 +27,9 @@ public:
     virtual int pin(uint64_t key) = 0;
     // Whether `key`'s tile is resident (no pin).
     virtual bool isActive(uint64_t key) const = 0;
+    // The upload sequence number of the tile this frame pinned in `layer` (UploadCounters::tiles
+    // once its upload was counted); 0 where unknown.
+    virtual uint64_t uploadSeq(int /*layer*/) const { return 0; }
 
 protected:
     ~TileResidency() = default;
@@ -64,6 +67,7 @@ struct DrawList {
     bool lrComplete = false;         // every visible LR tile is resident (drawn or culled)
     bool hrComplete = false;         // every visible HR tile is drawn: the frame is complete
     uint32_t lrTiles = 0, hrTiles = 0; // visible tiles of each layer
+    uint64_t newestUpload = 0;         // the highest upload sequence number among drawn LR and HR tiles
 
     uint32_t instanceCount() const;
     // The instances in painter's order (base, LR, HR) into `out`, which holds instanceCount().

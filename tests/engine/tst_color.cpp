@@ -149,7 +149,7 @@ Stats TestColor::compare(const iris::Frame& off, const iris::Frame& on, uint32_t
         const std::array<uint8_t, 3> shown{got[0], got[1], got[2]};
         de.push_back(ref::deltaE2000(lab->toLab(shown), lab->toLab(want)));
         if (lut) {
-            const std::array<uint8_t, 3> model = ref::applyLut(*lut, src[0], src[1], src[2], 8);
+            const std::array<uint8_t, 3> model = ref::applyLut(*lut, src[0], src[1], src[2]);
             for (int c = 0; c < 3; ++c) s.maxLutStep = std::max(s.maxLutStep, std::abs(int(model[c]) - int(got[c])));
         }
     }

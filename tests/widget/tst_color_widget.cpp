@@ -210,7 +210,7 @@ void TstColorWidget::presentedFrameIsConverted() {
     for (const QPoint& p : points) {
         uint8_t stored[4];
         iristest::syntheticPixel(300 + p.x(), 200 + p.y(), stored);
-        const auto want = ref::applyLut(lut.value(), stored[0], stored[1], stored[2], 8);
+        const auto want = ref::applyLut(lut.value(), stored[0], stored[1], stored[2]);
         QColor seen;
         QTRY_VERIFY2(presentedPixelIs(w.view, p, QColor(want[0], want[1], want[2]), 1, &seen),
                      qPrintable(QStringLiteral("(%1, %2): %3, the table gives (%4, %5, %6)")

@@ -5,6 +5,7 @@
 #include <QtCore/QMimeData>
 #include <QtCore/QSettings>
 #include <QtGui/QAction>
+#include <QtGui/QActionGroup>
 #include <QtGui/QCloseEvent>
 #include <QtGui/QDragEnterEvent>
 #include <QtWidgets/QApplication>
@@ -59,6 +60,7 @@ MainWindow::MainWindow(QWidget *parent)
     connect(m_view, &IrisSlideView::slideClosed, this, &MainWindow::onSlideClosed);
     connect(m_view, &IrisSlideView::slideError, this, &MainWindow::onSlideError);
     connect(m_view, &IrisSlideView::viewChanged, this, &MainWindow::updateActions);
+    connect(m_view, &IrisSlideView::colorManagementChanged, this, &MainWindow::onColorManagementChanged);
 
     connect(m_sample, &SampleSlide::generating, this, [this](const QString &message) {
         statusBar()->showMessage(message);
@@ -81,6 +83,9 @@ MainWindow::MainWindow(QWidget *parent)
     restoreGeometry(settings.value(QStringLiteral("window/geometry")).toByteArray());
     restoreState(settings.value(QStringLiteral("window/state")).toByteArray());
     m_enhanceAction->setChecked(settings.value(QStringLiteral("view/enhance"), true).toBool());
+    m_colorAction->setChecked(settings.value(QStringLiteral("view/colorManaged"), m_view->colorManaged()).toBool());
+    if (settings.value(QStringLiteral("view/renderingIntent")).toString() == QLatin1String("relative"))
+        m_relativeAction->trigger();
     if (!settings.contains(QStringLiteral("window/geometry")))
         resize(1280, 800);
     updateActions();
@@ -140,6 +145,28 @@ void MainWindow::createActions()
     m_enhanceAction->setStatusTip(tr("Sharpen reduced levels (reduction enhancement)"));
     connect(m_enhanceAction, &QAction::toggled, m_view, &IrisSlideView::setEnhance);
     connect(m_view, &IrisSlideView::enhanceChanged, m_enhanceAction, &QAction::setChecked);
+
+    // Colour management: the slide's ICC profile applied (on by default), and the intent.
+    m_colorAction = new QAction(tr("&Colour Management"), this);
+    m_colorAction->setCheckable(true);
+    m_colorAction->setChecked(m_view->colorManaged());
+    m_colorAction->setShortcut(Qt::CTRL | Qt::SHIFT | Qt::Key_M);
+    m_colorAction->setStatusTip(tr("Show the slide in the colours its scanner's ICC profile describes"));
+    connect(m_colorAction, &QAction::toggled, m_view, &IrisSlideView::setColorManaged);
+    auto *intents = new QActionGroup(this);
+    m_perceptualAction = intents->addAction(tr("&Perceptual"));
+    m_relativeAction = intents->addAction(tr("&Relative Colorimetric"));
+    m_perceptualAction->setStatusTip(tr("Compress the slide's whole gamut into the display's"));
+    m_relativeAction->setStatusTip(
+        tr("Keep the colours the display can show exact and clip the others (black-point compensated)"));
+    for (QAction *action : {m_perceptualAction, m_relativeAction})
+        action->setCheckable(true);
+    m_perceptualAction->setChecked(m_view->renderingIntent() == IrisSlideView::Perceptual);
+    m_relativeAction->setChecked(m_view->renderingIntent() == IrisSlideView::RelativeColorimetric);
+    connect(m_perceptualAction, &QAction::triggered, m_view,
+        [this] { m_view->setRenderingIntent(IrisSlideView::Perceptual); });
+    connect(m_relativeAction, &QAction::triggered, m_view,
+        [this] { m_view->setRenderingIntent(IrisSlideView::RelativeColorimetric); });
 }
 
 void MainWindow::createMenus()
@@ -164,6 +191,11 @@ void MainWindow::createMenus()
     presets->addActions(m_presetActions);
     view->addSeparator();
     view->addAction(m_enhanceAction);
+    QMenu *color = view->addMenu(tr("Co&lour"));
+    color->addAction(m_colorAction);
+    color->addSeparator();
+    color->addAction(m_perceptualAction);
+    color->addAction(m_relativeAction);
 
     // Overlays the engine draws over the slide: each shown or hidden and put in a corner,
     // remembered across runs. The checks follow the view (also when set from elsewhere).
@@ -288,10 +320,24 @@ void MainWindow::onSlideOpened(const IrisSlideInfo &info)
 {
     setWindowTitle(tr("%1 — Iris View").arg(QFileInfo(info.path).fileName()));
     m_properties->showSlide(info);
-    m_images->clear();
-    for (const QString &name : info.associatedImages)
-        m_images->addImage(name, m_view->associatedImage(name));
+    // The colour row and the associated images follow: the view announces colorManagementChanged.
     updateActions();
+}
+
+void MainWindow::onColorManagementChanged()
+{
+    m_colorAction->setChecked(m_view->colorManaged());
+    const bool relative = m_view->renderingIntent() == IrisSlideView::RelativeColorimetric;
+    (relative ? m_relativeAction : m_perceptualAction)->setChecked(true);
+    m_perceptualAction->setEnabled(m_view->colorManaged());
+    m_relativeAction->setEnabled(m_view->colorManaged());
+    if (!m_view->hasSlide())
+        return;
+    m_properties->showColor(m_view->slideProfileDescription(), m_view->displayProfileDescription(),
+        m_view->colorManaged(), m_view->isColorTransformApplied(), m_view->colorManagementError());
+    m_images->clear();
+    for (const QString &name : m_view->slideInfo().associatedImages)
+        m_images->addImage(name, m_view->associatedImage(name));
 }
 
 void MainWindow::onSlideClosed()
@@ -370,5 +416,9 @@ void MainWindow::closeEvent(QCloseEvent *event)
     settings.setValue(QStringLiteral("window/geometry"), saveGeometry());
     settings.setValue(QStringLiteral("window/state"), saveState());
     settings.setValue(QStringLiteral("view/enhance"), m_view->enhance());
+    settings.setValue(QStringLiteral("view/colorManaged"), m_view->colorManaged());
+    settings.setValue(QStringLiteral("view/renderingIntent"),
+        m_view->renderingIntent() == IrisSlideView::RelativeColorimetric ? QStringLiteral("relative")
+                                                                         : QStringLiteral("perceptual"));
     QMainWindow::closeEvent(event);
 }

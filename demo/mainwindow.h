@@ -47,6 +47,9 @@ private:
     void onSlideClosed();
     void onSlideError(const QString &message);
     void updateActions();
+    // Shows what colour management applies (properties dock) and reloads the associated images,
+    // which are shown in the same colours as the slide.
+    void onColorManagementChanged();
     static QString droppedSlide(const QMimeData *mime);
 
     IrisSlideView *m_view;
@@ -68,5 +71,8 @@ private:
     QAction *m_zoomInAction = nullptr;
     QAction *m_zoomOutAction = nullptr;
     QAction *m_enhanceAction = nullptr;
+    QAction *m_colorAction = nullptr;
+    QAction *m_perceptualAction = nullptr;
+    QAction *m_relativeAction = nullptr;
     QList<QAction *> m_presetActions;
 };

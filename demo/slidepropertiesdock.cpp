@@ -32,6 +32,7 @@ SlidePropertiesDock::SlidePropertiesDock(QWidget *parent)
     , m_dimensions(new QLabel)
     , m_resolution(new QLabel)
     , m_objective(new QLabel)
+    , m_color(new QLabel)
     , m_levels(new QTreeWidget)
     , m_filter(new QLineEdit)
     , m_model(new QStandardItemModel(this))
@@ -43,12 +44,15 @@ SlidePropertiesDock::SlidePropertiesDock(QWidget *parent)
     auto *layout = new QVBoxLayout(body);
 
     auto *summary = new QFormLayout;
-    for (QLabel *label : {m_vendor, m_dimensions, m_resolution, m_objective})
+    for (QLabel *label : {m_vendor, m_dimensions, m_resolution, m_objective, m_color})
         label->setTextInteractionFlags(Qt::TextSelectableByMouse);
+    m_color->setObjectName(QStringLiteral("colorProfileLabel"));
+    m_color->setWordWrap(true);
     summary->addRow(tr("Vendor:"), m_vendor);
     summary->addRow(tr("Dimensions:"), m_dimensions);
     summary->addRow(tr("Resolution:"), m_resolution);
     summary->addRow(tr("Objective:"), m_objective);
+    summary->addRow(tr("Colour:"), m_color);
     layout->addLayout(summary);
 
     m_levels->setHeaderLabels({tr("Level"), tr("Size (px)"), tr("Downsample")});
@@ -126,9 +130,25 @@ void SlidePropertiesDock::showSlide(const IrisSlideInfo &info)
     m_table->resizeColumnToContents(0);
 }
 
+void SlidePropertiesDock::showColor(
+    const QString &slideProfile, const QString &displayProfile, bool managed, bool applied, const QString &error)
+{
+    QString text;
+    if (slideProfile.isEmpty())
+        text = tr("no embedded profile: shown as stored");
+    else if (applied)
+        text = tr("%1 → display: %2").arg(slideProfile, displayProfile);
+    else if (!managed)
+        text = tr("%1, not applied (colour management is off)").arg(slideProfile);
+    else
+        text = tr("%1, not applied: %2").arg(slideProfile, error);
+    m_color->setText(text);
+    m_color->setToolTip(text);
+}
+
 void SlidePropertiesDock::clear()
 {
-    for (QLabel *label : {m_vendor, m_dimensions, m_resolution, m_objective})
+    for (QLabel *label : {m_vendor, m_dimensions, m_resolution, m_objective, m_color})
         label->setText(dash());
     m_levels->clear();
     m_model->removeRows(0, m_model->rowCount());

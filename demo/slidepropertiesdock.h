@@ -22,6 +22,9 @@ public:
     explicit SlidePropertiesDock(QWidget *parent = nullptr);
 
     void showSlide(const IrisSlideInfo &info);
+    // The colour row: the slide's profile, what the view does with it, and the display's.
+    void showColor(
+        const QString &slideProfile, const QString &displayProfile, bool managed, bool applied, const QString &error);
     void clear();
 
     // For tests and scripting: rows the filter currently shows.
@@ -33,6 +36,7 @@ private:
     QLabel *m_dimensions;
     QLabel *m_resolution;
     QLabel *m_objective;
+    QLabel *m_color;
     QTreeWidget *m_levels;
     QLineEdit *m_filter;
     QStandardItemModel *m_model;

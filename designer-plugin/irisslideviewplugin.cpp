@@ -96,7 +96,7 @@ void IrisSlideViewPlugin::initialize(QDesignerFormEditorInterface *)
 QString IrisSlideViewPlugin::domXml() const
 {
     // The defaults a new IrisSlideView gets when dropped on a form: the engine's own
-    // (EngineConfig) for the background and the budgets. The slide path stays empty: a form
+    // (EngineConfig) for the background, the budgets and colour management. The slide path stays empty: a form
     // usually opens its slide at run time.
     const iris::EngineConfig engine;
     const auto byte = [](float v) { return QString::number(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f)); };
@@ -144,6 +144,12 @@ QString IrisSlideViewPlugin::domXml() const
     <property name="overviewCorner">
       <enum>IrisSlideView::TopRight</enum>
     </property>
+    <property name="colorManaged">
+      <bool>%6</bool>
+    </property>
+    <property name="renderingIntent">
+      <enum>IrisSlideView::%7</enum>
+    </property>
   </widget>
   <customwidgets>
     <customwidget>
@@ -155,5 +161,8 @@ QString IrisSlideViewPlugin::domXml() const
 </ui>
 )")
         .arg(byte(engine.background[0]), byte(engine.background[1]), byte(engine.background[2]),
-             QString::number(engine.ramBudgetBytes >> 20), QString::number(engine.vramBudgetBytes >> 20));
+            QString::number(engine.ramBudgetBytes >> 20), QString::number(engine.vramBudgetBytes >> 20),
+            engine.color.managed ? QStringLiteral("true") : QStringLiteral("false"),
+            engine.color.intent == iris::RenderingIntent::RelativeColorimetric ? QStringLiteral("RelativeColorimetric")
+                                                                               : QStringLiteral("Perceptual"));
 }

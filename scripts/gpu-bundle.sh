@@ -3,7 +3,8 @@
 # programs and engine suites of a release tree with tests (build/gpu), the libraries they load
 # (this machine's Debian 12 ones, found with ldd; glibc stays the host's), the Khronos
 # validation layer, the test slides and a font with a fontconfig file. With BASE=DIR, also
-# DIR/bin/iris-bench and DIR/lib/libiris_engine.so* under base/, for an A/B in one session.
+# DIR/bin/iris-bench and DIR/lib/libiris_engine.so* under base/, for an A/B in one session
+# (BASE="DIR1:NAME1 DIR2:NAME2": several, each under its NAME/).
 #   cmake --preset release -B build/gpu -DIRIS_BUILD_TESTS=ON -DIRIS_BUILD_WIDGET=OFF -DIRIS_MAN_PAGES=OFF
 #   cmake --build build/gpu && scripts/gpu-bundle.sh
 set -euo pipefail
@@ -14,12 +15,16 @@ mkdir -p $b/bin $b/lib $b/layers $b/fonts $b/testdata/slides
 cp build/gpu/bin/* $b/bin/
 cp -P build/gpu/lib/libiris_engine.so* $b/lib/
 programs=($b/bin/*)
-if [ -n "${BASE:-}" ]; then
-  mkdir -p $b/base/bin $b/base/lib
-  cp "$BASE/bin/iris-bench" $b/base/bin/
-  cp -P "$BASE"/lib/libiris_engine.so* $b/base/lib/
-  programs+=($b/base/bin/iris-bench)
-fi
+# BASE: one or more (space-separated) DIR or DIR:NAME; each goes under NAME/ (default base/).
+for spec in ${BASE:-}; do
+  dir=${spec%%:*}
+  name=base
+  [ "$spec" != "$dir" ] && name=${spec#*:}
+  mkdir -p $b/$name/bin $b/$name/lib
+  cp "$dir/bin/iris-bench" $b/$name/bin/
+  cp -P "$dir"/lib/libiris_engine.so* $b/$name/lib/
+  programs+=($b/$name/bin/iris-bench)
+done
 layer=/usr/lib/x86_64-linux-gnu/libVkLayer_khronos_validation.so
 for f in "${programs[@]}" $layer; do ldd "$f" | awk '/=> \//{print $3}'; done | sort -u |
   grep -v -E '/(libc|libm|libpthread|libdl|librt|ld-linux-x86-64)\.so|libiris_' |

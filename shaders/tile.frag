@@ -3,8 +3,9 @@
 // Samples one tile. The texel is computed from the fragment's own pixel centre rather than
 // from interpolated UVs, so that at 1:1 with integer alignment every fragment lands exactly
 // on a texel centre and reproduces the source bytes (linear filtering with weight 0).
-// Along a side where a neighbour is resident, a tile drawn at LOD 0 leaves a half-texel band
-// to the seam pass (tile_bands.glsl, tile_seam.frag), which filters across the seam.
+// Along a side where a neighbour is resident, a tile leaves a band (half a texel of the
+// coarsest mip it reads) to the seam pass (tile_bands.glsl, tile_seam.frag), which filters
+// across the seam.
 
 layout(set = 0, binding = 0) uniform sampler2DArray atlas; // 256×256 RGBA8 premultiplied, full mips
 

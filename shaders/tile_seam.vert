@@ -1,6 +1,6 @@
 #version 450
 #extension GL_GOOGLE_include_directive : require
-// The seam pass: for each tile instance of a level drawn at LOD 0, the band along one side
+// The seam pass: for each tile instance of a level, the band along one side
 // (push constant `edge`) that the tile pass left out because a neighbour is resident there
 // (tile_bands.glsl). A side without a band gives an empty quad.
 

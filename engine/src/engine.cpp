@@ -93,10 +93,7 @@ struct Engine::Impl {
         status.slideProfile = color::profileDescription(info->iccProfile);
         if (status.slideProfile.empty()) status.slideProfile = "embedded profile without a description";
         if (!settings.managed) return nullptr;
-        const color::Intent intent = settings.intent == RenderingIntent::RelativeColorimetric
-                                         ? color::Intent::RelativeColorimetric
-                                         : color::Intent::Perceptual;
-        Expected<color::Lut3D> lut = color::bakeLut(info->iccProfile, settings.displayProfile, intent);
+        Expected<color::Lut3D> lut = color::bakeLut(info->iccProfile, settings.displayProfile, settings.intent);
         if (!lut) {
             status.error = lut.error();
             log.warn("colour management: " + lut.error().message() + "; the slide is drawn without its profile");
@@ -289,10 +286,19 @@ std::optional<SlideInfo> Engine::slideInfo() const {
     return s.slide->info;
 }
 
-Expected<Image> Engine::readAssociatedImage(const std::string& name) const {
+Expected<Image> Engine::readAssociatedImage(const std::string& name, ImageColors colors) const {
     const Snapshot s = impl_->shared.snapshot();
     if (!s.slide) return Result(Status::NoSlide, "No slide is open");
-    return s.slide->source->readAssociatedImage(name);
+    Expected<Image> image = s.slide->source->readAssociatedImage(name);
+    // The snapshot's table is the transform the tiles go through: none, none for the image.
+    if (!image || colors == ImageColors::AsStored || !s.colorLut) return image;
+    const ColorSettings settings = colorSettings();
+    if (Result r =
+            color::transformImage(s.slide->info.iccProfile, settings.displayProfile, settings.intent, image.value());
+        !r) {
+        return Result(r.status(), "Cannot convert the associated image '" + name + "' for display: " + r.message());
+    }
+    return image;
 }
 
 void Engine::translate(double dx, double dy) {

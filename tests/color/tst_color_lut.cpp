@@ -603,6 +603,77 @@ private slots:
             if (!tcga.empty()) QCOMPARE(profileDescription(tcga), std::string("sRGB IEC61966-2.1"));
         }
     }
+
+    // transformImage (associated images in display colours): LittleCMS applied directly to
+    // each unpremultiplied pixel, within one 8-bit step (the unpremultiplied value is exact
+    // only to a step for translucent pixels), alpha kept; premultiplied pixels converted
+    // unpremultiplied.
+    void transformImage_data() {
+        QTest::addColumn<int>("intent");
+        QTest::addColumn<bool>("wideDisplay");
+        QTest::newRow("perceptual, sRGB") << 0 << false;
+        QTest::newRow("relative, wide gamut display") << 1 << true;
+    }
+    void transformImage() {
+        QFETCH(int, intent);
+        QFETCH(bool, wideDisplay);
+        const Intent in = intent ? Intent::RelativeColorimetric : Intent::Perceptual;
+        const std::vector<uint8_t> source = ref::strongCurvesProfile();
+        const std::vector<uint8_t> display = wideDisplay ? ref::wideGamma18Profile() : std::vector<uint8_t>{};
+        std::string error;
+        auto xf = ref::Transform::create(source, display, in, &error);
+        QVERIFY2(xf, error.c_str());
+
+        iris::Image image;
+        image.width = 97; // odd sizes: rows are converted one at a time
+        image.height = 61;
+        image.rgba.resize(size_t(image.width) * image.height * 4);
+        std::mt19937 rng(7);
+        for (size_t i = 0; i < image.rgba.size(); i += 4) {
+            const uint8_t a = (i / 4) % 5 == 0 ? uint8_t(rng() % 256) : 255;
+            for (int c = 0; c < 3; ++c) image.rgba[i + c] = uint8_t(uint32_t(rng() % 256) * a / 255);
+            image.rgba[i + 3] = a;
+        }
+        const iris::Image stored = image;
+        QVERIFY(iris::color::transformImage(source, display, in, image).ok());
+
+        int worst = 0;
+        for (size_t i = 0; i < image.rgba.size(); i += 4) {
+            const uint8_t a = stored.rgba[i + 3];
+            QCOMPARE(image.rgba[i + 3], a);
+            if (a == 0) {
+                for (int c = 0; c < 3; ++c) QCOMPARE(image.rgba[i + c], uint8_t(0));
+                continue;
+            }
+            float un[3], out[3];
+            for (int c = 0; c < 3; ++c) un[c] = std::min(1.0f, stored.rgba[i + c] / float(a));
+            xf->apply(un, out, 1);
+            for (int c = 0; c < 3; ++c) {
+                const int expected = (ref::toUnorm8(out[c]) * a + 127) / 255;
+                const int d = std::abs(int(image.rgba[i + c]) - expected);
+                worst = std::max(worst, d);
+                if (d > 1)
+                    QFAIL(qPrintable(QStringLiteral("pixel %1 channel %2: %3, LittleCMS %4 (alpha %5)")
+                                         .arg(i / 4)
+                                         .arg(c)
+                                         .arg(image.rgba[i + c])
+                                         .arg(expected)
+                                         .arg(a)));
+            }
+        }
+        qInfo("largest difference from LittleCMS's float transform: %d", worst);
+        QVERIFY(image.rgba != stored.rgba); // the strong curves change colours
+
+        // Errors leave the image as it was.
+        iris::Image untouched = stored;
+        std::vector<uint8_t> truncated = source;
+        truncated.resize(truncated.size() / 2);
+        const iris::Result broken = iris::color::transformImage(truncated, display, in, untouched);
+        QCOMPARE(broken.status(), Status::CorruptData);
+        QVERIFY(untouched.rgba == stored.rgba);
+        untouched.rgba.pop_back();
+        QCOMPARE(iris::color::transformImage(source, display, in, untouched).status(), Status::InvalidArgument);
+    }
 };
 
 QTEST_GUILESS_MAIN(TestColorLut)

@@ -2,7 +2,8 @@
 // LittleCMS applied on the CPU to the same source pixels.
 //
 //   * For slides with an embedded profile (the TCGA SVS and the generic TIFF of the shared test
-//     data when they carry one, and a generated slide with a profile of strong curves), a 1:1
+//     data when they carry one, and a generated slide with a profile of strong curves, as TIFF
+//     and encoded as .iris), a 1:1
 //     integer-aligned frame with colour management on is compared pixel by pixel with the same
 //     frame off (the slide's stored bytes, which the pixel-exact suites check against
 //     OpenSlide) passed through LittleCMS: CIEDE2000, as the display shows both colours, at
@@ -18,6 +19,8 @@
 #include <algorithm>
 #include <filesystem>
 #include <tiffio.h>
+
+#include <iris/encoder.h>
 
 #include "color_reference.h"
 #include "test_support.h"
@@ -67,6 +70,7 @@ private slots:
     void slideWithoutProfileIsUnchanged();
     void brokenProfileFallsBackToNoTransform();
     void switchingAtRuntime();
+    void associatedImagesForDisplay();
 
 private:
     // A frame of `path` at level 0, top-left corner (x0, y0), with `settings`.
@@ -91,6 +95,11 @@ void TestColor::initTestCase() {
     QVERIFY2(writeOneLevelTiff(dir_ / "strong-curves.tiff", 2048, 1536, {}, &error, ref::strongCurvesProfile()),
              error.c_str());
     QVERIFY2(writeOneLevelTiff(dir_ / "no-profile.tiff", 2048, 1536, {}, &error), error.c_str());
+    // The same slide as .iris: the profile goes through the encoder's ICC_PROFILE block and the
+    // .iris reader (the reference encoders' fixtures in the shared test data carry none).
+    const auto encoded =
+        iris::encodeIris((dir_ / "strong-curves.tiff").string(), (dir_ / "strong-curves.iris").string());
+    QVERIFY2(encoded.ok(), describe(encoded.error()).c_str());
     std::vector<uint8_t> truncated = ref::strongCurvesProfile();
     truncated.resize(truncated.size() / 2);
     QVERIFY2(writeOneLevelTiff(dir_ / "broken-profile.tiff", 2048, 1536, {}, &error, truncated), error.c_str());
@@ -140,7 +149,7 @@ Stats TestColor::compare(const iris::Frame& off, const iris::Frame& on, uint32_t
         const std::array<uint8_t, 3> shown{got[0], got[1], got[2]};
         de.push_back(ref::deltaE2000(lab->toLab(shown), lab->toLab(want)));
         if (lut) {
-            const std::array<uint8_t, 3> model = ref::applyLut(*lut, src[0], src[1], src[2], 8);
+            const std::array<uint8_t, 3> model = ref::applyLut(*lut, src[0], src[1], src[2]);
             for (int c = 0; c < 3; ++c) s.maxLutStep = std::max(s.maxLutStep, std::abs(int(model[c]) - int(got[c])));
         }
     }
@@ -162,6 +171,8 @@ void TestColor::profiledSlidesMatchLittleCms_data() {
     QTest::newRow("strong curves, perceptual, sRGB") << strong << 512.0 << 256.0 << 0 << false;
     QTest::newRow("strong curves, relative, sRGB") << strong << 512.0 << 256.0 << 1 << false;
     QTest::newRow("strong curves, perceptual, wide gamut display") << strong << 512.0 << 256.0 << 0 << true;
+    const QString strongIris = QString::fromStdString((dir_ / "strong-curves.iris").string());
+    QTest::newRow("strong curves as .iris, perceptual, sRGB") << strongIris << 512.0 << 256.0 << 0 << false;
     if (auto slides = slidesDir()) {
         for (const char* f :
              {"aperio/tcga-cr-7395-01a-01-ts1.svs", "aperio/CMU-1-Small-Region.svs", "generic-tiff/boxes.tiff"}) {
@@ -198,7 +209,10 @@ void TestColor::profiledSlidesMatchLittleCms() {
     QVERIFY(!status.slideProfile.empty());
     // The strong curves change every colour; a scanner's sRGB-like profile shown on an sRGB
     // display may change none (the table then reproduces the stored bytes exactly).
-    if (slide.contains(QLatin1String("strong-curves"))) QVERIFY(a->image.rgba != b->image.rgba);
+    if (slide.contains(QLatin1String("strong-curves"))) {
+        QVERIFY(a->image.rgba != b->image.rgba);
+        QCOMPARE(status.slideProfile, std::string("Iris test: strong curves"));
+    }
 
     const std::vector<uint8_t> profile = engine_->slideInfo()->iccProfile;
     const auto intentRef = intent ? iris::color::Intent::RelativeColorimetric : iris::color::Intent::Perceptual;
@@ -266,6 +280,53 @@ void TestColor::switchingAtRuntime() {
     const auto back = e.readFrame();
     QVERIFY(back.ok());
     QVERIFY(back.value().image.rgba == a->image.rgba);
+}
+
+// Engine::readAssociatedImage(…, ForDisplay): the same transform as the tiles (LittleCMS on
+// the stored pixels, within one 8-bit step), the stored pixels when colour management is off
+// or the slide has no profile. Needs a slide with a profile and associated images: the TCGA SVS.
+void TestColor::associatedImagesForDisplay() {
+    const auto slides = slidesDir();
+    const fs::path tcga = slides ? *slides / "aperio/tcga-cr-7395-01a-01-ts1.svs" : fs::path();
+    if (!slides || !fs::exists(tcga)) QSKIP("the shared test slide aperio/tcga-cr-7395-01a-01-ts1.svs is not here");
+    const std::vector<uint8_t> profile = tiffIccProfile(tcga);
+    QVERIFY(!profile.empty());
+    iris::Engine& e = *engine_.engine;
+    iris::ColorSettings settings;
+    settings.displayProfile = ref::wideGamma18Profile(); // sRGB → sRGB would change little
+    e.setColorSettings(settings);
+    QVERIFY(e.open(tcga.string()).ok());
+    QVERIFY(e.colorStatus().applied);
+    const auto names = e.slideInfo()->associatedImages;
+    QVERIFY(!names.empty());
+    std::string error;
+    const auto xf = ref::Transform::create(profile, settings.displayProfile, settings.intent, &error);
+    QVERIFY2(xf, error.c_str());
+    for (const std::string& name : names) {
+        const auto stored = e.readAssociatedImage(name);
+        const auto shown = e.readAssociatedImage(name, iris::ImageColors::ForDisplay);
+        QVERIFY2(stored.ok() && shown.ok(), name.c_str());
+        QCOMPARE(shown->width, stored->width);
+        QCOMPARE(shown->height, stored->height);
+        int worst = 0;
+        for (size_t i = 0; i < stored->rgba.size(); i += 4) {
+            QCOMPARE(stored->rgba[i + 3], uint8_t(255)); // scanners' associated images are opaque
+            const auto want = xf->apply8(stored->rgba[i], stored->rgba[i + 1], stored->rgba[i + 2]);
+            for (int c = 0; c < 3; ++c) worst = std::max(worst, std::abs(int(shown->rgba[i + c]) - int(want[c])));
+        }
+        qInfo("%s: %ux%u, largest difference from LittleCMS %d", name.c_str(), stored->width, stored->height, worst);
+        QVERIFY2(worst <= 1, name.c_str());
+        QVERIFY(shown->rgba != stored->rgba);
+    }
+    iris::ColorSettings off = settings;
+    off.managed = false;
+    e.setColorSettings(off);
+    const auto stored = e.readAssociatedImage(names.front());
+    const auto shown = e.readAssociatedImage(names.front(), iris::ImageColors::ForDisplay);
+    QVERIFY(stored.ok() && shown.ok());
+    QVERIFY(shown->rgba == stored->rgba);
+    e.setColorSettings(iris::ColorSettings{});
+    e.close();
 }
 
 QTEST_GUILESS_MAIN(TestColor)

@@ -4,6 +4,8 @@
 // shows: culling must never change it.
 #include <QtTest>
 
+#include <set>
+
 #include <cmath>
 #include <random>
 #include <unordered_map>
@@ -67,6 +69,7 @@ public:
         return it->second;
     }
     bool isActive(uint64_t key) const override { return layers_.count(key) != 0; }
+    uint64_t uploadSeq(int layer) const override { return uint64_t(layer) + 1000; } // a stamp per tile
     uint64_t keyOf(int layer) const { return keys_[size_t(layer)]; }
     int pins = 0;
 
@@ -98,6 +101,22 @@ std::vector<iris::gpu::TileInstance> instancesOf(const DrawList& list) {
 
 Viewport viewport(double cx, double cy, double ds, uint32_t w = 320, uint32_t h = 240) {
     return Viewport{.view = {cx, cy, ds}, .width = w, .height = h};
+}
+
+// The pins a level's draw takes: its drawn tiles, and once each the resident tiles of the level
+// next to a drawn one (8-connected) that are not drawn themselves (the seam pass's neighbours).
+int pinsOf(const LevelDraw& d, const LevelInfo& level, const FakeMap& map) {
+    std::set<std::pair<int64_t, int64_t>> pinned;
+    for (int64_t ty = d.range.y0; ty <= d.range.y1; ++ty)
+        for (int64_t tx = d.range.x0; tx <= d.range.x1; ++tx) {
+            if (!d.isDrawn(tx, ty)) continue;
+            for (int64_t y = ty - 1; y <= ty + 1; ++y)
+                for (int64_t x = tx - 1; x <= tx + 1; ++x)
+                    if (x >= 0 && y >= 0 && x < level.tilesX && y < level.tilesY &&
+                        map.isActive(TileKey::make(kGen, d.level, x, y)))
+                        pinned.insert({x, y});
+        }
+    return int(pinned.size());
 }
 
 DrawList build(const SlideInfo& s, const Viewport& vp, FakeMap& map, DrawOptions options = {}) {
@@ -151,7 +170,14 @@ void TestDrawList::allResidentCullsWhatHrCovers() {
     QCOMPARE(culled.levels[0].instances.size(), size_t(0));
     QCOMPARE(culled.levels[1].instances.size(), size_t(0));
     QCOMPARE(uint32_t(culled.levels[2].instances.size()), culled.hrTiles);
-    QCOMPARE(map.pins, int(culled.hrTiles)); // culled tiles are not pinned either
+    // Culled tiles are not pinned either: only HR's and, for its seams, their neighbours.
+    QCOMPARE(map.pins, pinsOf(culled.levels[2], s.levels[0], map));
+    // The newest upload among the drawn LR and HR tiles (what tells a revisit from a field
+    // that loaded before its first frame: metrics/field_metrics).
+    uint64_t newest = 0;
+    for (const iris::gpu::TileInstance& t : culled.levels[2].instances)
+        newest = std::max(newest, uint64_t(t.texel[2]) + 1000);
+    QCOMPARE(culled.newestUpload, newest);
 
     const DrawList all = build(s, vp, map, DrawOptions{.drawCovered = true});
     QCOMPARE(all.instanceCount(), uint32_t(iris::visibleTiles(s.levels[0], vp, 0).count() +
@@ -249,7 +275,7 @@ void TestDrawList::instanceBudget() {
     const Viewport vp = viewport(10000, 7000, 2);
     const DrawList list = build(s, vp, map, DrawOptions{.maxInstances = 5});
     QCOMPARE(list.instanceCount(), 5u);
-    QCOMPARE(map.pins, 5);
+    QCOMPARE(map.pins, pinsOf(list.levels[2], s.levels[0], map)); // the 5 and their neighbours
     QVERIFY(!list.hrComplete);
 }
 
@@ -309,10 +335,9 @@ void TestDrawList::thumbnail() {
     QVERIFY(iris::render::appendThumbnail(big, kGen, 1, viewport(4096, 4096, 64, 128, 128), 0, 0, 100, none, out));
 }
 
-// Drawn at LOD 0 (here zoomed in past 1:1), each instance names the atlas layers of its eight
-// neighbours in the level for the seam pass: drawn tiles as drawn, tiles just outside the view
-// pinned when resident, -1 past the slide's edge and where a tile is not resident. Drawn
-// shrunk (through mips), no instance names any.
+// Each instance names the atlas layers of its eight neighbours in the level for the seam pass:
+// drawn tiles as drawn, tiles just outside the view pinned when resident, -1 past the slide's
+// edge and where a tile is not resident; zoomed in past 1:1 (LOD 0) and shrunk (LOD 1) alike.
 void TestDrawList::zoomedInTilesNameTheirNeighbours() {
     const SlideInfo s = scan();
     FakeMap map;
@@ -352,11 +377,24 @@ void TestDrawList::zoomedInTilesNameTheirNeighbours() {
     QVERIFY(hr.range.x0 == 0 && hr.range.y0 == 0); // the slide's edge is in view: -1 there was checked
     QVERIFY(hr.range.contains(3, 1));               // and so is the missing tile
 
-    // Shrunk (LOD 1): nothing named.
+    // Shrunk (LOD 1), the seams are filtered across too (through the mips): the same names.
     const DrawList shrunk = build(s, viewport(10000, 7000, 2), map);
-    QVERIFY(!shrunk.levels[2].linked);
-    for (const iris::gpu::TileInstance& t : shrunk.levels[2].instances)
-        for (int i = 0; i < 4; ++i) QVERIFY(t.sides[i] == -1.0f && t.corners[i] == -1.0f);
+    const LevelDraw& small = shrunk.levels[2];
+    QCOMPARE(small.level, 0);
+    QVERIFY(small.linked);
+    QVERIFY(!small.instances.empty());
+    k = 0;
+    for (int64_t ty = small.range.y0; ty <= small.range.y1; ++ty) {
+        for (int64_t tx = small.range.x0; tx <= small.range.x1; ++tx) {
+            if (!small.isDrawn(tx, ty)) continue;
+            const iris::gpu::TileInstance& t = small.instances[k++];
+            QCOMPARE(t.texel[3], 1.0f);
+            QCOMPARE(t.sides[0], layerOf(tx - 1, ty));
+            QCOMPARE(t.sides[1], layerOf(tx + 1, ty));
+            QCOMPARE(t.corners[3], layerOf(tx + 1, ty + 1));
+        }
+    }
+    QCOMPARE(k, small.instances.size());
 }
 
 QTEST_APPLESS_MAIN(TestDrawList)

@@ -1,9 +1,10 @@
 // The CPU reference of colour management (docs/COLOR.md), for the unit suite (tests/color) and
 // the GPU suites that check the tile shader's colour step:
 //
-//   * applyLut: what the shader does with a baked table (color/color_lut.h): the 3D texture
-//     sampled with linear filtering at c·(size − 1) in texel units (texel centres at i/(size−1)
-//     of the source value), then written to an 8-bit UNORM target (round(v·255));
+//   * applyLut: what the shader does with a baked table (color/color_lut.h): trilinear
+//     interpolation between the nodes around c·(size − 1) (node i holds the colour i/(size−1)),
+//     in float (shaders/color_lut.glsl fetches the eight nodes itself), then written to an
+//     8-bit UNORM target (round(v·255)); weightBits models a sampler's fixed-point weights;
 //   * Transform: LittleCMS applied to the pixels directly (float pipeline, no table): the
 //     colours the table approximates;
 //   * LabConverter + deltaE2000: what a display's RGB looks like (CIELAB, D50, through the

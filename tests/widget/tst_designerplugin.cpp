@@ -137,9 +137,9 @@ void TstDesignerPlugin::domXmlParsesAndMatchesTheWidget()
         QVERIFY2(view.metaObject()->property(index).isWritable(), qPrintable(name));
         QVERIFY2(view.metaObject()->property(index).isDesignable(), qPrintable(name));
     }
-    for (const char *expected : {"backgroundColor", "enhance", "ramBudgetMB", "vramBudgetMB", "scaleBarVisible",
+    for (const char* expected : {"backgroundColor", "enhance", "ramBudgetMB", "vramBudgetMB", "scaleBarVisible",
                                  "scaleBarCorner", "magnificationLabelVisible", "magnificationLabelCorner",
-                                 "overviewVisible", "overviewCorner"})
+                                 "overviewVisible", "overviewCorner", "colorManaged", "renderingIntent"})
         QVERIFY2(properties.contains(QLatin1String(expected)), expected);
 }
 
@@ -159,6 +159,8 @@ void TstDesignerPlugin::uicFormBuildsAndShowsASlide()
     QVERIFY(!view->isOverviewVisible());
     QCOMPARE(view->scaleBarCorner(), IrisSlideView::TopRight);
     QVERIFY(view->isMagnificationLabelVisible()); // not set in the form: the widget's default
+    QVERIFY(!view->colorManaged());
+    QCOMPARE(view->renderingIntent(), IrisSlideView::RelativeColorimetric);
 
     const QString slide = sampleSlide();
     QVERIFY2(QFileInfo::exists(slide), qPrintable(slide));

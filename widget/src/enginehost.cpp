@@ -30,6 +30,15 @@ std::array<float, 3> toEngineRgb(const QColor &color)
     return {rgb.redF(), rgb.greenF(), rgb.blueF()};
 }
 
+iris::ColorSettings toEngineColor(const EngineSettings &settings)
+{
+    iris::ColorSettings color;
+    color.managed = settings.colorManaged;
+    color.intent = settings.intent;
+    color.displayProfile.assign(settings.displayProfile.begin(), settings.displayProfile.end());
+    return color;
+}
+
 // Shared by the host (GUI thread) and the engine's frame callback (render thread).
 struct EngineHost::Relay {
     std::mutex mutex;
@@ -65,6 +74,7 @@ bool EngineHost::create(QVulkanInstance *vulkan, const EngineSettings &settings,
     config.background = settings.background;
     config.instance = vulkan->vkInstance();
     config.log = &logEngineMessage;
+    config.color = toEngineColor(settings);
 
     auto created = iris::Engine::create(config);
     if (!created) {
@@ -124,6 +134,19 @@ void EngineHost::applyOverlays(const EngineSettings &settings)
     m_settings.overlayFont = settings.overlayFont;
     for (int i = 0; i < iris::kOverlayCount; ++i)
         m_engine->setOverlayVisible(iris::Overlay(i), settings.overlayVisible[size_t(i)]);
+}
+
+void EngineHost::applyColor(const EngineSettings &settings)
+{
+    if (!m_engine)
+        return;
+    if (settings.colorManaged == m_settings.colorManaged && settings.intent == m_settings.intent
+        && settings.displayProfile == m_settings.displayProfile)
+        return;
+    m_settings.colorManaged = settings.colorManaged;
+    m_settings.intent = settings.intent;
+    m_settings.displayProfile = settings.displayProfile;
+    m_engine->setColorSettings(toEngineColor(settings));
 }
 
 void EngineHost::destroy()

@@ -11,6 +11,7 @@
 #include <array>
 #include <memory>
 
+#include <QtCore/QByteArray>
 #include <QtCore/QObject>
 #include <QtCore/QSize>
 #include <QtCore/QString>
@@ -39,7 +40,14 @@ struct EngineSettings {
     std::array<iris::Corner, iris::kOverlayCount> overlayCorner{iris::Corner::BottomLeft, iris::Corner::TopLeft,
                                                                 iris::Corner::TopRight};
     QString overlayFont; // empty: the engine's default
+    // Colour management; displayProfile is the one in use (the host's or the screen's).
+    bool colorManaged = iris::EngineConfig{}.color.managed;
+    iris::RenderingIntent intent = iris::EngineConfig{}.color.intent;
+    QByteArray displayProfile;
 };
+
+// The engine's colour settings for `settings`.
+iris::ColorSettings toEngineColor(const EngineSettings &settings);
 
 // A QColor as the engine's background components. The engine's targets are UNORM (bytes
 // in, bytes out, no sRGB encode on write), so QColor's display-encoded components are
@@ -60,6 +68,9 @@ public:
     const EngineSettings &settings() const { return m_settings; }
     // Shows, places and re-fonts the overlays as `settings` say (only what changed).
     void applyOverlays(const EngineSettings &settings);
+    // Gives the engine the colour settings of `settings` when they differ from its own (a new
+    // transform is baked on this thread: milliseconds).
+    void applyColor(const EngineSettings &settings);
 
     // Makes the engine present into window's surface at deviceSize.
     bool bindSurface(QWindow *window, QSize deviceSize, QString *error);

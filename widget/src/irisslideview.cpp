@@ -62,7 +62,7 @@ QImage IrisSlideView::associatedImage(const QString &name) const
     Q_D(const IrisSlideView);
     if (!d->engine() || !d->slide)
         return {};
-    auto image = d->engine()->readAssociatedImage(name.toStdString());
+    auto image = d->engine()->readAssociatedImage(name.toStdString(), iris::ImageColors::ForDisplay);
     if (!image) {
         qCWarning(lcIrisWidget).noquote() << "cannot read the associated image" << name << ":"
                                           << QString::fromStdString(image.error().message());
@@ -101,6 +101,7 @@ void IrisSlideView::closeSlide()
     d->forgetSlide();
     Q_EMIT slidePathChanged(QString());
     Q_EMIT slideClosed();
+    Q_EMIT colorManagementChanged();
     d->notifyViewChanged();
 }
 
@@ -271,6 +272,88 @@ void IrisSlideView::setEnhance(bool on)
     if (d->engine())
         d->engine()->setEnhance(on);
     Q_EMIT enhanceChanged(on);
+}
+
+// --- colour management -----------------------------------------------------------------
+
+bool IrisSlideView::colorManaged() const
+{
+    Q_D(const IrisSlideView);
+    return d->settings.colorManaged;
+}
+
+void IrisSlideView::setColorManaged(bool on)
+{
+    Q_D(IrisSlideView);
+    if (on == d->settings.colorManaged)
+        return;
+    d->settings.colorManaged = on;
+    d->updateColor(true);
+}
+
+IrisSlideView::RenderingIntent IrisSlideView::renderingIntent() const
+{
+    Q_D(const IrisSlideView);
+    return d->settings.intent == iris::RenderingIntent::RelativeColorimetric ? RelativeColorimetric : Perceptual;
+}
+
+void IrisSlideView::setRenderingIntent(RenderingIntent intent)
+{
+    Q_D(IrisSlideView);
+    const iris::RenderingIntent engineIntent = intent == RelativeColorimetric
+        ? iris::RenderingIntent::RelativeColorimetric
+        : iris::RenderingIntent::Perceptual;
+    if (engineIntent == d->settings.intent)
+        return;
+    d->settings.intent = engineIntent;
+    d->updateColor(true);
+}
+
+QByteArray IrisSlideView::displayProfile() const
+{
+    Q_D(const IrisSlideView);
+    return d->settings.displayProfile;
+}
+
+void IrisSlideView::setDisplayProfile(const QByteArray &iccProfile)
+{
+    Q_D(IrisSlideView);
+    d->hostDisplayProfile = iccProfile;
+    d->updateColor(true);
+}
+
+void IrisSlideView::resetDisplayProfile()
+{
+    Q_D(IrisSlideView);
+    d->hostDisplayProfile.reset();
+    d->updateColor(true);
+}
+
+bool IrisSlideView::isColorTransformApplied() const
+{
+    Q_D(const IrisSlideView);
+    return d->engine() && d->engine()->colorStatus().applied;
+}
+
+QString IrisSlideView::slideProfileDescription() const
+{
+    Q_D(const IrisSlideView);
+    return d->engine() ? QString::fromStdString(d->engine()->colorStatus().slideProfile) : QString();
+}
+
+QString IrisSlideView::displayProfileDescription() const
+{
+    Q_D(const IrisSlideView);
+    return d->engine() ? QString::fromStdString(d->engine()->colorStatus().displayProfile) : QString();
+}
+
+QString IrisSlideView::colorManagementError() const
+{
+    Q_D(const IrisSlideView);
+    if (!d->engine())
+        return {};
+    const iris::Result error = d->engine()->colorStatus().error;
+    return error.ok() ? QString() : QString::fromStdString(error.message());
 }
 
 bool IrisSlideView::kineticPanning() const

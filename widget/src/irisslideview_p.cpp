@@ -5,10 +5,12 @@
 
 #include <QtCore/QFile>
 #include <QtCore/QTimer>
+#include <QtGui/QScreen>
 #include <QtGui/QVulkanInstance>
 #include <QtWidgets/QLabel>
 #include <QtWidgets/QStackedLayout>
 
+#include "displayprofile_p.h"
 #include "eventforwarding_p.h"
 #include "logging_p.h"
 #include "magnification_p.h"
@@ -79,6 +81,12 @@ void IrisSlideViewPrivate::init()
                      [this](QSize size) { onTargetSizeChanged(size); });
     QObject::connect(window, &SurfaceWindow::surfaceAboutToBeDestroyed, &host,
                      [this] { onSurfaceAboutToBeDestroyed(); });
+    // The display profile follows the screen the view is on (a child window's screen follows
+    // its top-level's) and the platform's changes to it.
+    QObject::connect(window, &QWindow::screenChanged, &host, [this] { updateColor(false); });
+    if (DisplayProfileWatcher *watcher = DisplayProfileWatcher::instance())
+        QObject::connect(watcher, &DisplayProfileWatcher::changed, &host, [this] { updateColor(false); });
+    updateColor(false);
 
     container = QWidget::createWindowContainer(window, q);
     container->setObjectName(QStringLiteral("irisSurfaceContainer"));
@@ -117,6 +125,24 @@ void IrisSlideViewPrivate::showMessage(const QString &text)
     stack->setCurrentWidget(message);
     if (container)
         container->hide();
+}
+
+void IrisSlideViewPrivate::updateColor(bool settingChanged)
+{
+    Q_Q(IrisSlideView);
+    const QScreen *screen = window ? window->screen() : q->screen();
+    const QByteArray profile = hostDisplayProfile ? *hostDisplayProfile : screenIccProfile(screen);
+    const bool profileChanged = profile != settings.displayProfile;
+    if (profileChanged) {
+        qCInfo(lcIrisWidget).noquote() << "display profile:"
+                                       << (profile.isEmpty() ? QStringLiteral("sRGB")
+                                                             : QStringLiteral("%1 bytes").arg(profile.size()))
+                                       << (hostDisplayProfile ? "(the host's)" : "(the screen's)");
+        settings.displayProfile = profile;
+    }
+    host.applyColor(settings);
+    if (settingChanged || profileChanged)
+        Q_EMIT q->colorManagementChanged();
 }
 
 // --- engine and surface ----------------------------------------------------------------
@@ -275,6 +301,7 @@ bool IrisSlideViewPrivate::open(const QString &newPath)
         if (had) {
             Q_EMIT q->slidePathChanged(path);
             Q_EMIT q->slideClosed();
+            Q_EMIT q->colorManagementChanged();
         }
         if (!vulkan) // ensureEngine() reported any other reason itself
             Q_EMIT q->slideError(IrisSlideView::tr("The renderer could not start: %1").arg(rendererError));
@@ -291,6 +318,7 @@ bool IrisSlideViewPrivate::open(const QString &newPath)
         if (had) {
             Q_EMIT q->slidePathChanged(path);
             Q_EMIT q->slideClosed();
+            Q_EMIT q->colorManagementChanged();
         }
         Q_EMIT q->slideError(text);
         notifyViewChanged();
@@ -308,6 +336,7 @@ bool IrisSlideViewPrivate::open(const QString &newPath)
                                    << "levels" << info.levels.size();
     Q_EMIT q->slidePathChanged(path);
     Q_EMIT q->slideOpened(info);
+    Q_EMIT q->colorManagementChanged();
     notifyViewChanged();
     return true;
 }

@@ -48,6 +48,10 @@ public:
     void checkEngineError();
     void recoverFromDeviceLoss();
     void showMessage(const QString &text);
+    // Takes the display profile from the host's setting or the view's screen and gives the
+    // engine the colour settings when they changed; emits colorManagementChanged() when the
+    // caller changed a setting or the profile changed.
+    void updateColor(bool settingChanged);
 
     // --- slide and view --------------------------------------------------------------
     bool open(const QString &path);
@@ -94,4 +98,5 @@ public:
     double boundDevicePixelRatio = 0;        // at the last bind or resize
     std::optional<iris::View> notifiedView;  // last view viewChanged() announced
     bool overviewDragging = false;           // a press on the overview map: moves follow it
+    std::optional<QByteArray> hostDisplayProfile; // setDisplayProfile(); none: the screen's
 };

@@ -110,7 +110,11 @@ public:
     Result open(const std::string& path);
     void close();
     std::optional<SlideInfo> slideInfo() const;
-    Expected<Image> readAssociatedImage(const std::string& name) const;
+    // An associated image ("label", "macro", "thumbnail", …; SlideInfo::associatedImages).
+    // ImageColors::ForDisplay converts it as the slide's tiles are drawn (the current
+    // ColorSettings with the slide's ICC profile, when colorStatus().applied), so that a host
+    // showing it beside the slide shows the same colours; AsStored gives the file's pixels.
+    Expected<Image> readAssociatedImage(const std::string& name, ImageColors colors = ImageColors::AsStored) const;
 
     // --- view ----------------------------------------------------------------------
     // Moves the view by (dx, dy) target pixels: the image moves with the pointer, so a

@@ -180,6 +180,10 @@ struct ColorSettings {
     RenderingIntent intent = RenderingIntent::Perceptual;
 };
 
+// Which colours Engine::readAssociatedImage returns: the file's, or those the display shows
+// the slide's tiles in (the colour transform, when one is applied).
+enum class ImageColors { AsStored, ForDisplay };
+
 // What the engine applies now (Engine::colorStatus).
 struct ColorStatus {
     bool applied = false;       // the slide's pixels go through a transform

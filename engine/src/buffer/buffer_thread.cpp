@@ -172,14 +172,19 @@ bool BufferThread::pollCompleted() {
                 counters_.mipTiles.fetch_add(t.slots.size(), std::memory_order_relaxed);
             }
         }
-        counters_.tiles.fetch_add(t.slots.size(), std::memory_order_relaxed);
+        // Each tile's sequence number: the counter's value once it is counted (the stamp that
+        // tells metrics whether a tile was uploaded after a move).
+        uint64_t seq = counters_.tiles.fetch_add(t.slots.size(), std::memory_order_relaxed);
         counters_.bytes.fetch_add(t.slots.size() * gpu::TileAtlas::bytesPerSlot(), std::memory_order_relaxed);
         // Single family: the compute submission made the tiles visible to fragment reads, so
         // they can be drawn now. Separate families: the render thread must first record the
         // acquire half of the compute → graphics ownership transfer; it activates them then.
         for (int s : t.slots) {
-            if (handover_.needed) handover_.push({s, t.signalValue});
-            else atlas_.map().activate(s);
+            ++seq;
+            if (handover_.needed)
+                handover_.push({s, t.signalValue, seq});
+            else
+                atlas_.map().activate(s, seq);
         }
         for (uint32_t s : t.staging) freeStaging_.push_back(s);
         t.slots.clear();

@@ -21,6 +21,7 @@ namespace iris {
 struct HandoverItem {
     int slot;
     uint64_t uploadValue; // upload timeline value whose signal released the slot
+    uint64_t uploadSeq;   // UploadCounters::tiles once this tile's upload was counted (TileMap::activate)
 };
 
 class Handover {

@@ -134,19 +134,16 @@ Result checkRgbProfile(cmsHPROFILE profile, const std::string& what) {
     return Result::success();
 }
 
-} // namespace
-
-Expected<Lut3D> bakeLut(std::span<const uint8_t> source, std::span<const uint8_t> display, Intent intent,
-                        uint32_t size) {
-    if (size < kMinLutSize || size > kMaxLutSize)
-        return Result(Status::InvalidArgument,
-                      "a colour table of " + std::to_string(size) + "³ entries: the size must be 2 to 129");
+// The source → display transform both bakeLut and transformImage evaluate: the profiles
+// checked and opened in `ctx`, the intent's flags, pixel formats `in` → `out`. The
+// descriptions are filled when asked for.
+Expected<Transform> openTransform(Context& ctx, std::span<const uint8_t> source, std::span<const uint8_t> display,
+                                  Intent intent, cmsUInt32Number in, cmsUInt32Number out, cmsUInt32Number extraFlags,
+                                  std::string* sourceDescription, std::string* displayDescription) {
     const std::string srcWhat = "the slide's ICC profile", dstWhat = "the display's ICC profile";
     if (Result r = checkProfileBytes(source, srcWhat); !r) return r;
     if (!display.empty())
         if (Result r = checkProfileBytes(display, dstWhat); !r) return r;
-
-    Context ctx;
     if (!ctx.handle) return Result(Status::OutOfMemory, "LittleCMS could not create a context");
     Profile src = openProfile(ctx, source);
     if (!src) return Result(Status::CorruptData, "LittleCMS rejected " + srcWhat + ": " + ctx.why());
@@ -155,25 +152,38 @@ Expected<Lut3D> bakeLut(std::span<const uint8_t> source, std::span<const uint8_t
     if (!dst) return Result(Status::CorruptData, "LittleCMS rejected " + dstWhat + ": " + ctx.why());
     if (Result r = checkRgbProfile(src.get(), srcWhat); !r) return r;
     if (Result r = checkRgbProfile(dst.get(), dstWhat); !r) return r;
+    if (sourceDescription) *sourceDescription = descriptionOf(src.get());
+    if (displayDescription) *displayDescription = display.empty() ? "sRGB" : descriptionOf(dst.get());
 
-    Lut3D lut;
-    lut.size = size;
-    lut.sourceDescription = descriptionOf(src.get());
-    lut.displayDescription = display.empty() ? "sRGB" : descriptionOf(dst.get());
-
-    // Float in and out: LittleCMS then evaluates the whole pipeline in floating point (its
-    // 8/16-bit optimisations, which resample the transform into a table of their own, are
-    // not used on float formats), so the table's entries are the transform itself.
     const cmsUInt32Number flags =
-        cmsFLAGS_NOCACHE | (intent == Intent::RelativeColorimetric ? cmsFLAGS_BLACKPOINTCOMPENSATION : 0);
+        extraFlags | (intent == Intent::RelativeColorimetric ? cmsFLAGS_BLACKPOINTCOMPENSATION : 0);
     const cmsUInt32Number lcmsIntent =
         intent == Intent::RelativeColorimetric ? INTENT_RELATIVE_COLORIMETRIC : INTENT_PERCEPTUAL;
-    Transform xf(
-        cmsCreateTransformTHR(ctx.handle.get(), src.get(), TYPE_RGB_FLT, dst.get(), TYPE_RGB_FLT, lcmsIntent, flags),
-        cmsDeleteTransform);
+    // The transform keeps what it needs of the profiles; they may be closed after this.
+    Transform xf(cmsCreateTransformTHR(ctx.handle.get(), src.get(), in, dst.get(), out, lcmsIntent, flags),
+                 cmsDeleteTransform);
     if (!xf)
         return Result(Status::UnsupportedFormat,
                       "LittleCMS could not build the transform from " + srcWhat + " to " + dstWhat + ": " + ctx.why());
+    return xf;
+}
+
+} // namespace
+
+Expected<Lut3D> bakeLut(std::span<const uint8_t> source, std::span<const uint8_t> display, Intent intent,
+                        uint32_t size) {
+    if (size < kMinLutSize || size > kMaxLutSize)
+        return Result(Status::InvalidArgument,
+                      "a colour table of " + std::to_string(size) + "³ entries: the size must be 2 to 129");
+    Lut3D lut;
+    lut.size = size;
+    Context ctx;
+    // Float in and out: LittleCMS then evaluates the whole pipeline in floating point (its
+    // 8/16-bit optimisations, which resample the transform into a table of their own, are
+    // not used on float formats), so the table's entries are the transform itself.
+    Expected<Transform> xf = openTransform(ctx, source, display, intent, TYPE_RGB_FLT, TYPE_RGB_FLT, cmsFLAGS_NOCACHE,
+                                           &lut.sourceDescription, &lut.displayDescription);
+    if (!xf) return xf.error();
 
     const std::size_t n = std::size_t(size) * size * size;
     std::vector<float> grid(n * 3), out(n * 3);
@@ -187,7 +197,7 @@ Expected<Lut3D> bakeLut(std::span<const uint8_t> source, std::span<const uint8_t
                 grid[i + 1] = g + 1 == size ? 1.0f : float(g) * step;
                 grid[i + 2] = b + 1 == size ? 1.0f : float(b) * step;
             }
-    cmsDoTransform(xf.get(), grid.data(), out.data(), cmsUInt32Number(n));
+    cmsDoTransform(xf.value().get(), grid.data(), out.data(), cmsUInt32Number(n));
 
     lut.rgba.resize(n * 4);
     for (std::size_t k = 0; k < n; ++k) {
@@ -200,6 +210,40 @@ Expected<Lut3D> bakeLut(std::span<const uint8_t> source, std::span<const uint8_t
         lut.rgba[k * 4 + 3] = 0x3c00; // 1.0
     }
     return lut;
+}
+
+Result transformImage(std::span<const uint8_t> source, std::span<const uint8_t> display, Intent intent, Image& image) {
+    if (uint64_t(image.width) * image.height * 4 != image.rgba.size())
+        return Result(Status::InvalidArgument, "an image of " + std::to_string(image.width) + "x" +
+                                                   std::to_string(image.height) + " pixels holds " +
+                                                   std::to_string(image.rgba.size()) + " bytes, not 4 a pixel");
+    Context ctx;
+    // Floats in and out, as bakeLut: LittleCMS's 8- and 16-bit paths resample the transform
+    // into tables of their own, which are off by several codes in the darks of steep curves.
+    Expected<Transform> xf =
+        openTransform(ctx, source, display, intent, TYPE_RGB_FLT, TYPE_RGB_FLT, cmsFLAGS_NOCACHE, nullptr, nullptr);
+    if (!xf) return xf.error();
+    // Row by row, so that the scratch stays small whatever the image's size. The colour is
+    // converted unpremultiplied, as the tile shader converts it, and premultiplied again.
+    std::vector<float> row(std::size_t(image.width) * 3), out(row.size());
+    for (uint32_t y = 0; y < image.height; ++y) {
+        uint8_t* px = image.rgba.data() + std::size_t(y) * image.width * 4;
+        for (uint32_t x = 0; x < image.width; ++x) {
+            const float a = px[x * 4 + 3];
+            for (int c = 0; c < 3; ++c) row[x * 3 + c] = a == 0 ? 0.0f : std::min(1.0f, px[x * 4 + c] / a);
+        }
+        cmsDoTransform(xf.value().get(), row.data(), out.data(), image.width);
+        for (uint32_t x = 0; x < image.width; ++x) {
+            const uint32_t a = px[x * 4 + 3];
+            for (int c = 0; c < 3; ++c) {
+                // Clipped to the display's range (NaN becomes 0), rounded to 8 bits, premultiplied.
+                const float v = out[x * 3 + c];
+                const uint32_t v8 = uint32_t(std::lround((v > 0 ? std::min(v, 1.0f) : 0.0f) * 255.0f));
+                px[x * 4 + c] = uint8_t((v8 * a + 127) / 255);
+            }
+        }
+    }
+    return Result::success();
 }
 
 std::string profileDescription(std::span<const uint8_t> profile) {

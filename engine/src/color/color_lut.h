@@ -14,11 +14,8 @@
 
 namespace iris::color {
 
-// ICC rendering intent of the slide → display transform.
-enum class Intent {
-    Perceptual,           // the default
-    RelativeColorimetric, // with black-point compensation
-};
+// ICC rendering intent of the slide → display transform (the public RenderingIntent).
+using Intent = RenderingIntent;
 
 // A baked transform: size³ entries; entry (r, g, b) (r fastest, then g, then b) holds the
 // display RGB, as IEEE half floats (RGBA, A = 1), of the source colour (r, g, b) / (size - 1).
@@ -39,6 +36,12 @@ inline constexpr uint32_t kLutSize = 65;
 // malformed profile, one LittleCMS rejects, a non-RGB profile, an absurd size.
 Expected<Lut3D> bakeLut(std::span<const uint8_t> source, std::span<const uint8_t> display, Intent intent,
                         uint32_t size = kLutSize);
+
+// Converts `image` (RGBA8, premultiplied alpha, as SlideSource::readAssociatedImage returns it)
+// in place with the transform bakeLut tabulates, evaluated by LittleCMS directly (no table):
+// the associated images of a slide, shown beside its tiles, in the same colours. The colour is
+// converted unpremultiplied, as the tile shader does; alpha is unchanged. Errors as bakeLut's.
+Result transformImage(std::span<const uint8_t> source, std::span<const uint8_t> display, Intent intent, Image& image);
 
 // The profile's description tag (ASCII), or "" when it has none or the bytes are no profile.
 std::string profileDescription(std::span<const uint8_t> profile);

@@ -187,14 +187,23 @@ int TileMap::claimFree(uint64_t key) {
     return -1;
 }
 
-void TileMap::activate(int slot) {
+void TileMap::activate(int slot, uint64_t uploadSeq) {
+    Slot& s = slots_[size_t(slot)];
+    s.uploadSeq.store(uploadSeq, std::memory_order_relaxed); // published by the release below
     // release: pairs with pin()'s seq_cst (acquiring) status load; the upload's completion,
     // observed by the writer on the timeline semaphore, happens-before a reader drawing it.
-    slots_[size_t(slot)].status.store(uint32_t(Status::Active), std::memory_order_release);
+    s.status.store(uint32_t(Status::Active), std::memory_order_release);
 }
 
-void TileMap::activatePinned(int slot, uint64_t frame) {
+uint64_t TileMap::uploadSeqOf(int slot) const {
+    // relaxed: the caller's pin (a seq_cst load that saw ACTIVE) acquired the stamp, and the
+    // slot cannot be refilled while it is pinned.
+    return slots_[size_t(slot)].uploadSeq.load(std::memory_order_relaxed);
+}
+
+void TileMap::activatePinned(int slot, uint64_t frame, uint64_t uploadSeq) {
     Slot& s = slots_[size_t(slot)];
+    s.uploadSeq.store(uploadSeq, std::memory_order_relaxed); // published by the seq_cst store below
     // The count is raised before the status flips, so the writer's CAS (which needs ACTIVE)
     // can only happen once refs ≥ 1 is visible to its seq_cst load: it backs off.
     s.refs.fetch_add(1, std::memory_order_seq_cst);

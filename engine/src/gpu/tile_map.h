@@ -51,6 +51,9 @@ public:
     void unpin(int slot);
     // Lookup only (no pin): the status of `key`'s slot, Free when absent. For metrics/tests.
     Status statusOf(uint64_t key) const;
+    // The upload sequence number its activation gave `slot` (see activate()). Read it only
+    // for a slot this thread has pinned: the pin's acquire of ACTIVE orders the stamp.
+    uint64_t uploadSeqOf(int slot) const;
     uint32_t countActive() const;
 
     // --- the writer (buffer thread only) ------------------------------------------------
@@ -61,11 +64,14 @@ public:
     // that no frame has pinned.
     template <class Keep>
     int allocate(uint64_t key, Keep&& keep);
-    void activate(int slot);
+    // Makes the slot ACTIVE, stamped with `uploadSeq`: the value of UploadCounters::tiles once
+    // its upload was counted, so that metrics can tell a tile uploaded after a move from one
+    // resident before it (a revisit).
+    void activate(int slot, uint64_t uploadSeq = 0);
     // Render thread, for tiles handed over from another queue family: makes the slot ACTIVE
     // already pinned by the frame that acquires it, so it cannot be reclaimed (and released
     // again) before that frame's acquire has executed. Unpin after the frame's fence.
-    void activatePinned(int slot, uint64_t frame);
+    void activatePinned(int slot, uint64_t frame, uint64_t uploadSeq = 0);
     // Gives up a FILLING slot (its upload was abandoned): it becomes FREE and unindexed.
     void abandon(int slot);
 
@@ -75,6 +81,9 @@ private:
         std::atomic<uint32_t> status{uint32_t(Status::Free)};
         std::atomic<uint32_t> refs{0};
         std::atomic<uint64_t> lastUsed{0}; // frame serial; relaxed: only an eviction hint
+        // Stored relaxed before the status's release (or seq_cst) store to ACTIVE; read relaxed
+        // after a pin's seq_cst load saw ACTIVE, which acquires it.
+        std::atomic<uint64_t> uploadSeq{0};
     };
     static_assert(sizeof(Slot) == kCacheLine, "one slot per cache line: readers and the writer touch different slots");
 

@@ -45,10 +45,12 @@ void MetricsBoard::frameDrawn(const Snapshot& snap, const FieldProgress& p) {
         }
     }
     if (!field_.active) return;
-    // The first frame of a new field already whole: every tile of it was resident when the
-    // view moved there (a revisit), so there is nothing to time.
+    // The first frame of a new field already whole, every tile of it uploaded before the view
+    // moved there: it was resident (a revisit), so there is nothing to time. (Whole with a
+    // tile uploaded since: a field that loaded before the render thread's first frame of it,
+    // which a fast GPU on one queue does for a few tiles; that is timed.)
     const bool whole = p.hrComplete && (!p.hasLr || p.lrComplete);
-    if (std::exchange(field_.firstFrame, false) && whole) {
+    if (std::exchange(field_.firstFrame, false) && whole && p.newestUpload <= field_.tilesAtStart) {
         field_.active = false;
         return;
     }

@@ -5,8 +5,9 @@
 //                  fieldStart, fieldTilesAtStart);
 //   MetricsBoard   (render thread) follows each frame's progress on the current field —
 //                  TeFOV-LR when every visible LR tile is resident, TeFOV-HR and TPT when the
-//                  frame is complete; a field whose first frame is already complete was
-//                  resident (a revisit) and is not timed — and publishes the frame's stats and
+//                  frame is complete; a field whose first frame is already complete with
+//                  tiles that were all uploaded before the move was resident (a revisit) and
+//                  is not timed — and publishes the frame's stats and
 //                  the finished fields for the API threads (metrics(), resetMetrics()).
 //
 //   frameFinished  (render thread) the frame's stats (interval, GPU and CPU time, bytes
@@ -40,6 +41,7 @@ bool isNewField(const View& before, const View& after, double width, double heig
 struct FieldProgress {
     bool hasLr = false, lrComplete = false, hrComplete = false;
     uint32_t lrTiles = 0, hrTiles = 0;
+    uint64_t newestUpload = 0; // the highest upload sequence number of the LR and HR tiles drawn
 };
 
 class MetricsBoard {

@@ -120,6 +120,7 @@ void buildDrawList(const SlideInfo& info, uint32_t generation, const Viewport& v
         d.linked = false;
     }
     out.lrTiles = out.hrTiles = 0;
+    out.newestUpload = 0;
     out.hasLr = out.lrComplete = out.hrComplete = false;
     if (info.levels.empty() || vp.width == 0 || vp.height == 0) return;
 
@@ -171,11 +172,13 @@ void buildDrawList(const SlideInfo& info, uint32_t generation, const Viewport& v
                     continue;
                 }
                 --budget;
+                if (isHr || isLr) out.newestUpload = std::max(out.newestUpload, tiles.uploadSeq(layer));
                 d.layers[size_t((ty - d.range.y0) * (d.range.x1 - d.range.x0 + 1) + (tx - d.range.x0))] = layer;
                 d.instances.push_back(instanceOf(placeTile(level, vp, tx, ty), 0, 0, layer, lod));
             }
         }
-        if (lod == 0.0 && !d.instances.empty()) {
+        // Every drawn level filters across its tile seams (the seam pass), enlarged or shrunk.
+        if (!d.instances.empty()) {
             linkNeighbours(level, li, generation, tiles, d);
             d.linked = true;
         }

@@ -27,6 +27,9 @@ public:
     virtual int pin(uint64_t key) = 0;
     // Whether `key`'s tile is resident (no pin).
     virtual bool isActive(uint64_t key) const = 0;
+    // The upload sequence number of the tile this frame pinned in `layer` (UploadCounters::tiles
+    // once its upload was counted); 0 where unknown.
+    virtual uint64_t uploadSeq(int /*layer*/) const { return 0; }
 
 protected:
     ~TileResidency() = default;
@@ -51,7 +54,7 @@ struct LevelDraw {
     std::vector<int32_t> layers;
     std::vector<gpu::TileInstance> instances;
     std::vector<int32_t> around; // scratch: layers of the range grown by one tile (linkNeighbours)
-    bool linked = false;         // drawn at LOD 0, neighbours named: the seam pass draws its bands
+    bool linked = false;         // neighbours named: the seam pass draws its bands
 
     bool isDrawn(int64_t tx, int64_t ty) const {
         return range.contains(tx, ty) && layers[size_t((ty - range.y0) * (range.x1 - range.x0 + 1) + (tx - range.x0))] >= 0;
@@ -64,6 +67,7 @@ struct DrawList {
     bool lrComplete = false;         // every visible LR tile is resident (drawn or culled)
     bool hrComplete = false;         // every visible HR tile is drawn: the frame is complete
     uint32_t lrTiles = 0, hrTiles = 0; // visible tiles of each layer
+    uint64_t newestUpload = 0;         // the highest upload sequence number among drawn LR and HR tiles
 
     uint32_t instanceCount() const;
     // The instances in painter's order (base, LR, HR) into `out`, which holds instanceCount().
@@ -76,7 +80,7 @@ struct DrawList {
 void buildDrawList(const SlideInfo& info, uint32_t generation, const Viewport& vp, const DrawOptions& options,
                    TileResidency& tiles, DrawList& out);
 
-// Zoomed in (the level drawn at LOD 0), names in each of `d`'s instances the atlas layers of the
+// Names in each of `d`'s instances (a level drawn enlarged or shrunk) the atlas layers of the
 // tile's eight neighbours in the level, so that the tile shader interpolates across the seams:
 // drawn tiles' layers as they are, any other neighbour pinned for the frame when resident.
 void linkNeighbours(const LevelInfo& level, int levelIndex, uint32_t generation, TileResidency& tiles, LevelDraw& d);

@@ -29,6 +29,7 @@ public:
         return slot;
     }
     bool isActive(uint64_t key) const override { return map_.statusOf(key) == gpu::TileMap::Status::Active; }
+    uint64_t uploadSeq(int layer) const override { return map_.uploadSeqOf(layer); }
 
 private:
     gpu::TileMap& map_;
@@ -457,7 +458,7 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
             b.dstQueueFamilyIndex = device_.queueFamily();
             acquires.push_back(b);
             uploadWait = std::max(uploadWait, h.uploadValue);
-            atlas_.map().activatePinned(h.slot, serial);
+            atlas_.map().activatePinned(h.slot, serial, h.uploadSeq);
             f.pinned.push_back(h.slot); // held until this frame's fence
         });
     }

@@ -50,7 +50,8 @@ Result TilePass::prepare(FrameContext& frame) {
                                        .lrComplete = drawList_.lrComplete,
                                        .hrComplete = drawList_.hrComplete,
                                        .lrTiles = drawList_.lrTiles,
-                                       .hrTiles = drawList_.hrTiles};
+                                       .hrTiles = drawList_.hrTiles,
+                                       .newestUpload = drawList_.newestUpload};
     if (!drawList_.hrComplete) frame.complete = false;
     return colorError;
 }

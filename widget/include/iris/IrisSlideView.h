@@ -10,6 +10,7 @@
 //     (objectivePower × level-0 downsample / downsample).
 #pragma once
 
+#include <QtCore/QByteArray>
 #include <QtCore/QPointF>
 #include <QtCore/QRectF>
 #include <QtCore/QScopedPointer>
@@ -50,6 +51,12 @@ class IRIS_WIDGET_EXPORT IrisSlideView : public QWidget {
     Q_PROPERTY(bool overviewVisible READ isOverviewVisible WRITE setOverviewVisible NOTIFY overlaysChanged)
     Q_PROPERTY(OverlayCorner overviewCorner READ overviewCorner WRITE setOverviewCorner NOTIFY overlaysChanged)
     Q_PROPERTY(QString overlayFont READ overlayFont WRITE setOverlayFont RESET resetOverlayFont NOTIFY overlaysChanged)
+    // Colour management (docs/COLOR.md): on by default.
+    Q_PROPERTY(bool colorManaged READ colorManaged WRITE setColorManaged NOTIFY colorManagementChanged)
+    Q_PROPERTY(
+        RenderingIntent renderingIntent READ renderingIntent WRITE setRenderingIntent NOTIFY colorManagementChanged)
+    Q_PROPERTY(QByteArray displayProfile READ displayProfile WRITE setDisplayProfile RESET resetDisplayProfile NOTIFY
+            colorManagementChanged DESIGNABLE false STORED false)
 
 public:
     // The overlays: a scale bar (hidden when the slide states no mpp), the magnification
@@ -59,6 +66,11 @@ public:
     Q_ENUM(Overlay)
     enum OverlayCorner { TopLeft, TopRight, BottomLeft, BottomRight };
     Q_ENUM(OverlayCorner)
+    // How colours outside the display's gamut are brought in: Perceptual (the default)
+    // compresses the whole gamut; RelativeColorimetric keeps in-gamut colours exact and
+    // clips the rest, with black-point compensation.
+    enum RenderingIntent { Perceptual, RelativeColorimetric };
+    Q_ENUM(RenderingIntent)
 
     explicit IrisSlideView(QWidget *parent = nullptr);
     ~IrisSlideView() override;
@@ -72,6 +84,8 @@ public:
     double objectivePower() const;
     // An associated image ("label", "macro", "thumbnail", …) of the open slide; a null
     // QImage when there is none (the reason is logged). Reads the file on the calling thread.
+    // While colour management applies the slide's profile, the image is converted the same
+    // way (so a label shown beside the slide has the slide's colours); else as stored.
     QImage associatedImage(const QString &name) const;
 
     // --- view ----------------------------------------------------------------------
@@ -125,6 +139,30 @@ public:
     void setOverlayFont(const QString &path);
     void resetOverlayFont() { setOverlayFont(QString()); }
 
+    // --- colour management --------------------------------------------------------------
+    // On, the slide's embedded ICC profile (Aperio/TIFF, .iris, DICOM) is converted to the
+    // display's profile on the GPU, for every pixel of the slide and the overview map; the
+    // HUD's own colours and the background are not converted. Off, or for a slide without a
+    // profile, the stored bytes are shown.
+    bool colorManaged() const;
+    void setColorManaged(bool on);
+    RenderingIntent renderingIntent() const;
+    void setRenderingIntent(RenderingIntent intent);
+    // The display profile in use: the one set with setDisplayProfile(), or else the one the
+    // platform states for the screen the view is on (X11: the root window's _ICC_PROFILE
+    // property, followed when it or the screen changes); empty means sRGB.
+    QByteArray displayProfile() const;
+    // Uses `iccProfile` (empty: sRGB) whatever the screen says, until resetDisplayProfile().
+    void setDisplayProfile(const QByteArray &iccProfile);
+    void resetDisplayProfile();
+    // What is applied: whether the slide's pixels are converted now, the descriptions of the
+    // slide's and the display's profiles ("" when the slide has none), and why a profile could
+    // not be used (the slide is then shown as stored; empty when nothing is wrong).
+    bool isColorTransformApplied() const;
+    QString slideProfileDescription() const;
+    QString displayProfileDescription() const;
+    QString colorManagementError() const;
+
     // --- state ---------------------------------------------------------------------
     // False when Vulkan could not be started; the widget then shows why in its place.
     bool isRendererAvailable() const;
@@ -174,6 +212,9 @@ Q_SIGNALS:
     void enhanceChanged(bool on);
     // An overlay was shown, hidden or moved, or the overlay font changed.
     void overlaysChanged();
+    // Colour management was switched, its intent or display profile changed, or a slide was
+    // opened or closed (what is applied, and the descriptions, may then differ).
+    void colorManagementChanged();
 
 protected:
     bool event(QEvent *event) override;

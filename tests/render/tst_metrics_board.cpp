@@ -1,0 +1,80 @@
+// The render thread's field timing (metrics/field_metrics: MetricsBoard) on scripted frames,
+// without a device: which moves are timed, and with what.
+//
+//   * a field whose first frame is already whole, every tile of it uploaded before the move,
+//     is a revisit: not timed;
+//   * a field whose first frame is whole with tiles uploaded after the move loaded before the
+//     render thread drew it (a few tiles on a fast GPU on one queue): timed, with its uploads;
+//   * a field that completes over several frames: LR-TeFOV at the first frame with LR whole,
+//     HR-TeFOV and TPT at the first complete one.
+#include <QtTest>
+
+#include "metrics/field_metrics.h"
+
+using iris::Snapshot;
+using iris::UploadCounters;
+using iris::metrics::FieldProgress;
+using iris::metrics::MetricsBoard;
+
+namespace {
+
+Snapshot field(uint64_t id, uint64_t tilesAtStart) {
+    Snapshot s;
+    s.fieldId = id;
+    s.fieldStart = std::chrono::steady_clock::now() - std::chrono::milliseconds(20);
+    s.fieldTilesAtStart = tilesAtStart;
+    s.viewport.view = {1000.0 * double(id), 500, 1};
+    return s;
+}
+
+FieldProgress progress(bool lr, bool hr, uint64_t newestUpload) {
+    return {
+        .hasLr = true, .lrComplete = lr, .hrComplete = hr, .lrTiles = 1, .hrTiles = 4, .newestUpload = newestUpload};
+}
+
+} // namespace
+
+class TestMetricsBoard : public QObject {
+    Q_OBJECT
+private slots:
+    void revisitsAndFastFields() {
+        UploadCounters counters;
+        counters.tiles = 100;
+        MetricsBoard board(counters);
+        uint64_t serial = 0;
+        const auto frame = [&](const Snapshot& s, const FieldProgress& p) {
+            board.frameDrawn(s, p);
+            (void)board.frameFinished(s, ++serial, p.hrComplete, p.hrTiles, 0.1, 0.1);
+        };
+
+        // A revisit: whole at once, nothing uploaded since the move.
+        frame(field(1, 100), progress(true, true, 97));
+        QCOMPARE(board.read().fields.size(), size_t(0));
+
+        // Loaded before its first frame: 5 tiles uploaded since the move (101-105).
+        counters.tiles = 105;
+        frame(field(2, 100), progress(true, true, 105));
+        QCOMPARE(board.read().fields.size(), size_t(1));
+        const iris::FieldStats fast = board.read().fields.back();
+        QCOMPARE(fast.tilesBuffered, 5u);
+        QVERIFY(fast.hrTeFovMs >= 20 && fast.lrTeFovMs >= 20);
+        QCOMPARE(fast.view.centerX, 2000.0);
+
+        // Over three frames: nothing, then LR, then HR.
+        const Snapshot third = field(3, 105);
+        frame(third, progress(false, false, 0));
+        counters.tiles = 106;
+        frame(third, progress(true, false, 106));
+        QCOMPARE(board.read().fields.size(), size_t(1));
+        counters.tiles = 110;
+        frame(third, progress(true, true, 110));
+        QCOMPARE(board.read().fields.size(), size_t(2));
+        const iris::FieldStats slow = board.read().fields.back();
+        QCOMPARE(slow.tilesBuffered, 5u);
+        QVERIFY(slow.lrTeFovMs > 0 && slow.lrTeFovMs <= slow.hrTeFovMs);
+        QVERIFY(std::abs(slow.hrTptUs - slow.hrTeFovMs * 1000.0 / 5) < 1e-6);
+    }
+};
+
+QTEST_APPLESS_MAIN(TestMetricsBoard)
+#include "tst_metrics_board.moc"

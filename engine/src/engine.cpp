@@ -227,7 +227,7 @@ void Engine::redraw() { impl_->shared.bump(); }
 
 Result Engine::open(const std::string& path) {
     // The disk work (header parse) runs without holding any engine lock.
-    Expected<std::unique_ptr<SlideSource>> src = openSlideSource(path, impl_->config.source);
+    Expected<std::unique_ptr<SlideSource>> src = openSlideSource(path, impl_->config.source, impl_->config.network);
     std::lock_guard lock(impl_->openMutex);
     if (!src) {
         close();

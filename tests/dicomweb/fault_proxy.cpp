@@ -1,5 +1,8 @@
 #include "fault_proxy.h"
 
+#include <pthread.h>
+#include <signal.h>
+
 #include <arpa/inet.h>
 #include <netinet/in.h>
 #include <poll.h>
@@ -132,6 +135,13 @@ FaultProxy::Rule FaultProxy::rule() const {
 }
 
 void FaultProxy::acceptLoop() {
+    // SSL_write to a client that went away raises SIGPIPE; blocked here (and in the serving
+    // threads, which inherit this thread's mask) it is EPIPE, and the rest of the test process
+    // keeps the default: the engine must survive SIGPIPE on its own (net/http_client.cpp).
+    sigset_t pipe;
+    sigemptyset(&pipe);
+    sigaddset(&pipe, SIGPIPE);
+    pthread_sigmask(SIG_BLOCK, &pipe, nullptr);
     while (!stop_.load(std::memory_order_acquire)) {
         pollfd pfd{listen_, POLLIN, 0};
         if (::poll(&pfd, 1, 100) <= 0) continue;

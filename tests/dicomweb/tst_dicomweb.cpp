@@ -324,6 +324,32 @@ private slots:
             QVERIFY(local->readTile(0, 3, 4, b.data()).ok());
             QVERIFY(a == b);
         }
+        // Through the Engine: EngineConfig::network reaches the source, and a frame is drawn
+        // over TLS with basic authentication; an engine without the credentials is refused.
+        {
+            iris::EngineConfig cfg;
+            cfg.color.managed = false;
+            cfg.network = good;
+            TestEngine withCredentials = createTestEngine(cfg);
+            QVERIFY2(withCredentials, describe(withCredentials.error).c_str());
+            QVERIFY(withCredentials->bindOffscreen(kW, kH).ok());
+            const iris::Result opened = withCredentials->open(url);
+            QVERIFY2(opened.ok(), describe(opened).c_str());
+            withCredentials->setView(viewWithOrigin(700, 900, 1, kW, kH));
+            QVERIFY(withCredentials->waitForFrame(std::chrono::seconds(30)).ok());
+            const std::string problems = withCredentials.finish();
+            QVERIFY2(problems.empty(), problems.c_str());
+            cfg.network = {};
+            cfg.network.caFile = good.caFile;
+            TestEngine without = createTestEngine(cfg);
+            QVERIFY2(without, describe(without.error).c_str());
+            const iris::Result refused = without->open(url);
+            QCOMPARE(refused.status(), iris::Status::IoError);
+            QVERIFY2(refused.message().find("HTTP 401") != std::string::npos, refused.message().c_str());
+            without->clearError();
+            const std::string problems2 = without.finish();
+            QVERIFY2(problems2.empty(), problems2.c_str());
+        }
         iris::NetworkOptions wrong = good;
         wrong.password = "tr0ub4dor";
         CHECKED(expectOpenFails(url, wrong, iris::Status::IoError, {"HTTP 401", "refused the credentials"}));

@@ -103,10 +103,13 @@ public:
     void redraw();
 
     // --- slide ---------------------------------------------------------------------
-    // Opens a slide (replacing the current one) and fits it into the target. A path of the
-    // form "synthetic:WIDTHxHEIGHT" opens a procedural test slide of that size. Returns a
-    // clear error for missing, unreadable, corrupt or unsupported files; on error the
-    // previous slide is closed and the engine stays usable.
+    // Opens a slide (replacing the current one) and fits it into the target: a slide file, a
+    // DICOM series folder (or one of its files), or a DICOMweb series URL
+    // (https://host/prefix/studies/<StudyUID>/series/<SeriesUID>; credentials and TLS from
+    // EngineConfig::network; docs/DICOM.md). A path of the form "synthetic:WIDTHxHEIGHT" opens
+    // a procedural test slide of that size. Returns a clear error for missing, unreadable,
+    // corrupt or unsupported files and unreachable or refusing servers; on error the previous
+    // slide is closed and the engine stays usable.
     Result open(const std::string& path);
     void close();
     std::optional<SlideInfo> slideInfo() const;

@@ -1,5 +1,8 @@
 #include "net/http_client.h"
 
+#include <pthread.h>
+#include <signal.h>
+
 #include <curl/curl.h>
 
 #include <algorithm>
@@ -141,12 +144,13 @@ HttpClient::HttpClient(const NetworkOptions& options, Url origin) : options_(opt
 
 HttpClient::~HttpClient() {
     {
+        // Under the lock: the thread frees the multi handle under it once it has seen stop_.
         std::lock_guard lock(mutex_);
         stop_ = true;
+        if (multi_) curl_multi_wakeup(static_cast<CURLM*>(multi_));
     }
-    if (multi_) curl_multi_wakeup(static_cast<CURLM*>(multi_));
     if (thread_.joinable()) thread_.join();
-    if (multi_) curl_multi_cleanup(static_cast<CURLM*>(multi_));
+    if (multi_) curl_multi_cleanup(static_cast<CURLM*>(multi_)); // the thread never ran
     if (share_) curl_share_cleanup(static_cast<CURLSH*>(share_));
 }
 
@@ -291,6 +295,16 @@ void HttpClient::finish(Transfer* t, Response&& r) {
 }
 
 void HttpClient::run() {
+    // A write to a connection the server has closed raises SIGPIPE, whose default action ends
+    // the process: the host application, a viewer in a hospital. libcurl's own guard
+    // (ignoring it process-wide around each call) is off with CURLOPT_NOSIGNAL, which threads
+    // need, and OpenSSL writes to its socket with write(). Every transfer runs on this thread,
+    // so blocking the signal here turns it into EPIPE for this thread alone (the pending
+    // signal is discarded when the thread ends) and leaves the host's handling alone.
+    sigset_t pipe;
+    sigemptyset(&pipe);
+    sigaddset(&pipe, SIGPIPE);
+    pthread_sigmask(SIG_BLOCK, &pipe, nullptr);
     CURLM* multi = static_cast<CURLM*>(multi_);
     for (;;) {
         std::vector<std::unique_ptr<Transfer>> fresh;
@@ -316,7 +330,14 @@ void HttpClient::run() {
             for (auto& t : waiting) t->done(cancelled());
             while (!running_.empty()) finish(running_.back().get(), cancelled());
         }
-        if (stop) return;
+        if (stop) {
+            // The connections close here too (TLS sends its close_notify: a write), on this
+            // thread, where SIGPIPE is blocked. Under the lock: the destructor may be waking it.
+            std::lock_guard lock(mutex_);
+            curl_multi_cleanup(multi);
+            multi_ = nullptr;
+            return;
+        }
         const Clock::time_point now = Clock::now();
         Clock::time_point next = now + std::chrono::seconds(1);
         for (size_t i = 0; i < delayed_.size();) {

@@ -110,4 +110,12 @@ Result PyramidSource::readTile(int level, int64_t tx, int64_t ty, uint8_t* dst) 
                                            " stored tiles as unreadable)");
 }
 
+void PyramidSource::prefetch(const std::vector<TileAddress>& tiles, std::function<void()> arrived) {
+    std::vector<TileAddress> stored;
+    stored.reserve(tiles.size());
+    for (const TileAddress& t : tiles)
+        if (t.level < stored_) stored.push_back(t);
+    inner_->prefetch(stored, std::move(arrived));
+}
+
 } // namespace iris

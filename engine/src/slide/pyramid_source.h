@@ -44,6 +44,14 @@ public:
         abandoned_.store(true, std::memory_order_relaxed);
         inner_->abandon();
     }
+    // A network source's hints pass through for the stored levels. A synthetic tile is
+    // computed from many stored tiles, read one after another (blocking on the network there):
+    // it is never asked for ahead.
+    bool readsOverNetwork() const override { return inner_->readsOverNetwork(); }
+    void prefetch(const std::vector<TileAddress>& tiles, std::function<void()> arrived) override;
+    bool requestTile(int level, int64_t tx, int64_t ty) override {
+        return level >= stored_ || inner_->requestTile(level, tx, ty);
+    }
 
 private:
     PyramidSource(std::unique_ptr<SlideSource> inner, SlideInfo info, int stored)

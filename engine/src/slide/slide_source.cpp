@@ -8,6 +8,7 @@
 #include <string_view>
 
 #include "slide/dicom_source.h"
+#include "slide/dicomweb_source.h"
 #include "slide/iris_file.h"
 #include "slide/openslide_source.h"
 #include "slide/synthetic_source.h"
@@ -51,19 +52,13 @@ const SlideFormat kFormats[] = {
 
 } // namespace
 
-// The network source (slide/dicomweb_source.cpp). Weak: tests/engine builds tst_dicom from this
-// format table and the local readers without the network code; there the address is null and a
-// URL is refused like any path that names no file.
-[[gnu::weak]] Expected<std::unique_ptr<SlideSource>> openDicomWebSource(const std::string& url,
-                                                                        const NetworkOptions& options);
-
 Expected<std::unique_ptr<SlideSource>> openSlideSource(const std::string& path, SourcePreference preference,
                                                        const NetworkOptions& network) {
     if (path.empty()) return Result(Status::InvalidArgument, "No slide path given");
     if (SyntheticSource::detect(path)) return SyntheticSource::open(path); // not a file
     // A DICOMweb series URL: not a file either. Only the Auto table reads it (OpenSlide and
     // .iris read files).
-    if (isUrl(path) && openDicomWebSource) {
+    if (isUrl(path)) {
         if (preference != SourcePreference::Auto) {
             return Result(Status::UnsupportedFormat,
                           "Cannot open '" + path + "': a DICOMweb URL is read by the DICOMweb source only, not by " +

@@ -915,10 +915,19 @@ std::string seriesOf(const fs::path& file) {
 // one series. Other DICOM files, broken ones and copies of an instance are skipped.
 Result gatherSeries(const std::string& path, bool isFolder, std::vector<Parsed>* found) {
     const std::string shown = fileNameOf(path);
+    // DCMTK parses nothing without its data dictionary; asked only once there is a DICOM file
+    // to parse (a folder without any is NotAFile, whatever the installation).
+    const auto dictionary = [&]() -> Result {
+        if (dcmDataDict.isDictionaryLoaded()) return {};
+        return Result(Status::UnsupportedFormat, "Cannot open '" + shown +
+                                                     "' as DICOM: DCMTK's data dictionary is not loaded (is "
+                                                     "libdcmtk's dicom.dic installed, or DCMDICTPATH set?)");
+    };
     const fs::path folder = isFolder ? fs::path(path) : fs::path(path).parent_path();
     std::set<std::string> sopInstances;
     std::string series;
     if (!isFolder) {
+        if (Result r = dictionary(); !r.ok()) return r;
         auto first = parseFile(path);
         if (!first.ok()) return first.error();
         series = first->desc.seriesUid;
@@ -941,7 +950,8 @@ Result gatherSeries(const std::string& path, bool isFolder, std::vector<Parsed>*
     size_t dicomFiles = found->size();
     for (const fs::path& f : files) {
         if (!DicomSource::detect(f.string())) continue;
-        ++dicomFiles;
+        if (++dicomFiles == 1)
+            if (Result r = dictionary(); !r.ok()) return r;
         if (!series.empty() && seriesOf(f) != series) continue;
         auto in = parseFile(f.string());
         if (!in.ok()) continue; // another kind of DICOM file, or a broken one of another series
@@ -984,11 +994,6 @@ bool DicomSource::detect(const std::string& path) {
 Expected<std::unique_ptr<SlideSource>> DicomSource::open(const std::string& path) {
     quietDcmtk();
     const std::string shown = fileNameOf(path);
-    if (!dcmDataDict.isDictionaryLoaded()) {
-        return Result(Status::UnsupportedFormat, "Cannot open '" + shown +
-                                                     "' as DICOM: DCMTK's data dictionary is not loaded (is "
-                                                     "libdcmtk's dicom.dic installed, or DCMDICTPATH set?)");
-    }
     std::error_code ec;
     const bool isFolder = fs::is_directory(path, ec);
     std::vector<Parsed> parsed;

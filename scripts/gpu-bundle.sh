@@ -34,6 +34,8 @@ cp /usr/share/vulkan/explicit_layer.d/VkLayer_khronos_validation.json $b/layers/
 testdata=${IRIS_TESTDATA:-../shared/testdata}
 cp -r "$testdata/slides/aperio" "$testdata/slides/generic-tiff" $b/testdata/slides/
 cp /usr/share/fonts/truetype/dejavu/DejaVuSans.ttf $b/fonts/
+# DCMTK's data dictionary (DCMDICTPATH=/tmp/b/dicom.dic there), for the DICOM reader's suites.
+cp /usr/share/libdcmtk17/dicom.dic $b/
 cat > $b/fonts/fonts.conf <<'CONF'
 <?xml version="1.0"?>
 <!DOCTYPE fontconfig SYSTEM "fonts.dtd">

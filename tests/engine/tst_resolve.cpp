@@ -43,7 +43,9 @@ class TestResolve : public QObject {
 private slots:
     void initTestCase() {
         ::unsetenv("IRIS_TILE_RESOLVE");
-        quads_ = createTestEngine();
+        iris::EngineConfig quads;
+        quads.tuning.tileResolve = iris::EngineTuning::TileResolve::Quads; // not Auto: compute on a GPU
+        quads_ = createTestEngine(quads);
         QVERIFY2(quads_, describe(quads_.error).c_str());
         iris::EngineConfig cfg;
         cfg.tuning.tileResolve = iris::EngineTuning::TileResolve::Compute;

@@ -311,12 +311,13 @@ Json resultJson(const Options& o, const SizeResult& r) {
     const auto pacing = o.tuning.pacing == iris::EngineTuning::Pacing::On    ? "on"
                         : o.tuning.pacing == iris::EngineTuning::Pacing::Off ? "off"
                                                                              : "auto";
-    j["tuning"] = {
-        {"pacing", pacing},
-        {"draw_covered", o.tuning.drawCovered},
-        {"single_queue", o.tuning.singleQueue},
-        {"tile_resolve", o.tuning.tileResolve == iris::EngineTuning::TileResolve::Compute ? "compute" : "quads"},
-        {"device_filter", o.tuning.deviceName}};
+    j["tuning"] = {{"pacing", pacing},
+                   {"draw_covered", o.tuning.drawCovered},
+                   {"single_queue", o.tuning.singleQueue},
+                   {"tile_resolve", o.tuning.tileResolve == iris::EngineTuning::TileResolve::Compute ? "compute"
+                                    : o.tuning.tileResolve == iris::EngineTuning::TileResolve::Quads ? "quads"
+                                                                                                     : "auto"},
+                   {"device_filter", o.tuning.deviceName}};
     j["mip_us_per_tile"] = jsonNumber(r.mipUsPerTile);
     j["mip_share_of_hr_tpt"] = jsonNumber(r.mipUsPerTile / quartiles(r.hrTpt).median);
     j["timeouts"] = r.timeouts;

@@ -25,7 +25,8 @@ inline constexpr const char* kTuningEnvironmentHelp =
     "  IRIS_MIP_SCHEDULE=wide|serial  mip compute schedule (default: by device type)\n"
     "  IRIS_DEVICE=TEXT               use the Vulkan device whose name contains TEXT\n"
     "  IRIS_QUEUES=single|auto        every role on the graphics queue\n"
-    "  IRIS_TILE_RESOLVE=quads|compute  tiles drawn as quads, or resolved per pixel";
+    "  IRIS_TILE_RESOLVE=auto|quads|compute  tiles as quads, or resolved per pixel\n"
+    "                                 (default: compute offscreen on a GPU)";
 
 // "  -o, --output FILE       text (default: x)" within 80 columns.
 class HelpFormatter : public CLI::Formatter {

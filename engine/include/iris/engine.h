@@ -47,10 +47,12 @@ struct EngineTuning {
     // How the slide's tiles become pixels (docs/ARCHITECTURE.md, "Per-tile quads or a
     // per-pixel resolve"). Quads: one instanced quad per tile and layer, then the seam bands
     // (every target). Compute: one compute pass resolves every pixel through a page table of the
-    // frame's resident tiles, finest layer first, filtering across tiles at LOD 0 (offscreen
-    // targets only; a swapchain keeps quads). An evaluation, measured by iris-bench.
-    enum class TileResolve { Quads, Compute };
-    TileResolve tileResolve = TileResolve::Quads;
+    // frame's resident tiles, finest layer first, filtering across tiles by hand (offscreen
+    // targets; a swapchain keeps quads). Auto, as measured: compute for offscreen targets on a
+    // GPU (an H100 draws a settled 1080p frame 15× faster so, and its colour step costs
+    // nothing visible), quads on a CPU device (lavapipe resolves 3× slower per pixel).
+    enum class TileResolve { Auto, Quads, Compute };
+    TileResolve tileResolve = TileResolve::Auto;
 };
 
 struct EngineConfig {

@@ -46,9 +46,11 @@ Expected<EngineTuning> tuningFromEnvironment(EngineTuning base) {
         !r.ok())
         return r;
     if (Result r = pick<bool>("IRIS_QUEUES", {{"single", true}, {"auto", false}}, base.singleQueue); !r.ok()) return r;
-    if (Result r = pick<EngineTuning::TileResolve>(
-            "IRIS_TILE_RESOLVE", {{"quads", EngineTuning::TileResolve::Quads}, {"compute", EngineTuning::TileResolve::Compute}},
-            base.tileResolve);
+    if (Result r = pick<EngineTuning::TileResolve>("IRIS_TILE_RESOLVE",
+                                                   {{"auto", EngineTuning::TileResolve::Auto},
+                                                    {"quads", EngineTuning::TileResolve::Quads},
+                                                    {"compute", EngineTuning::TileResolve::Compute}},
+                                                   base.tileResolve);
         !r.ok())
         return r;
     if (std::string device = variable("IRIS_DEVICE"); !device.empty()) base.deviceName = std::move(device);

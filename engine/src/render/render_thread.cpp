@@ -74,10 +74,14 @@ Result RenderThread::init() {
     }
     log_.info(std::string("frame pacing: ") + (paceFrames_ ? "on" : "off"));
     if (Result r = hudPass_.init(kFramesInFlight); !r.ok()) return r;
-    if (tuning_.tileResolve == EngineTuning::TileResolve::Compute) {
+    const bool cpuDevice = device_.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
+    if (tuning_.tileResolve == EngineTuning::TileResolve::Compute ||
+        (tuning_.tileResolve == EngineTuning::TileResolve::Auto && !cpuDevice)) {
         resolvePass_ = std::make_unique<render::ResolvePass>(device_, atlas_, pipeline_);
         if (Result r = resolvePass_->init(kFramesInFlight); !r.ok()) return r;
         log_.info("tile resolve: compute (offscreen targets; a swapchain draws quads)");
+    } else {
+        log_.info("tile resolve: quads");
     }
     if (Result r = vk::createTimestampPool(device_.physical(), dev, device_.queueFamily(), 2 * kFramesInFlight,
                                            timestamps_, timestampPeriodNs_);

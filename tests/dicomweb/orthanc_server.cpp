@@ -136,7 +136,12 @@ bool OrthancServer::launch(std::string* why) {
     posix_spawn_file_actions_addopen(&actions, 1, logPath_.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
     posix_spawn_file_actions_adddup2(&actions, 1, 2);
     const std::string cfg = (dir_ / "orthanc.json").string();
-    char* argv[] = {const_cast<char*>("Orthanc"), const_cast<char*>(cfg.c_str()), nullptr};
+    // Through setpriv (util-linux, Essential): Orthanc gets SIGTERM should the suite die before
+    // it stops it (a crash, a timeout's SIGKILL), so no server outlives a failed run. (The
+    // signal follows the spawning thread: the suite's main thread.)
+    char* argv[] = {const_cast<char*>("setpriv"), const_cast<char*>("--pdeathsig"), const_cast<char*>("TERM"),
+                    const_cast<char*>("--"),      const_cast<char*>("Orthanc"),      const_cast<char*>(cfg.c_str()),
+                    nullptr};
     // The suite's environment without the sanitizer runtime the asan and tsan presets preload
     // into test programs: Orthanc is not built for it.
     std::vector<char*> env;
@@ -147,7 +152,7 @@ bool OrthancServer::launch(std::string* why) {
     }
     env.push_back(nullptr);
     pid_t pid = -1;
-    const int rc = ::posix_spawnp(&pid, "Orthanc", &actions, nullptr, argv, env.data());
+    const int rc = ::posix_spawnp(&pid, "setpriv", &actions, nullptr, argv, env.data());
     posix_spawn_file_actions_destroy(&actions);
     if (rc != 0) {
         *why = std::string("cannot start Orthanc (Debian orthanc): ") + std::strerror(rc);

@@ -25,7 +25,6 @@ BufferThread::~BufferThread() {
     if (timeline_) vkDestroySemaphore(dev, timeline_, nullptr);
     if (copyTimeline_) vkDestroySemaphore(dev, copyTimeline_, nullptr);
     if (mipTimestamps_) vkDestroyQueryPool(dev, mipTimestamps_, nullptr);
-    vk::destroyMappedBuffer(dev, staging_);
 }
 
 Result BufferThread::init() {

@@ -23,10 +23,6 @@ void writePlaceholder(uint16_t* out) {
 }
 } // namespace
 
-ColorLutTexture::~ColorLutTexture() {
-    for (vk::MappedBuffer& b : staging_) vk::destroyMappedBuffer(device_.device(), b);
-}
-
 Result ColorLutTexture::init(uint32_t frameSlots) {
     VkDevice dev = device_.device();
     VkImageCreateInfo ici =

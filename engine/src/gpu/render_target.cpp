@@ -10,7 +10,6 @@ OffscreenTarget::~OffscreenTarget() {
     if (view_) vkDestroyImageView(dev, view_, nullptr);
     if (image_) vkDestroyImage(dev, image_, nullptr);
     if (memory_) vkFreeMemory(dev, memory_, nullptr);
-    vk::destroyMappedBuffer(dev, readback_);
 }
 
 Result OffscreenTarget::init(uint32_t width, uint32_t height, bool storage) {

@@ -14,7 +14,7 @@
 
 namespace iris::vk {
 
-template <class H, void (*Destroy)(VkDevice, H, const VkAllocationCallbacks*)>
+template <class H, void(VKAPI_PTR* Destroy)(VkDevice, H, const VkAllocationCallbacks*)>
 class Owned {
 public:
     Owned() = default;
@@ -61,5 +61,10 @@ using Pipeline = Owned<VkPipeline, vkDestroyPipeline>;
 using PipelineLayout = Owned<VkPipelineLayout, vkDestroyPipelineLayout>;
 using DescriptorSetLayout = Owned<VkDescriptorSetLayout, vkDestroyDescriptorSetLayout>;
 using DescriptorPool = Owned<VkDescriptorPool, vkDestroyDescriptorPool>;
+using CommandPool = Owned<VkCommandPool, vkDestroyCommandPool>; // its command buffers go with it
+using Fence = Owned<VkFence, vkDestroyFence>;
+using Semaphore = Owned<VkSemaphore, vkDestroySemaphore>;
+using QueryPool = Owned<VkQueryPool, vkDestroyQueryPool>;
+using SwapchainKHR = Owned<VkSwapchainKHR, vkDestroySwapchainKHR>; // its images go with it
 
 } // namespace iris::vk

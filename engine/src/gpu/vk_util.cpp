@@ -137,6 +137,8 @@ Result createTimestampPool(VkPhysicalDevice pd, VkDevice dev, uint32_t family, u
 
 Result createMappedBuffer(VkPhysicalDevice pd, VkDevice dev, VkDeviceSize size, VkBufferUsageFlags usage,
                           bool preferCached, MappedBuffer& out) {
+    out = MappedBuffer{};
+    MappedBuffer b; // what is made so far goes away with it on failure
     const VkBufferCreateInfo bci{
         .sType = VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO,
         .pNext = nullptr,
@@ -147,42 +149,44 @@ Result createMappedBuffer(VkPhysicalDevice pd, VkDevice dev, VkDeviceSize size, 
         .queueFamilyIndexCount = 0,
         .pQueueFamilyIndices = nullptr,
     };
-    IRIS_VK_TRY(vkCreateBuffer(dev, &bci, nullptr, &out.buffer));
+    IRIS_VK_TRY(vkCreateBuffer(dev, &bci, nullptr, b.buffer_.replace(dev)));
+    b.buffer = b.buffer_.get();
     VkMemoryRequirements req;
-    vkGetBufferMemoryRequirements(dev, out.buffer, &req);
+    vkGetBufferMemoryRequirements(dev, b.buffer, &req);
     const uint32_t type = findMemoryType(pd, req.memoryTypeBits, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT,
                                          preferCached ? VK_MEMORY_PROPERTY_HOST_CACHED_BIT
                                                       : VK_MEMORY_PROPERTY_HOST_COHERENT_BIT);
     if (type == UINT32_MAX) return Result(Status::Vulkan, "no host-visible memory type for a staging buffer");
     VkPhysicalDeviceMemoryProperties props;
     vkGetPhysicalDeviceMemoryProperties(pd, &props);
-    out.coherent = props.memoryTypes[type].propertyFlags & VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+    b.coherent = props.memoryTypes[type].propertyFlags & VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
     const VkMemoryAllocateInfo mai{
         .sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO, .pNext = nullptr, .allocationSize = req.size, .memoryTypeIndex = type};
-    IRIS_VK_TRY(vkAllocateMemory(dev, &mai, nullptr, &out.memory));
-    IRIS_VK_TRY(vkBindBufferMemory(dev, out.buffer, out.memory, 0));
-    IRIS_VK_TRY(vkMapMemory(dev, out.memory, 0, VK_WHOLE_SIZE, 0, &out.mapped));
-    out.size = size;
+    IRIS_VK_TRY(vkAllocateMemory(dev, &mai, nullptr, b.memory_.replace(dev)));
+    IRIS_VK_TRY(vkBindBufferMemory(dev, b.buffer, b.memory(), 0));
+    IRIS_VK_TRY(vkMapMemory(dev, b.memory(), 0, VK_WHOLE_SIZE, 0, &b.mapped));
+    b.size = size;
+    out = std::move(b);
     return {};
-}
-
-void destroyMappedBuffer(VkDevice dev, MappedBuffer& b) {
-    if (b.memory) vkFreeMemory(dev, b.memory, nullptr); // unmaps implicitly
-    if (b.buffer) vkDestroyBuffer(dev, b.buffer, nullptr);
-    b = MappedBuffer{};
 }
 
 Result invalidate(VkDevice dev, const MappedBuffer& b) {
     if (b.coherent) return {};
-    const VkMappedMemoryRange range{
-        .sType = VK_STRUCTURE_TYPE_MAPPED_MEMORY_RANGE, .pNext = nullptr, .memory = b.memory, .offset = 0, .size = VK_WHOLE_SIZE};
+    const VkMappedMemoryRange range{.sType = VK_STRUCTURE_TYPE_MAPPED_MEMORY_RANGE,
+                                    .pNext = nullptr,
+                                    .memory = b.memory(),
+                                    .offset = 0,
+                                    .size = VK_WHOLE_SIZE};
     return check(vkInvalidateMappedMemoryRanges(dev, 1, &range), "vkInvalidateMappedMemoryRanges");
 }
 
 Result flush(VkDevice dev, const MappedBuffer& b) {
     if (b.coherent) return {};
-    const VkMappedMemoryRange range{
-        .sType = VK_STRUCTURE_TYPE_MAPPED_MEMORY_RANGE, .pNext = nullptr, .memory = b.memory, .offset = 0, .size = VK_WHOLE_SIZE};
+    const VkMappedMemoryRange range{.sType = VK_STRUCTURE_TYPE_MAPPED_MEMORY_RANGE,
+                                    .pNext = nullptr,
+                                    .memory = b.memory(),
+                                    .offset = 0,
+                                    .size = VK_WHOLE_SIZE};
     return check(vkFlushMappedMemoryRanges(dev, 1, &range), "vkFlushMappedMemoryRanges");
 }
 

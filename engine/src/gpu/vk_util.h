@@ -1,12 +1,13 @@
 // Small Vulkan helpers: VkResult → Result, synchronization2 barrier builders, memory types.
 #pragma once
 
-#include <string>
-
 #include <span>
+#include <string>
+#include <utility>
 
 #include <vulkan/vulkan.h>
 
+#include "gpu/vk_handle.h"
 #include "iris/types.h"
 
 namespace iris::vk {
@@ -198,17 +199,44 @@ Expected<VkPipeline> createInstancedQuadPipeline(VkDevice dev, VkPipelineLayout 
                                                  uint32_t attributeCount, VkFormat format,
                                                  const VkSpecializationInfo* fragSpecialization = nullptr);
 
-// A host-visible buffer, persistently mapped.
-struct MappedBuffer {
-    VkBuffer buffer = VK_NULL_HANDLE;
-    VkDeviceMemory memory = VK_NULL_HANDLE;
-    void* mapped = nullptr;
+// A host-visible buffer, persistently mapped, that owns its buffer and memory: they go with it
+// (freeing the memory unmaps it). Move-only. `buffer` and `mapped` show what it owns, as plain
+// fields because recording code takes the handle's address (vkCmdBindVertexBuffers): read
+// them, never assign them.
+class MappedBuffer {
+public:
+    MappedBuffer() = default;
+    MappedBuffer(MappedBuffer&& o) noexcept { *this = std::move(o); }
+    MappedBuffer& operator=(MappedBuffer&& o) noexcept {
+        if (this != &o) {
+            buffer_ = std::move(o.buffer_); // the old buffer goes before its memory
+            memory_ = std::move(o.memory_);
+            buffer = std::exchange(o.buffer, VK_NULL_HANDLE);
+            mapped = std::exchange(o.mapped, nullptr);
+            size = std::exchange(o.size, 0);
+            coherent = std::exchange(o.coherent, true);
+        }
+        return *this;
+    }
+    MappedBuffer(const MappedBuffer&) = delete;
+    MappedBuffer& operator=(const MappedBuffer&) = delete;
+
+    VkBuffer buffer = VK_NULL_HANDLE; // buffer_'s handle
+    void* mapped = nullptr;           // memory_, mapped whole
     VkDeviceSize size = 0;
     bool coherent = true;
+    VkDeviceMemory memory() const { return memory_.get(); }
+
+private:
+    friend Result createMappedBuffer(VkPhysicalDevice, VkDevice, VkDeviceSize, VkBufferUsageFlags, bool, MappedBuffer&);
+    Memory memory_;
+    Buffer buffer_; // destroyed before the memory it is bound to
 };
+// Replaces `out` with a new buffer of `size` bytes; on failure `out` is left empty.
 Result createMappedBuffer(VkPhysicalDevice pd, VkDevice dev, VkDeviceSize size, VkBufferUsageFlags usage,
                           bool preferCached, MappedBuffer& out);
-void destroyMappedBuffer(VkDevice dev, MappedBuffer& b);
+// Lets go of the buffer now rather than when `b` goes (nothing else: the destructor does the same).
+inline void destroyMappedBuffer(VkDevice, MappedBuffer& b) { b = MappedBuffer{}; }
 // Makes device writes visible to the host for non-coherent memory.
 [[nodiscard]] Result invalidate(VkDevice dev, const MappedBuffer& b);
 // Makes host writes visible to the device for non-coherent memory.

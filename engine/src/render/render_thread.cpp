@@ -61,7 +61,6 @@ RenderThread::~RenderThread() {
         if (f.fence) vkDestroyFence(dev, f.fence, nullptr);
         if (f.acquired) vkDestroySemaphore(dev, f.acquired, nullptr);
         if (f.pool) vkDestroyCommandPool(dev, f.pool, nullptr);
-        vk::destroyMappedBuffer(dev, f.instances);
     }
 }
 

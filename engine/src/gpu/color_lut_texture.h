@@ -42,8 +42,8 @@ public:
 
 private:
     Device& device_;
-    vk::Image image_;
     vk::Memory memory_;
+    vk::Image image_;
     vk::ImageView view_;
     vk::Sampler sampler_;
     std::vector<vk::MappedBuffer> staging_;       // one per frame slot

@@ -28,8 +28,6 @@ MipPipeline::~MipPipeline() {
     if (pool_) vkDestroyDescriptorPool(dev, pool_, nullptr);
     if (layout_) vkDestroyPipelineLayout(dev, layout_, nullptr);
     if (setLayout_) vkDestroyDescriptorSetLayout(dev, setLayout_, nullptr);
-    if (scratch_) vkDestroyBuffer(dev, scratch_, nullptr);
-    if (scratchMemory_) vkFreeMemory(dev, scratchMemory_, nullptr);
     if (module_) vkDestroyShaderModule(dev, module_, nullptr);
 }
 
@@ -52,9 +50,11 @@ Result MipPipeline::init(EngineTuning::MipSchedule requested) {
     sumsBytes_ = slots * 256 * 8;
     countersOffset_ = (sumsBytes_ + align - 1) / align * align;
     countersBytes_ = slots * 4;
-    IRIS_VK_TRY(vk::createDeviceBuffer(device_.physical(), dev, countersOffset_ + countersBytes_,
-                                       VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, scratch_,
-                                       scratchMemory_));
+    if (Result r = vk::createDeviceBuffer(device_.physical(), dev, countersOffset_ + countersBytes_,
+                                          VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                          scratch_, scratchMemory_);
+        !r.ok())
+        return r;
     const VkShaderModuleCreateInfo smci{.sType = VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO,
                                         .pNext = nullptr,
                                         .flags = 0,
@@ -110,8 +110,9 @@ Result MipPipeline::init(EngineTuning::MipSchedule requested) {
     VkDescriptorImageInfo infos[kTileMipLevels];
     for (uint32_t m = 0; m < kTileMipLevels; ++m)
         infos[m] = {.sampler = VK_NULL_HANDLE, .imageView = atlas_.mipView(m), .imageLayout = VK_IMAGE_LAYOUT_GENERAL};
-    const VkDescriptorBufferInfo buffers[2] = {{.buffer = scratch_, .offset = 0, .range = sumsBytes_},
-                                               {.buffer = scratch_, .offset = countersOffset_, .range = countersBytes_}};
+    const VkDescriptorBufferInfo buffers[2] = {
+        {.buffer = scratch_.get(), .offset = 0, .range = sumsBytes_},
+        {.buffer = scratch_.get(), .offset = countersOffset_, .range = countersBytes_}};
     const VkWriteDescriptorSet writes[4] = {
         {.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .pNext = nullptr, .dstSet = set_, .dstBinding = 0, .dstArrayElement = 0,
          .descriptorCount = 1, .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, .pImageInfo = &infos[0],
@@ -134,7 +135,7 @@ void MipPipeline::recordScratchBarrier(VkCommandBuffer cmd) {
     if (!countersZeroed_) {
         // The counters only ever grow by 16 per tile (the shader tests old % 16), so zeroing
         // them once, before the first dispatch, is enough.
-        vkCmdFillBuffer(cmd, scratch_, countersOffset_, countersBytes_, 0);
+        vkCmdFillBuffer(cmd, scratch_.get(), countersOffset_, countersBytes_, 0);
         countersZeroed_ = true;
     }
     // Order this dispatch's scratch accesses after the fill and after earlier dispatches on
@@ -148,7 +149,7 @@ void MipPipeline::recordScratchBarrier(VkCommandBuffer cmd) {
         .dstAccessMask = VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
         .srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED,
         .dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED,
-        .buffer = scratch_,
+        .buffer = scratch_.get(),
         .offset = 0,
         .size = VK_WHOLE_SIZE};
     vk::pipelineBarrier(cmd, b);

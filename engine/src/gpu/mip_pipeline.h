@@ -11,6 +11,7 @@
 
 #include "gpu/device.h"
 #include "gpu/tile_atlas.h"
+#include "gpu/vk_handle.h"
 
 namespace iris::gpu {
 
@@ -46,8 +47,8 @@ private:
     VkDescriptorSet set_ = VK_NULL_HANDLE;
     // Per atlas slot: 256 level-4 sums (uvec2) the regions hand to the last one, then one
     // arrival counter (uint) per slot.
-    VkBuffer scratch_ = VK_NULL_HANDLE;
-    VkDeviceMemory scratchMemory_ = VK_NULL_HANDLE;
+    vk::Memory scratchMemory_;
+    vk::Buffer scratch_;
     VkDeviceSize sumsBytes_ = 0;
     VkDeviceSize countersOffset_ = 0;
     VkDeviceSize countersBytes_ = 0;

@@ -51,8 +51,8 @@ private:
     VkPipelineLayout layout_ = VK_NULL_HANDLE;
     VkDescriptorPool pool_ = VK_NULL_HANDLE;
     VkDescriptorSet set_ = VK_NULL_HANDLE;
-    VkImage atlas_ = VK_NULL_HANDLE;
-    VkDeviceMemory atlasMemory_ = VK_NULL_HANDLE;
+    vk::Memory atlasMemory_;
+    vk::Image atlas_;
     VkImageView atlasView_ = VK_NULL_HANDLE;
     VkSampler sampler_ = VK_NULL_HANDLE;
     bool atlasReady_ = false; // the first clear has been recorded

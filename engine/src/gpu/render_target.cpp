@@ -8,8 +8,6 @@ namespace iris::gpu {
 OffscreenTarget::~OffscreenTarget() {
     VkDevice dev = device_.device();
     if (view_) vkDestroyImageView(dev, view_, nullptr);
-    if (image_) vkDestroyImage(dev, image_, nullptr);
-    if (memory_) vkFreeMemory(dev, memory_, nullptr);
 }
 
 Result OffscreenTarget::init(uint32_t width, uint32_t height, bool storage) {
@@ -20,8 +18,11 @@ Result OffscreenTarget::init(uint32_t width, uint32_t height, bool storage) {
         vk::image2D(kFormat, width, height, 1, 1,
                     VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT |
                         (storage ? VkImageUsageFlags(VK_IMAGE_USAGE_STORAGE_BIT) : VkImageUsageFlags(0)));
-    IRIS_VK_TRY(vk::createDeviceImage(device_.physical(), dev, ici, image_, memory_));
-    if (Result r = vk::createImageView(dev, image_, VK_IMAGE_VIEW_TYPE_2D, kFormat, vk::colorRange(0, 1, 0, 1), view_); !r.ok()) return r;
+    if (Result r = vk::createDeviceImage(device_.physical(), dev, ici, image_, memory_); !r.ok()) return r;
+    if (Result r =
+            vk::createImageView(dev, image_.get(), VK_IMAGE_VIEW_TYPE_2D, kFormat, vk::colorRange(0, 1, 0, 1), view_);
+        !r.ok())
+        return r;
     return vk::createMappedBuffer(device_.physical(), dev, VkDeviceSize(width) * height * 4,
                                   VK_BUFFER_USAGE_TRANSFER_DST_BIT, /*preferCached=*/true, readback_);
 }

@@ -16,15 +16,15 @@ public:
     // storage: the image can also be written by a compute shader (the per-pixel resolve).
     Result init(uint32_t width, uint32_t height, bool storage = false);
     static constexpr VkFormat kFormat = VK_FORMAT_R8G8B8A8_UNORM;
-    VkImage image() const { return image_; }
+    VkImage image() const { return image_.get(); }
     VkImageView view() const { return view_; }
     const vk::MappedBuffer& readback() const { return readback_; }
     VkExtent2D extent() const { return {width_, height_}; }
 
 private:
     Device& device_;
-    VkImage image_ = VK_NULL_HANDLE;
-    VkDeviceMemory memory_ = VK_NULL_HANDLE;
+    vk::Memory memory_;
+    vk::Image image_;
     VkImageView view_ = VK_NULL_HANDLE;
     vk::MappedBuffer readback_;
     uint32_t width_ = 0, height_ = 0;

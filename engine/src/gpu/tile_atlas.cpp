@@ -23,8 +23,6 @@ TileAtlas::~TileAtlas() {
     for (VkImageView v : mipViews_)
         if (v) vkDestroyImageView(dev, v, nullptr);
     if (view_) vkDestroyImageView(dev, view_, nullptr);
-    if (image_) vkDestroyImage(dev, image_, nullptr);
-    if (memory_) vkFreeMemory(dev, memory_, nullptr);
 }
 
 Result TileAtlas::init(uint64_t vramBudgetBytes) {
@@ -42,21 +40,24 @@ Result TileAtlas::init(uint64_t vramBudgetBytes) {
         return Result(Status::Vulkan, "The device cannot sample (linear) and store RGBA8 images");
     }
 
-    VkResult vr = VK_ERROR_OUT_OF_DEVICE_MEMORY;
+    Result made(Status::OutOfMemory, "no room for a tile atlas of 64 slots");
     // Halve the slot count until the allocation succeeds (a budget larger than the device).
     for (; n >= 64; n /= 2) {
         const VkImageCreateInfo ici =
             vk::image2D(kFormat, uint32_t(kTileSize), uint32_t(kTileSize), kTileMipLevels, uint32_t(n),
                         VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_STORAGE_BIT);
-        vr = vk::createDeviceImage(device_.physical(), dev, ici, image_, memory_);
-        if (vr == VK_SUCCESS) break;
+        made = vk::createDeviceImage(device_.physical(), dev, ici, image_, memory_);
+        if (made.ok()) break;
     }
-    IRIS_VK_TRY(vr);
+    if (!made.ok()) return made;
 
-    if (Result r = vk::createImageView(dev, image_, VK_IMAGE_VIEW_TYPE_2D_ARRAY, kFormat, vk::colorRange(), view_); !r.ok())
+    if (Result r =
+            vk::createImageView(dev, image_.get(), VK_IMAGE_VIEW_TYPE_2D_ARRAY, kFormat, vk::colorRange(), view_);
+        !r.ok())
         return r;
     for (uint32_t m = 0; m < kTileMipLevels; ++m) {
-        if (Result r = vk::createImageView(dev, image_, VK_IMAGE_VIEW_TYPE_2D_ARRAY, kFormat, vk::colorRange(m, 1), mipViews_[m]);
+        if (Result r = vk::createImageView(dev, image_.get(), VK_IMAGE_VIEW_TYPE_2D_ARRAY, kFormat,
+                                           vk::colorRange(m, 1), mipViews_[m]);
             !r.ok())
             return r;
     }
@@ -85,9 +86,10 @@ Result TileAtlas::init(uint64_t vramBudgetBytes) {
                                       .flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT,
                                       .pInheritanceInfo = nullptr};
     if (sr == VK_SUCCESS) sr = vkBeginCommandBuffer(cmd, &bi);
-    const VkImageMemoryBarrier2 b = vk::imageBarrier(image_, VK_PIPELINE_STAGE_2_NONE, VK_ACCESS_2_NONE,
-                                                 VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT,
-                                                 VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL, vk::colorRange());
+    const VkImageMemoryBarrier2 b =
+        vk::imageBarrier(image_.get(), VK_PIPELINE_STAGE_2_NONE, VK_ACCESS_2_NONE, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+                         VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
+                         VK_IMAGE_LAYOUT_GENERAL, vk::colorRange());
     if (sr == VK_SUCCESS) {
         vk::pipelineBarrier(cmd, &b, 1);
         sr = vkEndCommandBuffer(cmd);

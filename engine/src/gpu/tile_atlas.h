@@ -12,6 +12,7 @@
 
 #include "gpu/device.h"
 #include "gpu/tile_map.h"
+#include "gpu/vk_handle.h"
 
 namespace iris::gpu {
 
@@ -24,7 +25,7 @@ public:
     Result init(uint64_t vramBudgetBytes);
 
     static uint64_t bytesPerSlot();
-    VkImage image() const { return image_; }
+    VkImage image() const { return image_.get(); }
     VkImageView view() const { return view_; }
     // Storage views of one mip level across all layers (for the mip compute pass).
     VkImageView mipView(uint32_t level) const { return mipViews_[level]; }
@@ -36,8 +37,8 @@ public:
 
 private:
     Device& device_;
-    VkImage image_ = VK_NULL_HANDLE;
-    VkDeviceMemory memory_ = VK_NULL_HANDLE;
+    vk::Memory memory_;
+    vk::Image image_;
     VkImageView view_ = VK_NULL_HANDLE;
     VkImageView mipViews_[kTileMipLevels] = {};
     VkSampler sampler_ = VK_NULL_HANDLE;

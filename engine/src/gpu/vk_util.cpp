@@ -43,38 +43,37 @@ uint32_t findMemoryType(VkPhysicalDevice pd, uint32_t typeBits, VkMemoryProperty
 }
 
 namespace {
-VkResult allocateDeviceLocal(VkPhysicalDevice pd, VkDevice dev, const VkMemoryRequirements& req, VkDeviceMemory& memory) {
+Result allocateDeviceLocal(VkPhysicalDevice pd, VkDevice dev, const VkMemoryRequirements& req, Memory& memory) {
     const uint32_t type = findMemoryType(pd, req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
-    if (type == UINT32_MAX) return VK_ERROR_OUT_OF_DEVICE_MEMORY;
+    if (type == UINT32_MAX) return Result(Status::OutOfMemory, "no device-local memory type fits");
     const VkMemoryAllocateInfo mai{
         .sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO, .pNext = nullptr, .allocationSize = req.size, .memoryTypeIndex = type};
-    return vkAllocateMemory(dev, &mai, nullptr, &memory);
+    IRIS_VK_TRY(vkAllocateMemory(dev, &mai, nullptr, memory.replace(dev)));
+    return {};
 }
 } // namespace
 
-VkResult createDeviceImage(VkPhysicalDevice pd, VkDevice dev, const VkImageCreateInfo& info, VkImage& image,
-                           VkDeviceMemory& memory) {
-    image = VK_NULL_HANDLE;
-    memory = VK_NULL_HANDLE;
-    VkResult vr = vkCreateImage(dev, &info, nullptr, &image);
-    if (vr != VK_SUCCESS) return vr;
+Result createDeviceImage(VkPhysicalDevice pd, VkDevice dev, const VkImageCreateInfo& info, Image& image,
+                         Memory& memory) {
+    image.reset();
+    memory.reset();
+    // Made into locals, handed over only when bound: a failure leaves nothing behind.
+    Image img;
+    Memory mem;
+    IRIS_VK_TRY(vkCreateImage(dev, &info, nullptr, img.replace(dev)));
     VkMemoryRequirements req;
-    vkGetImageMemoryRequirements(dev, image, &req);
-    vr = allocateDeviceLocal(pd, dev, req, memory);
-    if (vr == VK_SUCCESS) vr = vkBindImageMemory(dev, image, memory, 0);
-    if (vr != VK_SUCCESS) {
-        if (memory) vkFreeMemory(dev, memory, nullptr);
-        vkDestroyImage(dev, image, nullptr);
-        image = VK_NULL_HANDLE;
-        memory = VK_NULL_HANDLE;
-    }
-    return vr;
+    vkGetImageMemoryRequirements(dev, img.get(), &req);
+    if (Result r = allocateDeviceLocal(pd, dev, req, mem); !r.ok()) return r;
+    IRIS_VK_TRY(vkBindImageMemory(dev, img.get(), mem.get(), 0));
+    memory = std::move(mem);
+    image = std::move(img);
+    return {};
 }
 
-VkResult createDeviceBuffer(VkPhysicalDevice pd, VkDevice dev, VkDeviceSize size, VkBufferUsageFlags usage,
-                            VkBuffer& buffer, VkDeviceMemory& memory) {
-    buffer = VK_NULL_HANDLE;
-    memory = VK_NULL_HANDLE;
+Result createDeviceBuffer(VkPhysicalDevice pd, VkDevice dev, VkDeviceSize size, VkBufferUsageFlags usage,
+                          Buffer& buffer, Memory& memory) {
+    buffer.reset();
+    memory.reset();
     const VkBufferCreateInfo bci{.sType = VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO,
                                  .pNext = nullptr,
                                  .flags = 0,
@@ -83,19 +82,16 @@ VkResult createDeviceBuffer(VkPhysicalDevice pd, VkDevice dev, VkDeviceSize size
                                  .sharingMode = VK_SHARING_MODE_EXCLUSIVE,
                                  .queueFamilyIndexCount = 0,
                                  .pQueueFamilyIndices = nullptr};
-    VkResult vr = vkCreateBuffer(dev, &bci, nullptr, &buffer);
-    if (vr != VK_SUCCESS) return vr;
+    Buffer buf;
+    Memory mem;
+    IRIS_VK_TRY(vkCreateBuffer(dev, &bci, nullptr, buf.replace(dev)));
     VkMemoryRequirements req;
-    vkGetBufferMemoryRequirements(dev, buffer, &req);
-    vr = allocateDeviceLocal(pd, dev, req, memory);
-    if (vr == VK_SUCCESS) vr = vkBindBufferMemory(dev, buffer, memory, 0);
-    if (vr != VK_SUCCESS) {
-        if (memory) vkFreeMemory(dev, memory, nullptr);
-        vkDestroyBuffer(dev, buffer, nullptr);
-        buffer = VK_NULL_HANDLE;
-        memory = VK_NULL_HANDLE;
-    }
-    return vr;
+    vkGetBufferMemoryRequirements(dev, buf.get(), &req);
+    if (Result r = allocateDeviceLocal(pd, dev, req, mem); !r.ok()) return r;
+    IRIS_VK_TRY(vkBindBufferMemory(dev, buf.get(), mem.get(), 0));
+    memory = std::move(mem);
+    buffer = std::move(buf);
+    return {};
 }
 
 Result createImageView(VkDevice dev, VkImage image, VkImageViewType type, VkFormat format,

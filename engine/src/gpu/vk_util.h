@@ -115,14 +115,15 @@ inline VkSamplerCreateInfo clampSampler(VkFilter filter, float maxLod) {
     };
 }
 
-// Creates an image and binds it to its own device-local allocation. On failure nothing is
-// left behind and the VkResult says why (VK_ERROR_OUT_OF_DEVICE_MEMORY when no memory type fits).
-VkResult createDeviceImage(VkPhysicalDevice pd, VkDevice dev, const VkImageCreateInfo& info, VkImage& image,
-                           VkDeviceMemory& memory);
+// Creates an image bound to its own device-local allocation into `image` and `memory`
+// (replacing what they held). On failure both are left empty and the result names the step
+// that failed (Status::OutOfMemory also when no memory type fits).
+Result createDeviceImage(VkPhysicalDevice pd, VkDevice dev, const VkImageCreateInfo& info, Image& image,
+                         Memory& memory);
 
 // A buffer bound to its own device-local allocation; same contract as createDeviceImage.
-VkResult createDeviceBuffer(VkPhysicalDevice pd, VkDevice dev, VkDeviceSize size, VkBufferUsageFlags usage,
-                            VkBuffer& buffer, VkDeviceMemory& memory);
+Result createDeviceBuffer(VkPhysicalDevice pd, VkDevice dev, VkDeviceSize size, VkBufferUsageFlags usage,
+                          Buffer& buffer, Memory& memory);
 
 // A timestamp query pool of `count` queries for work on `family`, and the nanoseconds per
 // tick. `pool` stays null (and the result ok) when that family has no timestamps.

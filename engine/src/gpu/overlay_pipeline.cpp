@@ -7,53 +7,42 @@
 
 namespace iris::gpu {
 
-OverlayPipeline::~OverlayPipeline() {
-    VkDevice dev = device_.device();
-    if (!dev) return;
-    for (auto& [f, p] : pipelines_) vkDestroyPipeline(dev, p, nullptr);
-    if (pool_) vkDestroyDescriptorPool(dev, pool_, nullptr);
-    if (layout_) vkDestroyPipelineLayout(dev, layout_, nullptr);
-    if (setLayout_) vkDestroyDescriptorSetLayout(dev, setLayout_, nullptr);
-    if (sampler_) vkDestroySampler(dev, sampler_, nullptr);
-    if (atlasView_) vkDestroyImageView(dev, atlasView_, nullptr);
-    if (vert_) vkDestroyShaderModule(dev, vert_, nullptr);
-    if (frag_) vkDestroyShaderModule(dev, frag_, nullptr);
-}
-
 Result OverlayPipeline::init(uint32_t atlasSize) {
     VkDevice dev = device_.device();
-    if (Result r = vk::createShaderModule(dev, overlay_vert_spv, sizeof(overlay_vert_spv), vert_); !r.ok()) return r;
-    if (Result r = vk::createShaderModule(dev, overlay_frag_spv, sizeof(overlay_frag_spv), frag_); !r.ok()) return r;
+    if (Result r = vk::createShaderModule(dev, overlay_vert_spv, sizeof(overlay_vert_spv), *vert_.replace(dev));
+        !r.ok())
+        return r;
+    if (Result r = vk::createShaderModule(dev, overlay_frag_spv, sizeof(overlay_frag_spv), *frag_.replace(dev));
+        !r.ok())
+        return r;
 
     constexpr VkFormat kFormat = VK_FORMAT_R8_UNORM; // sampled R8 is mandatory in Vulkan
     const VkImageCreateInfo ici =
         vk::image2D(kFormat, atlasSize, atlasSize, 1, 1, VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT);
     if (Result r = vk::createDeviceImage(device_.physical(), dev, ici, atlas_, atlasMemory_); !r.ok()) return r;
     if (Result r = vk::createImageView(dev, atlas_.get(), VK_IMAGE_VIEW_TYPE_2D, kFormat, vk::colorRange(0, 1, 0, 1),
-                                       atlasView_);
+                                       *atlasView_.replace(dev));
         !r.ok())
         return r;
     // The shader uses texelFetch; a sampler is still part of a combined image sampler.
     const VkSamplerCreateInfo sci = vk::clampSampler(VK_FILTER_NEAREST, 0);
-    IRIS_VK_TRY(vkCreateSampler(dev, &sci, nullptr, &sampler_));
+    IRIS_VK_TRY(vkCreateSampler(dev, &sci, nullptr, sampler_.replace(dev)));
 
-    if (Result r = vk::createSampledImageSet(dev, sizeof(OverlayPush), sampler_, atlasView_, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
-                                             setLayout_, layout_, pool_, set_);
-        !r.ok())
-        return r;
-    return {};
+    return vk::createSampledImageSet(dev, sizeof(OverlayPush), sampler_.get(), atlasView_.get(),
+                                     VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL, *setLayout_.replace(dev),
+                                     *layout_.replace(dev), *pool_.replace(dev), set_);
 }
 
 Expected<VkPipeline> OverlayPipeline::pipelineFor(VkFormat format) {
-    if (auto it = pipelines_.find(int(format)); it != pipelines_.end()) return it->second;
+    if (auto it = pipelines_.find(int(format)); it != pipelines_.end()) return it->second.get();
     const VkVertexInputAttributeDescription attrs[3] = {
         {.location = 0, .binding = 0, .format = VK_FORMAT_R32G32B32A32_SFLOAT, .offset = offsetof(OverlayInstance, rect)},
         {.location = 1, .binding = 0, .format = VK_FORMAT_R32G32B32A32_SFLOAT, .offset = offsetof(OverlayInstance, colour)},
         {.location = 2, .binding = 0, .format = VK_FORMAT_R32G32B32A32_SFLOAT, .offset = offsetof(OverlayInstance, glyph)},
     };
-    Expected<VkPipeline> p = vk::createInstancedQuadPipeline(device_.device(), layout_, vert_, frag_,
+    Expected<VkPipeline> p = vk::createInstancedQuadPipeline(device_.device(), layout_.get(), vert_.get(), frag_.get(),
                                                              sizeof(OverlayInstance), attrs, 3, format);
-    if (p) pipelines_[int(format)] = *p;
+    if (p) pipelines_.emplace(int(format), vk::Pipeline(device_.device(), *p));
     return p;
 }
 

@@ -17,15 +17,7 @@ BufferThread::BufferThread(SharedState& shared, TileCache& cache, gpu::Device& d
       perimeter_(perimeter) {}
 
 BufferThread::~BufferThread() {
-    stop();
-    VkDevice dev = device_.device();
-    if (!dev) return;
-    if (pool_) vkDestroyCommandPool(dev, pool_, nullptr);
-    if (copyPool_) vkDestroyCommandPool(dev, copyPool_, nullptr);
-    if (timeline_) vkDestroySemaphore(dev, timeline_, nullptr);
-    if (copyTimeline_) vkDestroySemaphore(dev, copyTimeline_, nullptr);
-    if (mipTimestamps_) vkDestroyQueryPool(dev, mipTimestamps_, nullptr);
-    vk::destroyMappedBuffer(dev, staging_);
+    stop(); // the uploads in flight finish before the pools, semaphores and staging ring go
 }
 
 Result BufferThread::init() {
@@ -35,21 +27,21 @@ Result BufferThread::init() {
     computeFamily_ = device_.family(Role::Compute);
     graphicsFamily_ = device_.family(Role::Graphics);
     separateCopy_ = transferFamily_ != computeFamily_;
-    const auto makePool = [&](uint32_t family, VkCommandPool& pool) -> Result {
+    const auto makePool = [&](uint32_t family, vk::CommandPool& pool) -> Result {
         const VkCommandPoolCreateInfo pci{.sType = VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO,
                                           .pNext = nullptr,
                                           .flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT,
                                           .queueFamilyIndex = family};
-        IRIS_VK_TRY(vkCreateCommandPool(dev, &pci, nullptr, &pool));
+        IRIS_VK_TRY(vkCreateCommandPool(dev, &pci, nullptr, pool.replace(dev)));
         return {};
     };
-    const auto makeTimeline = [&](VkSemaphore& sem) -> Result {
+    const auto makeTimeline = [&](vk::Semaphore& sem) -> Result {
         const VkSemaphoreTypeCreateInfo tci{.sType = VK_STRUCTURE_TYPE_SEMAPHORE_TYPE_CREATE_INFO,
                                             .pNext = nullptr,
                                             .semaphoreType = VK_SEMAPHORE_TYPE_TIMELINE,
                                             .initialValue = 0};
         const VkSemaphoreCreateInfo sci{.sType = VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO, .pNext = &tci, .flags = 0};
-        IRIS_VK_TRY(vkCreateSemaphore(dev, &sci, nullptr, &sem));
+        IRIS_VK_TRY(vkCreateSemaphore(dev, &sci, nullptr, sem.replace(dev)));
         return {};
     };
     if (Result r = makePool(computeFamily_, pool_); !r.ok()) return r;
@@ -58,13 +50,13 @@ Result BufferThread::init() {
         if (Result r = makePool(transferFamily_, copyPool_); !r.ok()) return r;
         if (Result r = makeTimeline(copyTimeline_); !r.ok()) return r;
     }
-    if (Result r = vk::createTimestampPool(device_.physical(), dev, computeFamily_, 2 * kMaxTransactions, mipTimestamps_,
-                                           timestampPeriodNs_);
+    if (Result r = vk::createTimestampPool(device_.physical(), dev, computeFamily_, 2 * kMaxTransactions,
+                                           *mipTimestamps_.replace(dev), timestampPeriodNs_);
         !r.ok())
         return r;
     handover_.needed = computeFamily_ != graphicsFamily_;
     handover_.srcFamily = computeFamily_;
-    handover_.uploadTimeline = timeline_;
+    handover_.uploadTimeline = timeline_.get();
     if (Result r = vk::createMappedBuffer(device_.physical(), dev, VkDeviceSize(kStagingTiles) * kTileBytes,
                                           VK_BUFFER_USAGE_TRANSFER_SRC_BIT, /*preferCached=*/false, staging_);
         !r.ok())
@@ -81,9 +73,9 @@ Result BufferThread::init() {
         return {};
     };
     for (Transaction& t : txns_) {
-        if (Result r = alloc(pool_, &t.cmd); !r.ok()) return r;
+        if (Result r = alloc(pool_.get(), &t.cmd); !r.ok()) return r;
         if (separateCopy_)
-            if (Result r = alloc(copyPool_, &t.copyCmd); !r.ok()) return r;
+            if (Result r = alloc(copyPool_.get(), &t.copyCmd); !r.ok()) return r;
     }
     return {};
 }
@@ -96,11 +88,12 @@ void BufferThread::stop() {
     if (thread_.joinable()) thread_.join();
     // Let the GPU finish the uploads in flight before their resources go away.
     if (timeline_ && nextValue_ > 0) {
+        const VkSemaphore timeline = timeline_.get();
         const VkSemaphoreWaitInfo wi{.sType = VK_STRUCTURE_TYPE_SEMAPHORE_WAIT_INFO,
                                      .pNext = nullptr,
                                      .flags = 0,
                                      .semaphoreCount = 1,
-                                     .pSemaphores = &timeline_,
+                                     .pSemaphores = &timeline,
                                      .pValues = &nextValue_};
         if (const VkResult r = vkWaitSemaphores(device_.device(), &wi, UINT64_MAX); r != VK_SUCCESS)
             log_.error(vk::check(r, "vkWaitSemaphores (uploads in flight at shutdown)").message());
@@ -121,11 +114,12 @@ void BufferThread::run() {
             uint64_t oldest = UINT64_MAX;
             for (const auto& t : txns_)
                 if (t.signalValue) oldest = std::min(oldest, t.signalValue);
+            const VkSemaphore timeline = timeline_.get();
             const VkSemaphoreWaitInfo wi{.sType = VK_STRUCTURE_TYPE_SEMAPHORE_WAIT_INFO,
                                          .pNext = nullptr,
                                          .flags = 0,
                                          .semaphoreCount = 1,
-                                         .pSemaphores = &timeline_,
+                                         .pSemaphores = &timeline,
                                          .pValues = &oldest};
             if (const VkResult r = vkWaitSemaphores(device_.device(), &wi, 2'000'000); r < 0) {
                 // The device is lost: nothing in flight will complete. Report it once (first
@@ -153,7 +147,7 @@ bool BufferThread::regionDone(const Snapshot& snap) const {
 
 bool BufferThread::pollCompleted() {
     uint64_t done = 0;
-    const VkResult vr = vkGetSemaphoreCounterValue(device_.device(), timeline_, &done);
+    const VkResult vr = vkGetSemaphoreCounterValue(device_.device(), timeline_.get(), &done);
     if (vr != VK_SUCCESS) {
         shared_.setError(vk::check(vr, "vkGetSemaphoreCounterValue"));
         return false;
@@ -166,8 +160,9 @@ bool BufferThread::pollCompleted() {
         if (mipTimestamps_) {
             uint64_t ts[2] = {0, 0};
             const uint32_t q = uint32_t(&t - txns_.data()) * 2;
-            if (vkGetQueryPoolResults(device_.device(), mipTimestamps_, q, 2, sizeof(ts), ts, sizeof(uint64_t),
-                                      VK_QUERY_RESULT_64_BIT) == VK_SUCCESS && ts[1] >= ts[0]) {
+            if (vkGetQueryPoolResults(device_.device(), mipTimestamps_.get(), q, 2, sizeof(ts), ts, sizeof(uint64_t),
+                                      VK_QUERY_RESULT_64_BIT) == VK_SUCCESS &&
+                ts[1] >= ts[0]) {
                 counters_.mipNs.fetch_add(uint64_t(double(ts[1] - ts[0]) * timestampPeriodNs_), std::memory_order_relaxed);
                 counters_.mipTiles.fetch_add(t.slots.size(), std::memory_order_relaxed);
             }
@@ -261,15 +256,16 @@ bool BufferThread::submitNew(const Snapshot& snap) {
 Result BufferThread::submit(Transaction& tx) {
     using Role = gpu::Device::Role;
     const VkSemaphoreSubmitInfo copyDone =
-        vk::semaphoreInfo(copyTimeline_, tx.signalValue, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT);
+        vk::semaphoreInfo(copyTimeline_.get(), tx.signalValue, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT);
     if (separateCopy_) {
         const VkCommandBufferSubmitInfo cbi = vk::commandInfo(tx.copyCmd);
         IRIS_VK_TRY(device_.submit(Role::Transfer, vk::submitInfo(&cbi, nullptr, 0, &copyDone, 1), VK_NULL_HANDLE));
     }
     // The compute stage waits for the copy (its acquire barrier needs the release to have run).
     const VkSemaphoreSubmitInfo waitCopy =
-        vk::semaphoreInfo(copyTimeline_, tx.signalValue, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT);
-    const VkSemaphoreSubmitInfo sig = vk::semaphoreInfo(timeline_, tx.signalValue, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT);
+        vk::semaphoreInfo(copyTimeline_.get(), tx.signalValue, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT);
+    const VkSemaphoreSubmitInfo sig =
+        vk::semaphoreInfo(timeline_.get(), tx.signalValue, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT);
     const VkCommandBufferSubmitInfo cbi = vk::commandInfo(tx.cmd);
     const VkSubmitInfo2 si = vk::submitInfo(&cbi, &waitCopy, separateCopy_ ? 1u : 0u, &sig, 1);
     IRIS_VK_TRY(device_.submit(Role::Compute, si, VK_NULL_HANDLE));
@@ -376,12 +372,12 @@ Result BufferThread::record(Transaction& t) {
     }
     const uint32_t q = uint32_t(&t - txns_.data()) * 2;
     if (mipTimestamps_) {
-        vkCmdResetQueryPool(cmd, mipTimestamps_, q, 2);
+        vkCmdResetQueryPool(cmd, mipTimestamps_.get(), q, 2);
         // Both stamps bracket only the dispatch: the first waits for the copy above to finish.
-        vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, mipTimestamps_, q);
+        vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, mipTimestamps_.get(), q);
     }
     mips_.record(cmd, t.slots.data(), n, t.enhance);
-    if (mipTimestamps_) vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, mipTimestamps_, q + 1);
+    if (mipTimestamps_) vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, mipTimestamps_.get(), q + 1);
     b.clear();
     for (int s : t.slots) {
         if (C != G) {

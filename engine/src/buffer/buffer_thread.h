@@ -24,6 +24,7 @@
 #include "buffer/handover.h"
 #include "gpu/mip_pipeline.h"
 #include "gpu/tile_atlas.h"
+#include "gpu/vk_handle.h"
 #include "gpu/vk_util.h"
 
 namespace iris {
@@ -42,8 +43,8 @@ public:
 
 private:
     struct Transaction {
-        VkCommandBuffer copyCmd = VK_NULL_HANDLE; // transfer queue (only when its family differs)
-        VkCommandBuffer cmd = VK_NULL_HANDLE;     // compute queue
+        VkCommandBuffer copyCmd = VK_NULL_HANDLE; // transfer queue (only when its family differs); freed with copyPool_
+        VkCommandBuffer cmd = VK_NULL_HANDLE;     // compute queue; freed with pool_
         uint64_t signalValue = 0; // 0: idle
         bool enhance = true;      // Snapshot::enhance of the view this transaction was made for
         std::vector<int> slots;
@@ -74,11 +75,12 @@ private:
     std::vector<TileRef> region_;
     std::unordered_set<uint64_t> keep_;
 
-    VkCommandPool pool_ = VK_NULL_HANDLE;         // compute family
-    VkCommandPool copyPool_ = VK_NULL_HANDLE;     // transfer family, when separate
-    VkSemaphore timeline_ = VK_NULL_HANDLE;       // upload timeline: signalled by the compute stage
-    VkSemaphore copyTimeline_ = VK_NULL_HANDLE;   // transfer → compute, when separate
-    VkQueryPool mipTimestamps_ = VK_NULL_HANDLE;  // 2 per transaction, around the mip dispatch
+    // Destroyed with the members, after the destructor's stop() has waited for the uploads in flight.
+    vk::CommandPool pool_;        // compute family
+    vk::CommandPool copyPool_;    // transfer family, when separate
+    vk::Semaphore timeline_;      // upload timeline: signalled by the compute stage
+    vk::Semaphore copyTimeline_;  // transfer → compute, when separate
+    vk::QueryPool mipTimestamps_; // 2 per transaction, around the mip dispatch
     double timestampPeriodNs_ = 0;
     bool separateCopy_ = false;
     uint32_t transferFamily_ = 0, computeFamily_ = 0, graphicsFamily_ = 0;

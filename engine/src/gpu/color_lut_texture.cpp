@@ -23,26 +23,17 @@ void writePlaceholder(uint16_t* out) {
 }
 } // namespace
 
-ColorLutTexture::~ColorLutTexture() {
-    for (vk::MappedBuffer& b : staging_) vk::destroyMappedBuffer(device_.device(), b);
-}
-
 Result ColorLutTexture::init(uint32_t frameSlots) {
     VkDevice dev = device_.device();
     VkImageCreateInfo ici =
         vk::image2D(kFormat, kSize, kSize, 1, 1, VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT);
     ici.imageType = VK_IMAGE_TYPE_3D;
     ici.extent.depth = kSize;
-    VkImage image = VK_NULL_HANDLE;
-    VkDeviceMemory memory = VK_NULL_HANDLE;
-    IRIS_VK_TRY(vk::createDeviceImage(device_.physical(), dev, ici, image, memory));
-    image_ = vk::Image(dev, image);
-    memory_ = vk::Memory(dev, memory);
-    VkImageView view = VK_NULL_HANDLE;
-    if (Result r = vk::createImageView(dev, image, VK_IMAGE_VIEW_TYPE_3D, kFormat, vk::colorRange(0, 1, 0, 1), view);
+    if (Result r = vk::createDeviceImage(device_.physical(), dev, ici, image_, memory_); !r.ok()) return r;
+    if (Result r = vk::createImageView(dev, image_.get(), VK_IMAGE_VIEW_TYPE_3D, kFormat, vk::colorRange(0, 1, 0, 1),
+                                       *view_.replace(dev));
         !r.ok())
         return r;
-    view_ = vk::ImageView(dev, view);
     const VkSamplerCreateInfo sci = vk::clampSampler(VK_FILTER_LINEAR, 0);
     IRIS_VK_TRY(vkCreateSampler(dev, &sci, nullptr, sampler_.replace(dev)));
     staging_.resize(frameSlots);

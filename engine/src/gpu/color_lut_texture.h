@@ -22,7 +22,6 @@ class ColorLutTexture {
 public:
     static constexpr VkFormat kFormat = VK_FORMAT_R16G16B16A16_SFLOAT; // sampled + linear filter: mandatory
     explicit ColorLutTexture(Device& device) : device_(device) {}
-    ~ColorLutTexture();
     ColorLutTexture(const ColorLutTexture&) = delete;
     ColorLutTexture& operator=(const ColorLutTexture&) = delete;
 
@@ -43,8 +42,8 @@ public:
 
 private:
     Device& device_;
-    vk::Image image_;
     vk::Memory memory_;
+    vk::Image image_;
     vk::ImageView view_;
     vk::Sampler sampler_;
     std::vector<vk::MappedBuffer> staging_;       // one per frame slot

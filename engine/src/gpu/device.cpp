@@ -13,11 +13,13 @@ namespace {
 
 constexpr const char* kValidationLayer = "VK_LAYER_KHRONOS_validation";
 
+// A failed query counts as "not there": the caller then goes on without the layer or extension.
 bool hasLayer(const char* name) {
     uint32_t n = 0;
-    vkEnumerateInstanceLayerProperties(&n, nullptr);
+    if (vkEnumerateInstanceLayerProperties(&n, nullptr) < 0) return false;
     std::vector<VkLayerProperties> layers(n);
-    vkEnumerateInstanceLayerProperties(&n, layers.data());
+    if (vkEnumerateInstanceLayerProperties(&n, layers.data()) < 0) return false;
+    layers.resize(n);
     for (const auto& l : layers)
         if (std::strcmp(l.layerName, name) == 0) return true;
     return false;
@@ -25,9 +27,10 @@ bool hasLayer(const char* name) {
 
 bool hasInstanceExtension(const char* name) {
     uint32_t n = 0;
-    vkEnumerateInstanceExtensionProperties(nullptr, &n, nullptr);
+    if (vkEnumerateInstanceExtensionProperties(nullptr, &n, nullptr) < 0) return false;
     std::vector<VkExtensionProperties> exts(n);
-    vkEnumerateInstanceExtensionProperties(nullptr, &n, exts.data());
+    if (vkEnumerateInstanceExtensionProperties(nullptr, &n, exts.data()) < 0) return false;
+    exts.resize(n);
     for (const auto& e : exts)
         if (std::strcmp(e.extensionName, name) == 0) return true;
     return false;
@@ -35,6 +38,11 @@ bool hasInstanceExtension(const char* name) {
 
 } // namespace
 
+// Hand-written, not vk::Owned: that wrapper destroys a child of a VkDevice, and none of these
+// is one (the device and the instance have no parent, the messenger's is the instance and its
+// destroy function is looked up at run time); the instance may be the host's, which is not
+// ours to destroy. The order is fixed: wait, device, messenger, instance. The engine declares
+// the Device before every object made from it, so it goes last.
 Device::~Device() {
     if (device_) {
         (void)vkDeviceWaitIdle(device_); // going away: a lost device is destroyed all the same
@@ -213,9 +221,10 @@ Result Device::pickPhysicalDevice() {
 
 Result Device::createDevice() {
     uint32_t n = 0;
-    vkEnumerateDeviceExtensionProperties(physical_, nullptr, &n, nullptr);
+    IRIS_VK_TRY(vkEnumerateDeviceExtensionProperties(physical_, nullptr, &n, nullptr));
     std::vector<VkExtensionProperties> exts(n);
-    vkEnumerateDeviceExtensionProperties(physical_, nullptr, &n, exts.data());
+    IRIS_VK_TRY(vkEnumerateDeviceExtensionProperties(physical_, nullptr, &n, exts.data()));
+    exts.resize(n);
     std::vector<const char*> enable;
     for (const auto& e : exts) {
         if (std::strcmp(e.extensionName, VK_KHR_SWAPCHAIN_EXTENSION_NAME) == 0) {

@@ -21,18 +21,6 @@ struct MipPush {
 static_assert(sizeof(MipPush) == 40);
 } // namespace
 
-MipPipeline::~MipPipeline() {
-    VkDevice dev = device_.device();
-    if (!dev) return;
-    if (pipeline_) vkDestroyPipeline(dev, pipeline_, nullptr);
-    if (pool_) vkDestroyDescriptorPool(dev, pool_, nullptr);
-    if (layout_) vkDestroyPipelineLayout(dev, layout_, nullptr);
-    if (setLayout_) vkDestroyDescriptorSetLayout(dev, setLayout_, nullptr);
-    if (scratch_) vkDestroyBuffer(dev, scratch_, nullptr);
-    if (scratchMemory_) vkFreeMemory(dev, scratchMemory_, nullptr);
-    if (module_) vkDestroyShaderModule(dev, module_, nullptr);
-}
-
 Result MipPipeline::init(EngineTuning::MipSchedule requested) {
     VkDevice dev = device_.device();
     const VkPhysicalDeviceLimits& limits = device_.properties().limits;
@@ -52,16 +40,18 @@ Result MipPipeline::init(EngineTuning::MipSchedule requested) {
     sumsBytes_ = slots * 256 * 8;
     countersOffset_ = (sumsBytes_ + align - 1) / align * align;
     countersBytes_ = slots * 4;
-    IRIS_VK_TRY(vk::createDeviceBuffer(device_.physical(), dev, countersOffset_ + countersBytes_,
-                                       VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT, scratch_,
-                                       scratchMemory_));
+    if (Result r = vk::createDeviceBuffer(device_.physical(), dev, countersOffset_ + countersBytes_,
+                                          VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                          scratch_, scratchMemory_);
+        !r.ok())
+        return r;
     const VkShaderModuleCreateInfo smci{.sType = VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO,
                                         .pNext = nullptr,
                                         .flags = 0,
                                         .codeSize = schedule_ == Schedule::Wide ? sizeof(mip_reduce_comp_spv)
                                                                                 : sizeof(mip_reduce_serial_comp_spv),
                                         .pCode = schedule_ == Schedule::Wide ? mip_reduce_comp_spv : mip_reduce_serial_comp_spv};
-    IRIS_VK_TRY(vkCreateShaderModule(dev, &smci, nullptr, &module_));
+    IRIS_VK_TRY(vkCreateShaderModule(dev, &smci, nullptr, module_.replace(dev)));
     const VkDescriptorSetLayoutBinding bindings[4] = {
         {.binding = 0, .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, .descriptorCount = 1,
          .stageFlags = VK_SHADER_STAGE_COMPUTE_BIT, .pImmutableSamplers = nullptr},
@@ -74,44 +64,51 @@ Result MipPipeline::init(EngineTuning::MipSchedule requested) {
     };
     const VkDescriptorSetLayoutCreateInfo dslci{
         .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO, .pNext = nullptr, .flags = 0, .bindingCount = 4, .pBindings = bindings};
-    IRIS_VK_TRY(vkCreateDescriptorSetLayout(dev, &dslci, nullptr, &setLayout_));
+    IRIS_VK_TRY(vkCreateDescriptorSetLayout(dev, &dslci, nullptr, setLayout_.replace(dev)));
+    const VkDescriptorSetLayout setLayout = setLayout_.get();
     const VkPushConstantRange push{.stageFlags = VK_SHADER_STAGE_COMPUTE_BIT, .offset = 0, .size = sizeof(MipPush)};
     const VkPipelineLayoutCreateInfo plci{.sType = VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO,
                                           .pNext = nullptr,
                                           .flags = 0,
                                           .setLayoutCount = 1,
-                                          .pSetLayouts = &setLayout_,
+                                          .pSetLayouts = &setLayout,
                                           .pushConstantRangeCount = 1,
                                           .pPushConstantRanges = &push};
-    IRIS_VK_TRY(vkCreatePipelineLayout(dev, &plci, nullptr, &layout_));
+    IRIS_VK_TRY(vkCreatePipelineLayout(dev, &plci, nullptr, layout_.replace(dev)));
     const VkComputePipelineCreateInfo cpci{
         .sType = VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO,
         .pNext = nullptr,
         .flags = 0,
-        .stage = {.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, .pNext = nullptr, .flags = 0,
-                  .stage = VK_SHADER_STAGE_COMPUTE_BIT, .module = module_, .pName = "main", .pSpecializationInfo = nullptr},
-        .layout = layout_,
+        .stage = {.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO,
+                  .pNext = nullptr,
+                  .flags = 0,
+                  .stage = VK_SHADER_STAGE_COMPUTE_BIT,
+                  .module = module_.get(),
+                  .pName = "main",
+                  .pSpecializationInfo = nullptr},
+        .layout = layout_.get(),
         .basePipelineHandle = VK_NULL_HANDLE,
         .basePipelineIndex = -1,
     };
-    IRIS_VK_TRY(vkCreateComputePipelines(dev, VK_NULL_HANDLE, 1, &cpci, nullptr, &pipeline_));
+    IRIS_VK_TRY(vkCreateComputePipelines(dev, VK_NULL_HANDLE, 1, &cpci, nullptr, pipeline_.replace(dev)));
 
     const VkDescriptorPoolSize ps[2] = {{.type = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, .descriptorCount = kTileMipLevels},
                                         {.type = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, .descriptorCount = 2}};
     const VkDescriptorPoolCreateInfo dpci{
         .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO, .pNext = nullptr, .flags = 0, .maxSets = 1, .poolSizeCount = 2, .pPoolSizes = ps};
-    IRIS_VK_TRY(vkCreateDescriptorPool(dev, &dpci, nullptr, &pool_));
+    IRIS_VK_TRY(vkCreateDescriptorPool(dev, &dpci, nullptr, pool_.replace(dev)));
     const VkDescriptorSetAllocateInfo dsai{.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO,
                                            .pNext = nullptr,
-                                           .descriptorPool = pool_,
+                                           .descriptorPool = pool_.get(),
                                            .descriptorSetCount = 1,
-                                           .pSetLayouts = &setLayout_};
+                                           .pSetLayouts = &setLayout};
     IRIS_VK_TRY(vkAllocateDescriptorSets(dev, &dsai, &set_));
     VkDescriptorImageInfo infos[kTileMipLevels];
     for (uint32_t m = 0; m < kTileMipLevels; ++m)
         infos[m] = {.sampler = VK_NULL_HANDLE, .imageView = atlas_.mipView(m), .imageLayout = VK_IMAGE_LAYOUT_GENERAL};
-    const VkDescriptorBufferInfo buffers[2] = {{.buffer = scratch_, .offset = 0, .range = sumsBytes_},
-                                               {.buffer = scratch_, .offset = countersOffset_, .range = countersBytes_}};
+    const VkDescriptorBufferInfo buffers[2] = {
+        {.buffer = scratch_.get(), .offset = 0, .range = sumsBytes_},
+        {.buffer = scratch_.get(), .offset = countersOffset_, .range = countersBytes_}};
     const VkWriteDescriptorSet writes[4] = {
         {.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .pNext = nullptr, .dstSet = set_, .dstBinding = 0, .dstArrayElement = 0,
          .descriptorCount = 1, .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, .pImageInfo = &infos[0],
@@ -134,7 +131,7 @@ void MipPipeline::recordScratchBarrier(VkCommandBuffer cmd) {
     if (!countersZeroed_) {
         // The counters only ever grow by 16 per tile (the shader tests old % 16), so zeroing
         // them once, before the first dispatch, is enough.
-        vkCmdFillBuffer(cmd, scratch_, countersOffset_, countersBytes_, 0);
+        vkCmdFillBuffer(cmd, scratch_.get(), countersOffset_, countersBytes_, 0);
         countersZeroed_ = true;
     }
     // Order this dispatch's scratch accesses after the fill and after earlier dispatches on
@@ -148,7 +145,7 @@ void MipPipeline::recordScratchBarrier(VkCommandBuffer cmd) {
         .dstAccessMask = VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
         .srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED,
         .dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED,
-        .buffer = scratch_,
+        .buffer = scratch_.get(),
         .offset = 0,
         .size = VK_WHOLE_SIZE};
     vk::pipelineBarrier(cmd, b);
@@ -160,9 +157,9 @@ void MipPipeline::record(VkCommandBuffer cmd, const int* layers, uint32_t count,
     for (uint32_t i = 0; i < count && i < kMaxTiles; ++i) push.layers[i] = uint32_t(layers[i]);
     push.enhance = enhance ? 1u : 0u;
     push.lambda = mipkernel::kLambda;
-    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_);
-    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout_, 0, 1, &set_, 0, nullptr);
-    vkCmdPushConstants(cmd, layout_, VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push), &push);
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline_.get());
+    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout_.get(), 0, 1, &set_, 0, nullptr);
+    vkCmdPushConstants(cmd, layout_.get(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof(push), &push);
     vkCmdDispatch(cmd, schedule_ == Schedule::Wide ? kRegionsPerTile : 1, count, 1);
 }
 

@@ -11,6 +11,7 @@
 
 #include "gpu/device.h"
 #include "gpu/tile_atlas.h"
+#include "gpu/vk_handle.h"
 
 namespace iris::gpu {
 
@@ -21,7 +22,6 @@ public:
     static constexpr uint32_t kSharedBytes = 27876;     // the wide shader's shared memory (checked at init)
     enum class Schedule { Wide, Serial };
     MipPipeline(Device& device, TileAtlas& atlas) : device_(device), atlas_(atlas) {}
-    ~MipPipeline();
     // `requested`: EngineConfig::tuning.mipSchedule (Auto picks by device type).
     Result init(EngineTuning::MipSchedule requested);
     Schedule schedule() const { return schedule_; }
@@ -38,16 +38,16 @@ private:
 
     Device& device_;
     TileAtlas& atlas_;
-    VkShaderModule module_ = VK_NULL_HANDLE;
-    VkDescriptorSetLayout setLayout_ = VK_NULL_HANDLE;
-    VkPipelineLayout layout_ = VK_NULL_HANDLE;
-    VkPipeline pipeline_ = VK_NULL_HANDLE;
-    VkDescriptorPool pool_ = VK_NULL_HANDLE;
-    VkDescriptorSet set_ = VK_NULL_HANDLE;
+    vk::ShaderModule module_;
     // Per atlas slot: 256 level-4 sums (uvec2) the regions hand to the last one, then one
     // arrival counter (uint) per slot.
-    VkBuffer scratch_ = VK_NULL_HANDLE;
-    VkDeviceMemory scratchMemory_ = VK_NULL_HANDLE;
+    vk::Memory scratchMemory_;
+    vk::Buffer scratch_;
+    vk::DescriptorSetLayout setLayout_;
+    vk::PipelineLayout layout_;
+    vk::DescriptorPool pool_;
+    VkDescriptorSet set_ = VK_NULL_HANDLE; // freed with pool_
+    vk::Pipeline pipeline_;
     VkDeviceSize sumsBytes_ = 0;
     VkDeviceSize countersOffset_ = 0;
     VkDeviceSize countersBytes_ = 0;

@@ -7,6 +7,7 @@
 #include <unordered_map>
 
 #include "gpu/device.h"
+#include "gpu/vk_handle.h"
 #include "gpu/vk_util.h"
 
 namespace iris::gpu {
@@ -25,7 +26,6 @@ struct OverlayPush {
 class OverlayPipeline {
 public:
     explicit OverlayPipeline(Device& device) : device_(device) {}
-    ~OverlayPipeline();
     OverlayPipeline(const OverlayPipeline&) = delete;
     OverlayPipeline& operator=(const OverlayPipeline&) = delete;
 
@@ -33,7 +33,7 @@ public:
     Result init(uint32_t atlasSize);
     // The pipeline for a colour format, created on first use.
     Expected<VkPipeline> pipelineFor(VkFormat format);
-    VkPipelineLayout layout() const { return layout_; }
+    VkPipelineLayout layout() const { return layout_.get(); }
     VkDescriptorSet descriptorSet() const { return set_; }
 
     // Records, outside a render pass, the copies of `regions` of `staging` into the glyph atlas
@@ -45,18 +45,17 @@ public:
 
 private:
     Device& device_;
-    VkShaderModule vert_ = VK_NULL_HANDLE;
-    VkShaderModule frag_ = VK_NULL_HANDLE;
-    VkDescriptorSetLayout setLayout_ = VK_NULL_HANDLE;
-    VkPipelineLayout layout_ = VK_NULL_HANDLE;
-    VkDescriptorPool pool_ = VK_NULL_HANDLE;
-    VkDescriptorSet set_ = VK_NULL_HANDLE;
-    VkImage atlas_ = VK_NULL_HANDLE;
-    VkDeviceMemory atlasMemory_ = VK_NULL_HANDLE;
-    VkImageView atlasView_ = VK_NULL_HANDLE;
-    VkSampler sampler_ = VK_NULL_HANDLE;
-    bool atlasReady_ = false; // the first clear has been recorded
-    std::unordered_map<int, VkPipeline> pipelines_;
+    vk::ShaderModule vert_, frag_;
+    vk::Memory atlasMemory_;
+    vk::Image atlas_;
+    vk::ImageView atlasView_;
+    vk::Sampler sampler_;
+    vk::DescriptorSetLayout setLayout_;
+    vk::PipelineLayout layout_;
+    vk::DescriptorPool pool_;
+    VkDescriptorSet set_ = VK_NULL_HANDLE; // freed with pool_
+    bool atlasReady_ = false;              // the first clear has been recorded
+    std::unordered_map<int, vk::Pipeline> pipelines_;
 };
 
 } // namespace iris::gpu

@@ -4,15 +4,6 @@
 
 namespace iris::gpu {
 
-
-OffscreenTarget::~OffscreenTarget() {
-    VkDevice dev = device_.device();
-    if (view_) vkDestroyImageView(dev, view_, nullptr);
-    if (image_) vkDestroyImage(dev, image_, nullptr);
-    if (memory_) vkFreeMemory(dev, memory_, nullptr);
-    vk::destroyMappedBuffer(dev, readback_);
-}
-
 Result OffscreenTarget::init(uint32_t width, uint32_t height, bool storage) {
     VkDevice dev = device_.device();
     width_ = width;
@@ -21,21 +12,16 @@ Result OffscreenTarget::init(uint32_t width, uint32_t height, bool storage) {
         vk::image2D(kFormat, width, height, 1, 1,
                     VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT |
                         (storage ? VkImageUsageFlags(VK_IMAGE_USAGE_STORAGE_BIT) : VkImageUsageFlags(0)));
-    IRIS_VK_TRY(vk::createDeviceImage(device_.physical(), dev, ici, image_, memory_));
-    if (Result r = vk::createImageView(dev, image_, VK_IMAGE_VIEW_TYPE_2D, kFormat, vk::colorRange(0, 1, 0, 1), view_); !r.ok()) return r;
+    if (Result r = vk::createDeviceImage(device_.physical(), dev, ici, image_, memory_); !r.ok()) return r;
+    if (Result r = vk::createImageView(dev, image_.get(), VK_IMAGE_VIEW_TYPE_2D, kFormat, vk::colorRange(0, 1, 0, 1),
+                                       *view_.replace(dev));
+        !r.ok())
+        return r;
     return vk::createMappedBuffer(device_.physical(), dev, VkDeviceSize(width) * height * 4,
                                   VK_BUFFER_USAGE_TRANSFER_DST_BIT, /*preferCached=*/true, readback_);
 }
 
-Swapchain::~Swapchain() {
-    destroyResources();
-    if (swapchain_) vkDestroySwapchainKHR(device_.device(), swapchain_, nullptr);
-}
-
 void Swapchain::destroyResources() {
-    VkDevice dev = device_.device();
-    for (VkImageView v : views_) vkDestroyImageView(dev, v, nullptr);
-    for (VkSemaphore s : renderDone_) vkDestroySemaphore(dev, s, nullptr);
     views_.clear();
     renderDone_.clear();
     images_.clear();
@@ -63,16 +49,14 @@ Result Swapchain::recreate(uint32_t width, uint32_t height) {
     // The old swapchain's images may still be in use by the presentation engine: wait.
     if (Result r = device_.waitIdle(); !r.ok()) return r;
     destroyResources();
-    VkSwapchainKHR old = swapchain_;
-    swapchain_ = VK_NULL_HANDLE;
-    if (extent.width == 0 || extent.height == 0) {
-        if (old) vkDestroySwapchainKHR(dev, old, nullptr);
-        return {};
-    }
+    // The old swapchain stays until the new one is made from it; it goes on every path.
+    vk::SwapchainKHR old = std::move(swapchain_);
+    if (extent.width == 0 || extent.height == 0) return {};
     uint32_t n = 0;
-    vkGetPhysicalDeviceSurfaceFormatsKHR(pd, surface_, &n, nullptr);
+    IRIS_VK_TRY(vkGetPhysicalDeviceSurfaceFormatsKHR(pd, surface_, &n, nullptr));
     std::vector<VkSurfaceFormatKHR> formats(n);
-    vkGetPhysicalDeviceSurfaceFormatsKHR(pd, surface_, &n, formats.data());
+    IRIS_VK_TRY(vkGetPhysicalDeviceSurfaceFormatsKHR(pd, surface_, &n, formats.data()));
+    formats.resize(n);
     // UNORM formats: slide bytes go to the screen unchanged (no sRGB encode on write).
     VkSurfaceFormatKHR chosen{VK_FORMAT_UNDEFINED, VK_COLOR_SPACE_SRGB_NONLINEAR_KHR};
     for (VkFormat want : {VK_FORMAT_B8G8R8A8_UNORM, VK_FORMAT_R8G8B8A8_UNORM}) {
@@ -102,28 +86,33 @@ Result Swapchain::recreate(uint32_t width, uint32_t height) {
         .imageSharingMode = VK_SHARING_MODE_EXCLUSIVE,
         .queueFamilyIndexCount = 0,
         .pQueueFamilyIndices = nullptr,
-        .preTransform = (caps.supportedTransforms & VK_SURFACE_TRANSFORM_IDENTITY_BIT_KHR) ? VK_SURFACE_TRANSFORM_IDENTITY_BIT_KHR
-                                                                                            : caps.currentTransform,
-        .compositeAlpha = (caps.supportedCompositeAlpha & VK_COMPOSITE_ALPHA_OPAQUE_BIT_KHR)
-                              ? VK_COMPOSITE_ALPHA_OPAQUE_BIT_KHR
-                              : VkCompositeAlphaFlagBitsKHR(caps.supportedCompositeAlpha & -caps.supportedCompositeAlpha),
+        .preTransform = (caps.supportedTransforms & VK_SURFACE_TRANSFORM_IDENTITY_BIT_KHR)
+                            ? VK_SURFACE_TRANSFORM_IDENTITY_BIT_KHR
+                            : caps.currentTransform,
+        .compositeAlpha =
+            (caps.supportedCompositeAlpha & VK_COMPOSITE_ALPHA_OPAQUE_BIT_KHR)
+                ? VK_COMPOSITE_ALPHA_OPAQUE_BIT_KHR
+                : VkCompositeAlphaFlagBitsKHR(caps.supportedCompositeAlpha & -caps.supportedCompositeAlpha),
         .presentMode = VK_PRESENT_MODE_FIFO_KHR, // vsync: the monitor's rate, no tearing, always supported
         .clipped = VK_TRUE,
-        .oldSwapchain = old,
+        .oldSwapchain = old.get(),
     };
-    const VkResult vr = vkCreateSwapchainKHR(dev, &sci, nullptr, &swapchain_);
-    if (old) vkDestroySwapchainKHR(dev, old, nullptr);
+    const VkResult vr = vkCreateSwapchainKHR(dev, &sci, nullptr, swapchain_.replace(dev));
+    old.reset(); // retired by the new one (or by the failure)
     IRIS_VK_TRY(vr);
     extent_ = extent;
-    IRIS_VK_TRY(vkGetSwapchainImagesKHR(dev, swapchain_, &n, nullptr));
+    IRIS_VK_TRY(vkGetSwapchainImagesKHR(dev, swapchain_.get(), &n, nullptr));
     images_.resize(n);
-    IRIS_VK_TRY(vkGetSwapchainImagesKHR(dev, swapchain_, &n, images_.data()));
+    IRIS_VK_TRY(vkGetSwapchainImagesKHR(dev, swapchain_.get(), &n, images_.data()));
     views_.resize(n);
     renderDone_.resize(n);
     const VkSemaphoreCreateInfo semci{.sType = VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO, .pNext = nullptr, .flags = 0};
     for (uint32_t i = 0; i < n; ++i) {
-        if (Result r = vk::createImageView(dev, images_[i], VK_IMAGE_VIEW_TYPE_2D, format_, vk::colorRange(0, 1, 0, 1), views_[i]); !r.ok()) return r;
-        IRIS_VK_TRY(vkCreateSemaphore(dev, &semci, nullptr, &renderDone_[i]));
+        if (Result r = vk::createImageView(dev, images_[i], VK_IMAGE_VIEW_TYPE_2D, format_, vk::colorRange(0, 1, 0, 1),
+                                           *views_[i].replace(dev));
+            !r.ok())
+            return r;
+        IRIS_VK_TRY(vkCreateSemaphore(dev, &semci, nullptr, renderDone_[i].replace(dev)));
     }
     return {};
 }

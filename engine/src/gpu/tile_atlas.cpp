@@ -16,16 +16,46 @@ uint64_t TileAtlas::bytesPerSlot() {
     return bytes;
 }
 
-TileAtlas::~TileAtlas() {
-    VkDevice dev = device_.device();
-    if (!dev) return;
-    if (sampler_) vkDestroySampler(dev, sampler_, nullptr);
-    for (VkImageView v : mipViews_)
-        if (v) vkDestroyImageView(dev, v, nullptr);
-    if (view_) vkDestroyImageView(dev, view_, nullptr);
-    if (image_) vkDestroyImage(dev, image_, nullptr);
-    if (memory_) vkFreeMemory(dev, memory_, nullptr);
+namespace {
+// Takes every layer and mip of `image` from UNDEFINED to GENERAL, where it stays, and waits
+// for that. The command pool and the fence are this function's: they go on every path.
+Result transitionToGeneral(Device& device, VkImage image) {
+    VkDevice dev = device.device();
+    const VkCommandPoolCreateInfo pci{.sType = VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO,
+                                      .pNext = nullptr,
+                                      .flags = VK_COMMAND_POOL_CREATE_TRANSIENT_BIT,
+                                      .queueFamilyIndex = device.queueFamily()};
+    vk::CommandPool pool;
+    IRIS_VK_TRY(vkCreateCommandPool(dev, &pci, nullptr, pool.replace(dev)));
+    VkCommandBuffer cmd = VK_NULL_HANDLE; // freed with the pool
+    const VkCommandBufferAllocateInfo cai{.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO,
+                                          .pNext = nullptr,
+                                          .commandPool = pool.get(),
+                                          .level = VK_COMMAND_BUFFER_LEVEL_PRIMARY,
+                                          .commandBufferCount = 1};
+    IRIS_VK_TRY(vkAllocateCommandBuffers(dev, &cai, &cmd));
+    const VkCommandBufferBeginInfo bi{.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO,
+                                      .pNext = nullptr,
+                                      .flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT,
+                                      .pInheritanceInfo = nullptr};
+    IRIS_VK_TRY(vkBeginCommandBuffer(cmd, &bi));
+    const VkImageMemoryBarrier2 b =
+        vk::imageBarrier(image, VK_PIPELINE_STAGE_2_NONE, VK_ACCESS_2_NONE, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+                         VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
+                         VK_IMAGE_LAYOUT_GENERAL, vk::colorRange());
+    vk::pipelineBarrier(cmd, &b, 1);
+    IRIS_VK_TRY(vkEndCommandBuffer(cmd));
+    const VkFenceCreateInfo fci{.sType = VK_STRUCTURE_TYPE_FENCE_CREATE_INFO, .pNext = nullptr, .flags = 0};
+    vk::Fence fence;
+    IRIS_VK_TRY(vkCreateFence(dev, &fci, nullptr, fence.replace(dev)));
+    const VkCommandBufferSubmitInfo cbi = vk::commandInfo(cmd);
+    const VkSubmitInfo2 si = vk::submitInfo(&cbi);
+    IRIS_VK_TRY(device.submit(si, fence.get()));
+    const VkFence f = fence.get();
+    IRIS_VK_TRY(vkWaitForFences(dev, 1, &f, VK_TRUE, UINT64_MAX));
+    return {};
 }
+} // namespace
 
 Result TileAtlas::init(uint64_t vramBudgetBytes) {
     VkDevice dev = device_.device();
@@ -42,66 +72,33 @@ Result TileAtlas::init(uint64_t vramBudgetBytes) {
         return Result(Status::Vulkan, "The device cannot sample (linear) and store RGBA8 images");
     }
 
-    VkResult vr = VK_ERROR_OUT_OF_DEVICE_MEMORY;
+    Result made(Status::OutOfMemory, "no room for a tile atlas of 64 slots");
     // Halve the slot count until the allocation succeeds (a budget larger than the device).
     for (; n >= 64; n /= 2) {
         const VkImageCreateInfo ici =
             vk::image2D(kFormat, uint32_t(kTileSize), uint32_t(kTileSize), kTileMipLevels, uint32_t(n),
                         VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_STORAGE_BIT);
-        vr = vk::createDeviceImage(device_.physical(), dev, ici, image_, memory_);
-        if (vr == VK_SUCCESS) break;
+        made = vk::createDeviceImage(device_.physical(), dev, ici, image_, memory_);
+        if (made.ok()) break;
     }
-    IRIS_VK_TRY(vr);
+    if (!made.ok()) return made;
 
-    if (Result r = vk::createImageView(dev, image_, VK_IMAGE_VIEW_TYPE_2D_ARRAY, kFormat, vk::colorRange(), view_); !r.ok())
+    if (Result r = vk::createImageView(dev, image_.get(), VK_IMAGE_VIEW_TYPE_2D_ARRAY, kFormat, vk::colorRange(),
+                                       *view_.replace(dev));
+        !r.ok())
         return r;
     for (uint32_t m = 0; m < kTileMipLevels; ++m) {
-        if (Result r = vk::createImageView(dev, image_, VK_IMAGE_VIEW_TYPE_2D_ARRAY, kFormat, vk::colorRange(m, 1), mipViews_[m]);
+        if (Result r = vk::createImageView(dev, image_.get(), VK_IMAGE_VIEW_TYPE_2D_ARRAY, kFormat,
+                                           vk::colorRange(m, 1), *mipViews_[m].replace(dev));
             !r.ok())
             return r;
     }
 
     const VkSamplerCreateInfo sci = vk::clampSampler(VK_FILTER_LINEAR, float(kTileMipLevels - 1));
-    IRIS_VK_TRY(vkCreateSampler(dev, &sci, nullptr, &sampler_));
+    IRIS_VK_TRY(vkCreateSampler(dev, &sci, nullptr, sampler_.replace(dev)));
 
     // One-time transition of every layer to GENERAL, where the image stays.
-    VkCommandPool pool;
-    const VkCommandPoolCreateInfo pci{.sType = VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO,
-                                      .pNext = nullptr,
-                                      .flags = VK_COMMAND_POOL_CREATE_TRANSIENT_BIT,
-                                      .queueFamilyIndex = device_.queueFamily()};
-    IRIS_VK_TRY(vkCreateCommandPool(dev, &pci, nullptr, &pool));
-    VkCommandBuffer cmd;
-    const VkCommandBufferAllocateInfo cai{.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO,
-                                          .pNext = nullptr,
-                                          .commandPool = pool,
-                                          .level = VK_COMMAND_BUFFER_LEVEL_PRIMARY,
-                                          .commandBufferCount = 1};
-    // Each step runs only if the one before succeeded; the first failure is reported, and the
-    // fence and the pool go away on every path.
-    VkResult sr = vkAllocateCommandBuffers(dev, &cai, &cmd);
-    const VkCommandBufferBeginInfo bi{.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO,
-                                      .pNext = nullptr,
-                                      .flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT,
-                                      .pInheritanceInfo = nullptr};
-    if (sr == VK_SUCCESS) sr = vkBeginCommandBuffer(cmd, &bi);
-    const VkImageMemoryBarrier2 b = vk::imageBarrier(image_, VK_PIPELINE_STAGE_2_NONE, VK_ACCESS_2_NONE,
-                                                 VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT,
-                                                 VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL, vk::colorRange());
-    if (sr == VK_SUCCESS) {
-        vk::pipelineBarrier(cmd, &b, 1);
-        sr = vkEndCommandBuffer(cmd);
-    }
-    VkFence fence = VK_NULL_HANDLE;
-    const VkFenceCreateInfo fci{.sType = VK_STRUCTURE_TYPE_FENCE_CREATE_INFO, .pNext = nullptr, .flags = 0};
-    if (sr == VK_SUCCESS) sr = vkCreateFence(dev, &fci, nullptr, &fence);
-    const VkCommandBufferSubmitInfo cbi = vk::commandInfo(cmd);
-    const VkSubmitInfo2 si = vk::submitInfo(&cbi);
-    if (sr == VK_SUCCESS) sr = device_.submit(si, fence);
-    if (sr == VK_SUCCESS) sr = vkWaitForFences(dev, 1, &fence, VK_TRUE, UINT64_MAX);
-    if (fence) vkDestroyFence(dev, fence, nullptr);
-    vkDestroyCommandPool(dev, pool, nullptr);
-    IRIS_VK_TRY(sr);
+    if (Result r = transitionToGeneral(device_, image_.get()); !r.ok()) return r;
 
     map_ = std::make_unique<TileMap>(uint32_t(n));
     return {};

@@ -12,6 +12,7 @@
 
 #include "gpu/device.h"
 #include "gpu/tile_map.h"
+#include "gpu/vk_handle.h"
 
 namespace iris::gpu {
 
@@ -20,15 +21,14 @@ inline constexpr uint32_t kTileMipLevels = 9; // 256 → 1
 class TileAtlas {
 public:
     explicit TileAtlas(Device& device) : device_(device) {}
-    ~TileAtlas();
     Result init(uint64_t vramBudgetBytes);
 
     static uint64_t bytesPerSlot();
-    VkImage image() const { return image_; }
-    VkImageView view() const { return view_; }
+    VkImage image() const { return image_.get(); }
+    VkImageView view() const { return view_.get(); }
     // Storage views of one mip level across all layers (for the mip compute pass).
-    VkImageView mipView(uint32_t level) const { return mipViews_[level]; }
-    VkSampler sampler() const { return sampler_; }
+    VkImageView mipView(uint32_t level) const { return mipViews_[level].get(); }
+    VkSampler sampler() const { return sampler_.get(); }
     uint32_t slotCount() const { return map_ ? map_->slotCount() : 0; }
 
     TileMap& map() { return *map_; }
@@ -36,11 +36,11 @@ public:
 
 private:
     Device& device_;
-    VkImage image_ = VK_NULL_HANDLE;
-    VkDeviceMemory memory_ = VK_NULL_HANDLE;
-    VkImageView view_ = VK_NULL_HANDLE;
-    VkImageView mipViews_[kTileMipLevels] = {};
-    VkSampler sampler_ = VK_NULL_HANDLE;
+    vk::Memory memory_;
+    vk::Image image_;
+    vk::ImageView view_;
+    vk::ImageView mipViews_[kTileMipLevels];
+    vk::Sampler sampler_;
 
     std::unique_ptr<TileMap> map_;
 };

@@ -1,8 +1,19 @@
 // Owned Vulkan handles: move-only, destroyed with their device when the owner goes away, so a
 // class that makes Vulkan objects needs no hand-written destroy list and a failed init leaves
-// nothing behind. New code uses these (gpu/color_lut_texture, gpu/tile_pipeline); the older
-// classes (render_target, tile_atlas, overlay and mip pipelines, the render and buffer
-// threads' frame resources) still keep destroy lists and move over as they are touched.
+// nothing behind. Every engine object is held this way (a persistently mapped buffer by
+// vk::MappedBuffer, gpu/vk_util.h, which owns its buffer and memory); only gpu/device.cpp
+// destroys by hand: the instance, the device and the debug messenger, which outlive the rest.
+//
+// Members go in reverse declaration order: declare a handle after what it depends on (the
+// memory before the image bound to it, an image before its views). Where the GPU may still
+// use an object, the owner's destructor body waits first (device idle, the upload timeline),
+// since it runs before the members go. Command buffers and descriptor sets go with their
+// pools and stay plain handles.
+//
+// Creation: a vkCreate* call writes into replace(dev) inside IRIS_VK_TRY, in a function that
+// returns Result; a helper that makes one object either takes its out-parameter (pass
+// *x.replace(dev)) and returns Result, or returns Expected<H> for the caller to adopt
+// (vk::Pipeline(dev, *p)).
 //
 //   vk::Owned<VkImage, vkDestroyImage> image;
 //   IRIS_VK_TRY(vkCreateImage(dev, &info, nullptr, image.replace(dev)));
@@ -14,7 +25,7 @@
 
 namespace iris::vk {
 
-template <class H, void (*Destroy)(VkDevice, H, const VkAllocationCallbacks*)>
+template <class H, void(VKAPI_PTR* Destroy)(VkDevice, H, const VkAllocationCallbacks*)>
 class Owned {
 public:
     Owned() = default;
@@ -61,5 +72,10 @@ using Pipeline = Owned<VkPipeline, vkDestroyPipeline>;
 using PipelineLayout = Owned<VkPipelineLayout, vkDestroyPipelineLayout>;
 using DescriptorSetLayout = Owned<VkDescriptorSetLayout, vkDestroyDescriptorSetLayout>;
 using DescriptorPool = Owned<VkDescriptorPool, vkDestroyDescriptorPool>;
+using CommandPool = Owned<VkCommandPool, vkDestroyCommandPool>; // its command buffers go with it
+using Fence = Owned<VkFence, vkDestroyFence>;
+using Semaphore = Owned<VkSemaphore, vkDestroySemaphore>;
+using QueryPool = Owned<VkQueryPool, vkDestroyQueryPool>;
+using SwapchainKHR = Owned<VkSwapchainKHR, vkDestroySwapchainKHR>; // its images go with it
 
 } // namespace iris::vk

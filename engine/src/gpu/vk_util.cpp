@@ -43,38 +43,37 @@ uint32_t findMemoryType(VkPhysicalDevice pd, uint32_t typeBits, VkMemoryProperty
 }
 
 namespace {
-VkResult allocateDeviceLocal(VkPhysicalDevice pd, VkDevice dev, const VkMemoryRequirements& req, VkDeviceMemory& memory) {
+Result allocateDeviceLocal(VkPhysicalDevice pd, VkDevice dev, const VkMemoryRequirements& req, Memory& memory) {
     const uint32_t type = findMemoryType(pd, req.memoryTypeBits, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
-    if (type == UINT32_MAX) return VK_ERROR_OUT_OF_DEVICE_MEMORY;
+    if (type == UINT32_MAX) return Result(Status::OutOfMemory, "no device-local memory type fits");
     const VkMemoryAllocateInfo mai{
         .sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO, .pNext = nullptr, .allocationSize = req.size, .memoryTypeIndex = type};
-    return vkAllocateMemory(dev, &mai, nullptr, &memory);
+    IRIS_VK_TRY(vkAllocateMemory(dev, &mai, nullptr, memory.replace(dev)));
+    return {};
 }
 } // namespace
 
-VkResult createDeviceImage(VkPhysicalDevice pd, VkDevice dev, const VkImageCreateInfo& info, VkImage& image,
-                           VkDeviceMemory& memory) {
-    image = VK_NULL_HANDLE;
-    memory = VK_NULL_HANDLE;
-    VkResult vr = vkCreateImage(dev, &info, nullptr, &image);
-    if (vr != VK_SUCCESS) return vr;
+Result createDeviceImage(VkPhysicalDevice pd, VkDevice dev, const VkImageCreateInfo& info, Image& image,
+                         Memory& memory) {
+    image.reset();
+    memory.reset();
+    // Made into locals, handed over only when bound: a failure leaves nothing behind.
+    Image img;
+    Memory mem;
+    IRIS_VK_TRY(vkCreateImage(dev, &info, nullptr, img.replace(dev)));
     VkMemoryRequirements req;
-    vkGetImageMemoryRequirements(dev, image, &req);
-    vr = allocateDeviceLocal(pd, dev, req, memory);
-    if (vr == VK_SUCCESS) vr = vkBindImageMemory(dev, image, memory, 0);
-    if (vr != VK_SUCCESS) {
-        if (memory) vkFreeMemory(dev, memory, nullptr);
-        vkDestroyImage(dev, image, nullptr);
-        image = VK_NULL_HANDLE;
-        memory = VK_NULL_HANDLE;
-    }
-    return vr;
+    vkGetImageMemoryRequirements(dev, img.get(), &req);
+    if (Result r = allocateDeviceLocal(pd, dev, req, mem); !r.ok()) return r;
+    IRIS_VK_TRY(vkBindImageMemory(dev, img.get(), mem.get(), 0));
+    memory = std::move(mem);
+    image = std::move(img);
+    return {};
 }
 
-VkResult createDeviceBuffer(VkPhysicalDevice pd, VkDevice dev, VkDeviceSize size, VkBufferUsageFlags usage,
-                            VkBuffer& buffer, VkDeviceMemory& memory) {
-    buffer = VK_NULL_HANDLE;
-    memory = VK_NULL_HANDLE;
+Result createDeviceBuffer(VkPhysicalDevice pd, VkDevice dev, VkDeviceSize size, VkBufferUsageFlags usage,
+                          Buffer& buffer, Memory& memory) {
+    buffer.reset();
+    memory.reset();
     const VkBufferCreateInfo bci{.sType = VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO,
                                  .pNext = nullptr,
                                  .flags = 0,
@@ -83,19 +82,16 @@ VkResult createDeviceBuffer(VkPhysicalDevice pd, VkDevice dev, VkDeviceSize size
                                  .sharingMode = VK_SHARING_MODE_EXCLUSIVE,
                                  .queueFamilyIndexCount = 0,
                                  .pQueueFamilyIndices = nullptr};
-    VkResult vr = vkCreateBuffer(dev, &bci, nullptr, &buffer);
-    if (vr != VK_SUCCESS) return vr;
+    Buffer buf;
+    Memory mem;
+    IRIS_VK_TRY(vkCreateBuffer(dev, &bci, nullptr, buf.replace(dev)));
     VkMemoryRequirements req;
-    vkGetBufferMemoryRequirements(dev, buffer, &req);
-    vr = allocateDeviceLocal(pd, dev, req, memory);
-    if (vr == VK_SUCCESS) vr = vkBindBufferMemory(dev, buffer, memory, 0);
-    if (vr != VK_SUCCESS) {
-        if (memory) vkFreeMemory(dev, memory, nullptr);
-        vkDestroyBuffer(dev, buffer, nullptr);
-        buffer = VK_NULL_HANDLE;
-        memory = VK_NULL_HANDLE;
-    }
-    return vr;
+    vkGetBufferMemoryRequirements(dev, buf.get(), &req);
+    if (Result r = allocateDeviceLocal(pd, dev, req, mem); !r.ok()) return r;
+    IRIS_VK_TRY(vkBindBufferMemory(dev, buf.get(), mem.get(), 0));
+    memory = std::move(mem);
+    buffer = std::move(buf);
+    return {};
 }
 
 Result createImageView(VkDevice dev, VkImage image, VkImageViewType type, VkFormat format,
@@ -137,6 +133,8 @@ Result createTimestampPool(VkPhysicalDevice pd, VkDevice dev, uint32_t family, u
 
 Result createMappedBuffer(VkPhysicalDevice pd, VkDevice dev, VkDeviceSize size, VkBufferUsageFlags usage,
                           bool preferCached, MappedBuffer& out) {
+    out = MappedBuffer{};
+    MappedBuffer b; // what is made so far goes away with it on failure
     const VkBufferCreateInfo bci{
         .sType = VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO,
         .pNext = nullptr,
@@ -147,42 +145,44 @@ Result createMappedBuffer(VkPhysicalDevice pd, VkDevice dev, VkDeviceSize size, 
         .queueFamilyIndexCount = 0,
         .pQueueFamilyIndices = nullptr,
     };
-    IRIS_VK_TRY(vkCreateBuffer(dev, &bci, nullptr, &out.buffer));
+    IRIS_VK_TRY(vkCreateBuffer(dev, &bci, nullptr, b.buffer_.replace(dev)));
+    b.buffer = b.buffer_.get();
     VkMemoryRequirements req;
-    vkGetBufferMemoryRequirements(dev, out.buffer, &req);
+    vkGetBufferMemoryRequirements(dev, b.buffer, &req);
     const uint32_t type = findMemoryType(pd, req.memoryTypeBits, VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT,
                                          preferCached ? VK_MEMORY_PROPERTY_HOST_CACHED_BIT
                                                       : VK_MEMORY_PROPERTY_HOST_COHERENT_BIT);
     if (type == UINT32_MAX) return Result(Status::Vulkan, "no host-visible memory type for a staging buffer");
     VkPhysicalDeviceMemoryProperties props;
     vkGetPhysicalDeviceMemoryProperties(pd, &props);
-    out.coherent = props.memoryTypes[type].propertyFlags & VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+    b.coherent = props.memoryTypes[type].propertyFlags & VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
     const VkMemoryAllocateInfo mai{
         .sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO, .pNext = nullptr, .allocationSize = req.size, .memoryTypeIndex = type};
-    IRIS_VK_TRY(vkAllocateMemory(dev, &mai, nullptr, &out.memory));
-    IRIS_VK_TRY(vkBindBufferMemory(dev, out.buffer, out.memory, 0));
-    IRIS_VK_TRY(vkMapMemory(dev, out.memory, 0, VK_WHOLE_SIZE, 0, &out.mapped));
-    out.size = size;
+    IRIS_VK_TRY(vkAllocateMemory(dev, &mai, nullptr, b.memory_.replace(dev)));
+    IRIS_VK_TRY(vkBindBufferMemory(dev, b.buffer, b.memory(), 0));
+    IRIS_VK_TRY(vkMapMemory(dev, b.memory(), 0, VK_WHOLE_SIZE, 0, &b.mapped));
+    b.size = size;
+    out = std::move(b);
     return {};
-}
-
-void destroyMappedBuffer(VkDevice dev, MappedBuffer& b) {
-    if (b.memory) vkFreeMemory(dev, b.memory, nullptr); // unmaps implicitly
-    if (b.buffer) vkDestroyBuffer(dev, b.buffer, nullptr);
-    b = MappedBuffer{};
 }
 
 Result invalidate(VkDevice dev, const MappedBuffer& b) {
     if (b.coherent) return {};
-    const VkMappedMemoryRange range{
-        .sType = VK_STRUCTURE_TYPE_MAPPED_MEMORY_RANGE, .pNext = nullptr, .memory = b.memory, .offset = 0, .size = VK_WHOLE_SIZE};
+    const VkMappedMemoryRange range{.sType = VK_STRUCTURE_TYPE_MAPPED_MEMORY_RANGE,
+                                    .pNext = nullptr,
+                                    .memory = b.memory(),
+                                    .offset = 0,
+                                    .size = VK_WHOLE_SIZE};
     return check(vkInvalidateMappedMemoryRanges(dev, 1, &range), "vkInvalidateMappedMemoryRanges");
 }
 
 Result flush(VkDevice dev, const MappedBuffer& b) {
     if (b.coherent) return {};
-    const VkMappedMemoryRange range{
-        .sType = VK_STRUCTURE_TYPE_MAPPED_MEMORY_RANGE, .pNext = nullptr, .memory = b.memory, .offset = 0, .size = VK_WHOLE_SIZE};
+    const VkMappedMemoryRange range{.sType = VK_STRUCTURE_TYPE_MAPPED_MEMORY_RANGE,
+                                    .pNext = nullptr,
+                                    .memory = b.memory(),
+                                    .offset = 0,
+                                    .size = VK_WHOLE_SIZE};
     return check(vkFlushMappedMemoryRanges(dev, 1, &range), "vkFlushMappedMemoryRanges");
 }
 

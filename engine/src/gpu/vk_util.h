@@ -1,12 +1,13 @@
 // Small Vulkan helpers: VkResult → Result, synchronization2 barrier builders, memory types.
 #pragma once
 
-#include <string>
-
 #include <span>
+#include <string>
+#include <utility>
 
 #include <vulkan/vulkan.h>
 
+#include "gpu/vk_handle.h"
 #include "iris/types.h"
 
 namespace iris::vk {
@@ -114,14 +115,15 @@ inline VkSamplerCreateInfo clampSampler(VkFilter filter, float maxLod) {
     };
 }
 
-// Creates an image and binds it to its own device-local allocation. On failure nothing is
-// left behind and the VkResult says why (VK_ERROR_OUT_OF_DEVICE_MEMORY when no memory type fits).
-VkResult createDeviceImage(VkPhysicalDevice pd, VkDevice dev, const VkImageCreateInfo& info, VkImage& image,
-                           VkDeviceMemory& memory);
+// Creates an image bound to its own device-local allocation into `image` and `memory`
+// (replacing what they held). On failure both are left empty and the result names the step
+// that failed (Status::OutOfMemory also when no memory type fits).
+Result createDeviceImage(VkPhysicalDevice pd, VkDevice dev, const VkImageCreateInfo& info, Image& image,
+                         Memory& memory);
 
 // A buffer bound to its own device-local allocation; same contract as createDeviceImage.
-VkResult createDeviceBuffer(VkPhysicalDevice pd, VkDevice dev, VkDeviceSize size, VkBufferUsageFlags usage,
-                            VkBuffer& buffer, VkDeviceMemory& memory);
+Result createDeviceBuffer(VkPhysicalDevice pd, VkDevice dev, VkDeviceSize size, VkBufferUsageFlags usage,
+                          Buffer& buffer, Memory& memory);
 
 // A timestamp query pool of `count` queries for work on `family`, and the nanoseconds per
 // tick. `pool` stays null (and the result ok) when that family has no timestamps.
@@ -198,17 +200,44 @@ Expected<VkPipeline> createInstancedQuadPipeline(VkDevice dev, VkPipelineLayout 
                                                  uint32_t attributeCount, VkFormat format,
                                                  const VkSpecializationInfo* fragSpecialization = nullptr);
 
-// A host-visible buffer, persistently mapped.
-struct MappedBuffer {
-    VkBuffer buffer = VK_NULL_HANDLE;
-    VkDeviceMemory memory = VK_NULL_HANDLE;
-    void* mapped = nullptr;
+// A host-visible buffer, persistently mapped, that owns its buffer and memory: they go with it
+// (freeing the memory unmaps it). Move-only. `buffer` and `mapped` show what it owns, as plain
+// fields because recording code takes the handle's address (vkCmdBindVertexBuffers): read
+// them, never assign them.
+class MappedBuffer {
+public:
+    MappedBuffer() = default;
+    MappedBuffer(MappedBuffer&& o) noexcept { *this = std::move(o); }
+    MappedBuffer& operator=(MappedBuffer&& o) noexcept {
+        if (this != &o) {
+            buffer_ = std::move(o.buffer_); // the old buffer goes before its memory
+            memory_ = std::move(o.memory_);
+            buffer = std::exchange(o.buffer, VK_NULL_HANDLE);
+            mapped = std::exchange(o.mapped, nullptr);
+            size = std::exchange(o.size, 0);
+            coherent = std::exchange(o.coherent, true);
+        }
+        return *this;
+    }
+    MappedBuffer(const MappedBuffer&) = delete;
+    MappedBuffer& operator=(const MappedBuffer&) = delete;
+
+    VkBuffer buffer = VK_NULL_HANDLE; // buffer_'s handle
+    void* mapped = nullptr;           // memory_, mapped whole
     VkDeviceSize size = 0;
     bool coherent = true;
+    VkDeviceMemory memory() const { return memory_.get(); }
+
+private:
+    friend Result createMappedBuffer(VkPhysicalDevice, VkDevice, VkDeviceSize, VkBufferUsageFlags, bool, MappedBuffer&);
+    Memory memory_;
+    Buffer buffer_; // destroyed before the memory it is bound to
 };
+// Replaces `out` with a new buffer of `size` bytes; on failure `out` is left empty.
 Result createMappedBuffer(VkPhysicalDevice pd, VkDevice dev, VkDeviceSize size, VkBufferUsageFlags usage,
                           bool preferCached, MappedBuffer& out);
-void destroyMappedBuffer(VkDevice dev, MappedBuffer& b);
+// Lets go of the buffer now rather than when `b` goes (nothing else: the destructor does the same).
+inline void destroyMappedBuffer(VkDevice, MappedBuffer& b) { b = MappedBuffer{}; }
 // Makes device writes visible to the host for non-coherent memory.
 [[nodiscard]] Result invalidate(VkDevice dev, const MappedBuffer& b);
 // Makes host writes visible to the device for non-coherent memory.

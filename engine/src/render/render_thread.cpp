@@ -51,17 +51,14 @@ RenderThread::~RenderThread() {
     stop();
     VkDevice dev = device_.device();
     if (!dev) return;
+    // The GPU finishes every frame before anything it uses goes: the targets here, the frame
+    // slots' objects and the timestamp queries with the members, after this body.
     if (Result r = device_.waitIdle(); !r.ok()) log_.error(r.message()); // going away regardless
     swapchain_.reset();
     offscreen_.reset();
-    if (timestamps_) vkDestroyQueryPool(dev, timestamps_, nullptr);
     for (FrameSlot& f : frames_) {
         for (int s : f.pinned) atlas_.map().unpin(s);
         f.pinned.clear();
-        if (f.fence) vkDestroyFence(dev, f.fence, nullptr);
-        if (f.acquired) vkDestroySemaphore(dev, f.acquired, nullptr);
-        if (f.pool) vkDestroyCommandPool(dev, f.pool, nullptr);
-        vk::destroyMappedBuffer(dev, f.instances);
     }
 }
 
@@ -84,7 +81,7 @@ Result RenderThread::init() {
         log_.info("tile resolve: quads");
     }
     if (Result r = vk::createTimestampPool(device_.physical(), dev, device_.queueFamily(), 2 * kFramesInFlight,
-                                           timestamps_, timestampPeriodNs_);
+                                           *timestamps_.replace(dev), timestampPeriodNs_);
         !r.ok())
         return r;
     for (FrameSlot& f : frames_) {
@@ -92,17 +89,17 @@ Result RenderThread::init() {
                                           .pNext = nullptr,
                                           .flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT,
                                           .queueFamilyIndex = device_.queueFamily()};
-        IRIS_VK_TRY(vkCreateCommandPool(dev, &pci, nullptr, &f.pool));
+        IRIS_VK_TRY(vkCreateCommandPool(dev, &pci, nullptr, f.pool.replace(dev)));
         const VkCommandBufferAllocateInfo cai{.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO,
                                               .pNext = nullptr,
-                                              .commandPool = f.pool,
+                                              .commandPool = f.pool.get(),
                                               .level = VK_COMMAND_BUFFER_LEVEL_PRIMARY,
                                               .commandBufferCount = 1};
         IRIS_VK_TRY(vkAllocateCommandBuffers(dev, &cai, &f.cmd));
         const VkFenceCreateInfo fci{.sType = VK_STRUCTURE_TYPE_FENCE_CREATE_INFO, .pNext = nullptr, .flags = VK_FENCE_CREATE_SIGNALED_BIT};
-        IRIS_VK_TRY(vkCreateFence(dev, &fci, nullptr, &f.fence));
+        IRIS_VK_TRY(vkCreateFence(dev, &fci, nullptr, f.fence.replace(dev)));
         const VkSemaphoreCreateInfo sci{.sType = VK_STRUCTURE_TYPE_SEMAPHORE_CREATE_INFO, .pNext = nullptr, .flags = 0};
-        IRIS_VK_TRY(vkCreateSemaphore(dev, &sci, nullptr, &f.acquired));
+        IRIS_VK_TRY(vkCreateSemaphore(dev, &sci, nullptr, f.acquired.replace(dev)));
         if (Result r = vk::createMappedBuffer(device_.physical(), dev, sizeof(gpu::TileInstance) * kMaxInstances,
                                               VK_BUFFER_USAGE_VERTEX_BUFFER_BIT, false, f.instances);
             !r.ok())
@@ -385,12 +382,14 @@ bool RenderThread::showsLayerWhole(const Snapshot& snap) const {
 
 Result RenderThread::waitSlot(FrameSlot& f) {
     if (!f.fence) return Result(Status::DeviceLost, "frame slot without a fence (a submit failed and so did its replacement)");
-    IRIS_VK_TRY(vkWaitForFences(device_.device(), 1, &f.fence, VK_TRUE, UINT64_MAX));
+    const VkFence fence = f.fence.get();
+    IRIS_VK_TRY(vkWaitForFences(device_.device(), 1, &fence, VK_TRUE, UINT64_MAX));
     if (f.timed) {
         uint64_t t[2] = {0, 0};
         const size_t idx = size_t(&f - frames_.data());
-        if (vkGetQueryPoolResults(device_.device(), timestamps_, uint32_t(idx * 2), 2, sizeof(t), t, sizeof(uint64_t),
-                                  VK_QUERY_RESULT_64_BIT) == VK_SUCCESS && t[1] >= t[0]) {
+        if (vkGetQueryPoolResults(device_.device(), timestamps_.get(), uint32_t(idx * 2), 2, sizeof(t), t,
+                                  sizeof(uint64_t), VK_QUERY_RESULT_64_BIT) == VK_SUCCESS &&
+            t[1] >= t[0]) {
             lastGpuMs_ = double(t[1] - t[0]) * timestampPeriodNs_ / 1e6;
         }
         f.timed = false;
@@ -406,7 +405,7 @@ Expected<RenderThread::TargetImage> RenderThread::acquireTarget(FrameSlot& f) {
     if (kind_ == TargetKind::Offscreen)
         return TargetImage{offscreen_->image(), offscreen_->view(), gpu::OffscreenTarget::kFormat, offscreen_->extent(), 0};
     uint32_t index = 0;
-    const VkResult ar = vkAcquireNextImageKHR(device_.device(), swapchain_->handle(), 100'000'000, f.acquired,
+    const VkResult ar = vkAcquireNextImageKHR(device_.device(), swapchain_->handle(), 100'000'000, f.acquired.get(),
                                               VK_NULL_HANDLE, &index);
     switch (ar) {
     case VK_SUCCESS: break;
@@ -514,8 +513,8 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
     IRIS_VK_TRY(vkBeginCommandBuffer(cmd, &bi));
     const uint32_t query = uint32_t(serial % kFramesInFlight) * 2;
     if (timestamps_) {
-        vkCmdResetQueryPool(cmd, timestamps_, query, 2);
-        vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_TOP_OF_PIPE_BIT, timestamps_, query);
+        vkCmdResetQueryPool(cmd, timestamps_.get(), query, 2);
+        vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_TOP_OF_PIPE_BIT, timestamps_.get(), query);
     }
     if (!acquires.empty()) vk::pipelineBarrier(cmd, acquires.data(), uint32_t(acquires.size()));
     for (render::FramePass* pass : passes_) pass->recordUploads(cmd, frame);
@@ -578,9 +577,9 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
         if (Result r = pass->recordDraws(cmd, frame); !r.ok()) passFailed(*pass, r);
     vkCmdEndRendering(cmd);
     recordTargetFinish(cmd, target);
-    if (timestamps_) vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, timestamps_, query + 1);
+    if (timestamps_) vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, timestamps_.get(), query + 1);
     IRIS_VK_TRY(vkEndCommandBuffer(cmd));
-    f.timed = timestamps_ != VK_NULL_HANDLE;
+    f.timed = bool(timestamps_);
 
     if (Result r = submitFrame(f, target, uploadWait); !r.ok()) return r;
     if (Result r = deliverFrame(f, target, frame); !r.ok()) return r;
@@ -631,12 +630,14 @@ void RenderThread::recordTargetFinish(VkCommandBuffer cmd, const TargetImage& ta
 
 Result RenderThread::submitFrame(FrameSlot& f, const TargetImage& target, uint64_t uploadWait) {
     VkDevice dev = device_.device();
-    IRIS_VK_TRY(vkResetFences(dev, 1, &f.fence));
+    const VkFence fence = f.fence.get();
+    IRIS_VK_TRY(vkResetFences(dev, 1, &fence));
     const VkCommandBufferSubmitInfo cbi = vk::commandInfo(f.cmd);
     const bool surface = kind_ == TargetKind::Surface;
     VkSemaphoreSubmitInfo waits[2];
     uint32_t waitCount = 0;
-    if (surface) waits[waitCount++] = vk::semaphoreInfo(f.acquired, 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT);
+    if (surface)
+        waits[waitCount++] = vk::semaphoreInfo(f.acquired.get(), 0, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT);
     if (uploadWait)
         waits[waitCount++] = vk::semaphoreInfo(handover_.uploadTimeline, uploadWait,
                                                VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT |
@@ -646,18 +647,18 @@ Result RenderThread::submitFrame(FrameSlot& f, const TargetImage& target, uint64
     const VkSemaphoreSubmitInfo sigDone = vk::semaphoreInfo(
         surface ? swapchain_->renderDone(target.index) : VK_NULL_HANDLE, 0, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT);
     const VkSubmitInfo2 si = vk::submitInfo(&cbi, waits, waitCount, &sigDone, surface ? 1u : 0u);
-    const VkResult sr = device_.submit(si, f.fence);
+    const VkResult sr = device_.submit(si, fence);
     if (sr == VK_SUCCESS) return {};
     // The fence was reset but nothing will signal it: replace it with a signalled one so the
     // next use of this frame slot does not wait forever. Should even that fail (the device is
     // gone), the slot has no fence and waitSlot reports the loss instead.
-    vkDestroyFence(dev, f.fence, nullptr);
-    f.fence = VK_NULL_HANDLE;
+    f.fence.reset();
     const VkFenceCreateInfo fci{.sType = VK_STRUCTURE_TYPE_FENCE_CREATE_INFO, .pNext = nullptr, .flags = VK_FENCE_CREATE_SIGNALED_BIT};
-    if (const VkResult fr = vkCreateFence(dev, &fci, nullptr, &f.fence); fr != VK_SUCCESS) {
-        f.fence = VK_NULL_HANDLE;
+    VkFence replacement = VK_NULL_HANDLE;
+    if (const VkResult fr = vkCreateFence(dev, &fci, nullptr, &replacement); fr == VK_SUCCESS)
+        f.fence = vk::Fence(dev, replacement);
+    else
         log_.error("vkCreateFence after a failed frame submit: " + vk::check(fr, "vkCreateFence").message());
-    }
     return vk::check(sr, "vkQueueSubmit2 (frame)");
 }
 

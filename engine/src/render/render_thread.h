@@ -24,6 +24,7 @@
 #include "gpu/render_target.h"
 #include "gpu/tile_atlas.h"
 #include "gpu/tile_pipeline.h"
+#include "gpu/vk_handle.h"
 #include "metrics/field_metrics.h"
 #include "render/frame_pass.h"
 #include "render/hud_pass.h"
@@ -67,10 +68,10 @@ public:
 private:
     static constexpr uint32_t kMaxInstances = 16384;
     struct FrameSlot {
-        VkCommandPool pool = VK_NULL_HANDLE;
-        VkCommandBuffer cmd = VK_NULL_HANDLE;
-        VkFence fence = VK_NULL_HANDLE;
-        VkSemaphore acquired = VK_NULL_HANDLE;
+        vk::CommandPool pool;
+        VkCommandBuffer cmd = VK_NULL_HANDLE; // freed with pool
+        vk::Fence fence;
+        vk::Semaphore acquired;
         vk::MappedBuffer instances;
         uint64_t serial = 0;
         std::vector<int> pinned; // atlas slots this frame samples, unpinned after its fence
@@ -130,7 +131,7 @@ private:
     Handover& handover_;
     const UploadCounters& counters_;
     const Log& log_;
-    VkQueryPool timestamps_ = VK_NULL_HANDLE; // 2 per frame slot; null when the queue has no timestamps
+    vk::QueryPool timestamps_; // 2 per frame slot; null when the queue has no timestamps
     double timestampPeriodNs_ = 0;
     double lastGpuMs_ = -1;
 

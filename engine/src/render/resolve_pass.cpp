@@ -23,10 +23,6 @@ constexpr uint32_t kMaxEntries = 65536; // tiles of the three layers' visible ra
 constexpr VkDeviceSize kTableBytes = sizeof(TableHeader) + kMaxEntries * sizeof(int32_t);
 } // namespace
 
-ResolvePass::~ResolvePass() {
-    for (Slot& s : slots_) vk::destroyMappedBuffer(device_.device(), s.table);
-}
-
 Result ResolvePass::init(uint32_t frameSlots) {
     VkDevice dev = device_.device();
     if (Result r =

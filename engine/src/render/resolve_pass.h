@@ -22,7 +22,6 @@ class ResolvePass {
 public:
     ResolvePass(gpu::Device& device, gpu::TileAtlas& atlas, gpu::TilePipeline& tiles)
         : device_(device), atlas_(atlas), tiles_(tiles) {}
-    ~ResolvePass();
     ResolvePass(const ResolvePass&) = delete;
     ResolvePass& operator=(const ResolvePass&) = delete;
 

@@ -236,8 +236,6 @@ private:
 // Replaces `out` with a new buffer of `size` bytes; on failure `out` is left empty.
 Result createMappedBuffer(VkPhysicalDevice pd, VkDevice dev, VkDeviceSize size, VkBufferUsageFlags usage,
                           bool preferCached, MappedBuffer& out);
-// Lets go of the buffer now rather than when `b` goes (nothing else: the destructor does the same).
-inline void destroyMappedBuffer(VkDevice, MappedBuffer& b) { b = MappedBuffer{}; }
 // Makes device writes visible to the host for non-coherent memory.
 [[nodiscard]] Result invalidate(VkDevice dev, const MappedBuffer& b);
 // Makes host writes visible to the device for non-coherent memory.

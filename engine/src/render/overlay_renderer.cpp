@@ -6,15 +6,6 @@
 
 namespace iris {
 
-OverlayRenderer::~OverlayRenderer() {
-    VkDevice dev = device_.device();
-    if (!dev) return;
-    for (Slot& s : slots_) {
-        vk::destroyMappedBuffer(dev, s.instances);
-        vk::destroyMappedBuffer(dev, s.staging);
-    }
-}
-
 Result OverlayRenderer::init(uint32_t frameSlots) {
     if (Result r = glyphs_.init(); !r.ok()) return r;
     if (Result r = pipeline_.init(overlay::GlyphCache::kAtlasSize); !r.ok()) return r;

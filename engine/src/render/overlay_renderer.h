@@ -30,7 +30,6 @@ struct OverlayFrame {
 class OverlayRenderer {
 public:
     OverlayRenderer(gpu::Device& device, const Log& log) : device_(device), log_(log), pipeline_(device) {}
-    ~OverlayRenderer();
     OverlayRenderer(const OverlayRenderer&) = delete;
     OverlayRenderer& operator=(const OverlayRenderer&) = delete;
 

@@ -10,10 +10,10 @@
 #      (open/close/reopen cycles, bad input, the API storm), where LeakSanitizer reports leaks;
 #   3. the ThreadSanitizer build (tsan preset, engine only): the suites labelled "tsan"
 #      (the lock-free tile map under concurrent pin/reclaim, the API storm);
-#   4. the fuzz build (fuzz preset: clang, libFuzzer, ASan + UBSan, the .iris reader only):
-#      the seed corpus and the committed regression inputs replayed (CTest label "fuzz"),
-#      then IRIS_FUZZ_SECONDS (120) of fuzzing; any crash, leak, timeout or sanitizer report
-#      fails (see tests/fuzz/README.md);
+#   4. the fuzz build (fuzz preset: clang, libFuzzer, ASan + UBSan, the readers and decoders
+#      only): every target's seed corpus and committed regression inputs replayed (CTest label
+#      "fuzz"), then IRIS_FUZZ_SECONDS (120) of fuzzing per target; any crash, leak, timeout,
+#      sanitizer report or broken promise fails (see tests/fuzz/README.md);
 #   5. the Debian packages (scripts/test-deb.sh): the release build packed by cpack, installed
 #      with apt-get, its programs run, outside projects built against /usr, then purged.
 # Exits non-zero if anything fails.
@@ -51,24 +51,44 @@ echo "== fuzz build"
 cmake --preset fuzz >/dev/null
 cmake --build --preset fuzz -j "$JOBS"
 echo "== fuzz tests"
-# fuzz.seeds writes the seed corpus to build/fuzz/tests/fuzz/seeds (fuzz_iris_seeds,
-# iris-encode of the dev build above, the small shared fixtures); the replay runs it and
-# tests/fuzz/regressions through the target once.
+# fuzz.seeds writes each target's seed corpus to build/fuzz/tests/fuzz/seeds/<target> (the seed
+# tools, iris-encode of the dev build above, the small shared slides); the replays run it and
+# tests/fuzz/regressions/<target> through the target once.
 ctest --preset fuzz -L fuzz -j 1
 FUZZ_SECONDS="${IRIS_FUZZ_SECONDS:-120}"
-echo "== fuzzing the .iris reader (${FUZZ_SECONDS} s)"
 FUZZ=build/fuzz
-mkdir -p "$FUZZ/corpus" "$FUZZ/artifacts"
-# corpus/ (kept between runs of this build tree) takes what the run finds new.
-if ! "$FUZZ/bin/fuzz_iris_reader" -max_total_time="$FUZZ_SECONDS" -timeout=10 -rss_limit_mb=2048 \
-    -dict=tests/fuzz/iris.dict -artifact_prefix="$FUZZ/artifacts/" -print_final_stats=1 \
-    "$FUZZ/corpus" "$FUZZ/tests/fuzz/seeds" tests/fuzz/regressions/iris_reader >"$FUZZ/fuzz.log" 2>&1; then
-  tail -n 100 "$FUZZ/fuzz.log"
-  echo "fuzz_iris_reader failed (log: $FUZZ/fuzz.log). The input that did it is in $FUZZ/artifacts/;"
-  echo "reproduce with: $FUZZ/bin/fuzz_iris_reader $FUZZ/artifacts/FILE"
+fuzz_failed=""
+# TARGET DICTIONARY (- for none): each fuzzed for FUZZ_SECONDS; corpus/<target> (kept between
+# runs of this build tree) takes what a run finds new. A failing target does not stop the
+# others; the stage fails at the end, naming them.
+while read -r target dict; do
+  echo "== fuzzing $target (${FUZZ_SECONDS} s)"
+  mkdir -p "$FUZZ/corpus/$target" "$FUZZ/artifacts/$target"
+  dict_arg=()
+  [ "$dict" = "-" ] || dict_arg=(-dict="$dict")
+  log="$FUZZ/fuzz-$target.log"
+  if "$FUZZ/bin/fuzz_$target" "${dict_arg[@]}" -max_total_time="$FUZZ_SECONDS" -timeout=10 -rss_limit_mb=2048 \
+      -artifact_prefix="$FUZZ/artifacts/$target/" -print_final_stats=1 \
+      "$FUZZ/corpus/$target" "$FUZZ/tests/fuzz/seeds/$target" "tests/fuzz/regressions/$target" >"$log" 2>&1 </dev/null; then
+    grep -E "INITED|DONE|^Done|stat::" "$log" || true
+  else
+    tail -n 100 "$log"
+    echo "fuzz_$target failed (log: $log). The input that did it is in $FUZZ/artifacts/$target/;"
+    echo "reproduce with: $FUZZ/bin/fuzz_$target $FUZZ/artifacts/$target/FILE"
+    fuzz_failed="$fuzz_failed $target"
+  fi
+done <<'EOF'
+iris_reader tests/fuzz/iris.dict
+tiff_reader tests/fuzz/tiff.dict
+jp2k tests/fuzz/jp2k.dict
+pyramid -
+icc_profile tests/fuzz/icc.dict
+dicom_file tests/fuzz/dicom.dict
+EOF
+if [ -n "$fuzz_failed" ]; then
+  echo "fuzzing failed:$fuzz_failed"
   exit 1
 fi
-grep -E "INITED|DONE|^Done|stat::" "$FUZZ/fuzz.log" || true
 
 echo "== Debian packages"
 scripts/test-deb.sh

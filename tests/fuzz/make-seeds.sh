@@ -1,28 +1,42 @@
 #!/usr/bin/env bash
-# Writes the seed corpus of fuzz_iris_reader: small valid .iris files.
+# Writes the seed corpus of every fuzz target, one folder each: OUT_DIR/<target>/.
 #
-#   tests/fuzz/make-seeds.sh [--seeds-tool PATH] BUILD_DIR OUT_DIR
+#   tests/fuzz/make-seeds.sh [--seeds-tool PATH] [--tool PATH] BUILD_DIR OUT_DIR
 #
-# BUILD_DIR is a build tree holding iris-encode (the dev build: build/dev); it writes a few
-# tiny synthetic slides with different sizes, quality and chroma subsampling.
-# --seeds-tool is the fuzz build's fuzz_iris_seeds, which writes files with every optional
-# block and corner of the format that an encoder does not produce. The reference
-# fixtures of the shared test data ($IRIS_TESTDATA, $IRIS_TESTDATA_DEFAULT, or
-# ../shared/testdata beside the checkout) are added when present, the small ones only
-# (IRIS_FUZZ_SEED_MAX_BYTES, 256 KiB by default: mutating a bigger file mostly hits tile
-# data, slowly). Copies land in OUT_DIR only, never in the repository.
+# iris_reader   BUILD_DIR's iris-encode (the dev build: build/dev) writes a few tiny synthetic
+#               slides with different sizes, quality and chroma subsampling; --seeds-tool (the
+#               fuzz build's fuzz_iris_seeds) writes files with every optional block and corner
+#               of the format that an encoder does not produce; the small .iris fixtures of the
+#               shared test data are added.
+# tiff_reader   --tool (fuzz_seeds) writes TIFF/SVS files, sound and broken; the small TIFF and
+#               SVS slides of the shared test data are added.
+# jp2k          fuzz_seeds writes codestreams and extracts the JPEG 2000 tiles of the shared
+#               Aperio slides.
+# pyramid       fuzz_seeds writes broken-source descriptions.
+# icc_profile   fuzz_seeds writes LittleCMS profiles and extracts the profiles embedded in the
+#               shared slides (TIFF tag 34675, DICOM (0028,2000)).
+# dicom_file    fuzz_seeds writes DICOM files and series; OrthancWSIDicomizer (where installed)
+#               converts a TIFF seed three ways; the shared DICOM files are added, one by one
+#               and as a series.
 #
-# Fails when it finds no seed at all, and when iris-encode or the seeds tool fails.
+# The shared test data is $IRIS_TESTDATA, $IRIS_TESTDATA_DEFAULT, or ../shared/testdata beside
+# the checkout; of its slides only the small ones are copied (IRIS_FUZZ_SEED_MAX_BYTES, 256 KiB
+# by default: mutating a bigger file mostly hits pixel data, slowly). Copies land in OUT_DIR
+# only, never in the repository.
+#
+# Fails when a target gets no seed at all, and when iris-encode or a seeds tool fails.
 set -euo pipefail
 
 usage() {
-  echo "usage: $0 [--seeds-tool PATH] BUILD_DIR OUT_DIR" >&2
+  echo "usage: $0 [--seeds-tool PATH] [--tool PATH] BUILD_DIR OUT_DIR" >&2
   exit 2
 }
 seeds_tool=""
+tool=""
 while [ $# -gt 0 ]; do
   case "$1" in
     --seeds-tool) [ $# -ge 2 ] || usage; seeds_tool=$2; shift 2 ;;
+    --tool) [ $# -ge 2 ] || usage; tool=$2; shift 2 ;;
     -*) usage ;;
     *) break ;;
   esac
@@ -32,11 +46,42 @@ build=$1
 out=$2
 max_bytes=${IRIS_FUZZ_SEED_MAX_BYTES:-262144}
 here="$(cd "$(dirname "$0")" && pwd)"
+targets="iris_reader tiff_reader jp2k pyramid icc_profile dicom_file"
 
-mkdir -p "$out"
-rm -f "$out"/*.iris
+for t in $targets; do
+  rm -rf "${out:?}/$t"
+  mkdir -p "$out/$t"
+done
 
-# --- iris-encode ----------------------------------------------------------------------
+slides=""
+for d in "${IRIS_TESTDATA:-}" "${IRIS_TESTDATA_DEFAULT:-}" "$here/../../../shared/testdata"; do
+  if [ -n "$d" ] && [ -d "$d/slides" ]; then
+    slides="$d/slides"
+    break
+  fi
+done
+# The shared slides whose names end in one of the given extensions, every folder.
+shared() {
+  [ -n "$slides" ] || return 0
+  local pattern=()
+  for ext in "$@"; do pattern+=(-o -name "*.$ext"); done
+  find "$slides" -type f \( "${pattern[@]:1}" \) | sort
+}
+# Copies the small ones of the given files into a target's folder, named after their folder.
+copy_small() {
+  local target=$1
+  shift
+  for f in "$@"; do
+    if [ "$(stat -c %s "$f")" -le "$max_bytes" ]; then
+      local dst
+      dst="$out/$target/shared-$(basename "$(dirname "$f")")-$(basename "$f")"
+      cp "$f" "$dst"
+      chmod u+w "$dst"
+    fi
+  done
+}
+
+# --- iris_reader ------------------------------------------------------------------------
 encoder=""
 for c in "$build/bin/iris-encode" "$build/tools/encode/iris-encode" "$build/iris-encode"; do
   if [ -x "$c" ]; then
@@ -48,7 +93,7 @@ if [ -n "$encoder" ]; then
   # SIZE QUALITY SUBSAMPLING: a few tiles each, partial at the edges (1x1 and other corners
   # come from fuzz_iris_seeds).
   while read -r size quality subsampling; do
-    dst="$out/encode-${size}-q${quality}-${subsampling}.iris"
+    dst="$out/iris_reader/encode-${size}-q${quality}-${subsampling}.iris"
     "$encoder" "synthetic:$size" -o "$dst" --quality "$quality" --subsampling "$subsampling" --threads 1 >/dev/null
   done <<'EOF'
 300x200 30 420
@@ -58,33 +103,74 @@ EOF
 else
   echo "make-seeds: no iris-encode in $build (build the dev preset first): no encoder seeds" >&2
 fi
-
-# --- fuzz_iris_seeds ------------------------------------------------------------------
 if [ -n "$seeds_tool" ]; then
-  "$seeds_tool" "$out"
+  "$seeds_tool" "$out/iris_reader"
+fi
+mapfile -t files < <(shared iris)
+copy_small iris_reader "${files[@]}"
+
+# --- the other targets ----------------------------------------------------------------------
+if [ -n "$tool" ]; then
+  mapfile -t tiffs < <(shared svs tif tiff)
+  mapfile -t dicoms < <(shared dcm)
+  "$tool" tiff "$out/tiff_reader"
+  copy_small tiff_reader "${tiffs[@]}"
+  "$tool" jp2k "$out/jp2k" "${tiffs[@]}"
+  "$tool" pyramid "$out/pyramid"
+  "$tool" icc "$out/icc_profile" "${tiffs[@]}" "${dicoms[@]}"
+  "$tool" dicom "$out/dicom_file"
+  copy_small dicom_file "${dicoms[@]}"
+  # Several files as one input (fuzz_dicom_file.cpp): the series marker, then the files with
+  # the separator between them.
+  as_series() {
+    local dst=$1
+    shift
+    {
+      printf 'IRIS-FUZZ-DICOM-SERIES\n'
+      local first=1
+      for f in "$@"; do
+        [ $first -eq 1 ] || printf '\n--iris-fuzz-next-file--\n'
+        first=0
+        cat "$f"
+      done
+    } >"$dst"
+  }
+  if [ ${#dicoms[@]} -gt 1 ]; then
+    as_series "$out/dicom_file/shared-series.bin" "${dicoms[@]}"
+  fi
+  # OrthancWSIDicomizer on a TIFF seed (150x100 and two levels, JPEG tiles of 48 px).
+  svs="$out/tiff_reader/generic-7.tiff"
+  if command -v OrthancWSIDicomizer >/dev/null; then
+    tmp=$(mktemp -d)
+    # OPTIONS: JPEG frames copied from the TIFF (JPEG 2000 and uncompressed frames come from
+    # fuzz_seeds, smaller).
+    n=0
+    while read -r options; do
+      n=$((n + 1))
+      mkdir "$tmp/$n"
+      # shellcheck disable=SC2086 # the options are words
+      OrthancWSIDicomizer --threads=1 --folder="$tmp/$n" $options "$svs" >"$tmp/$n.log" 2>&1 ||
+        { cat "$tmp/$n.log" >&2; echo "make-seeds: OrthancWSIDicomizer failed" >&2; exit 1; }
+      mapfile -t made < <(find "$tmp/$n" -name '*.dcm' | sort)
+      cp "${made[0]}" "$out/dicom_file/dicomizer-$n.dcm"
+      [ ${#made[@]} -lt 2 ] || as_series "$out/dicom_file/dicomizer-$n-series.bin" "${made[@]}"
+    done <<'EOF'
+--reencode=0
+EOF
+    rm -rf "$tmp"
+  fi
+else
+  echo "make-seeds: no --tool: no seeds for the TIFF, JPEG 2000, pyramid, ICC and DICOM targets" >&2
 fi
 
-# --- the shared reference fixtures ------------------------------------------------------
-fixtures=""
-for d in "${IRIS_TESTDATA:-}" "${IRIS_TESTDATA_DEFAULT:-}" "$here/../../../shared/testdata"; do
-  if [ -n "$d" ] && [ -d "$d/slides/iris" ]; then
-    fixtures="$d/slides/iris"
-    break
+status=0
+for t in $targets; do
+  count=$(find "$out/$t" -maxdepth 1 -type f | wc -l)
+  if [ "$count" -eq 0 ]; then
+    echo "make-seeds: no seeds for $t" >&2
+    status=1
+  else
+    echo "make-seeds: $count seed(s) in $out/$t"
   fi
 done
-if [ -n "$fixtures" ]; then
-  for f in "$fixtures"/*.iris; do
-    [ -f "$f" ] || continue
-    if [ "$(stat -c %s "$f")" -le "$max_bytes" ]; then
-      cp "$f" "$out/fixture-$(basename "$f")"
-      chmod u+w "$out/fixture-$(basename "$f")"
-    fi
-  done
-fi
-
-count=$(find "$out" -maxdepth 1 -name '*.iris' | wc -l)
-if [ "$count" -eq 0 ]; then
-  echo "make-seeds: no seeds: no iris-encode in $build, no --seeds-tool, no small fixtures in the shared test data" >&2
-  exit 1
-fi
-echo "make-seeds: $count seed(s) in $out"
+exit $status

@@ -122,15 +122,19 @@ std::string descriptionOf(cmsHPROFILE profile) {
 }
 
 // A profile whose colours are RGB and that can take part in a two-profile transform.
+// The header's signatures are whatever the file holds, mostly values that LittleCMS's enums do
+// not name; holding one in a variable of the enum type is undefined behaviour (found by
+// tests/fuzz, regressions/icc_profile/colour-space-outside-enum.fuzz), so they are compared as
+// the 32-bit numbers they are.
 Result checkRgbProfile(cmsHPROFILE profile, const std::string& what) {
-    const cmsColorSpaceSignature space = cmsGetColorSpace(profile);
-    if (space != cmsSigRgbData)
+    const uint32_t space = uint32_t(cmsGetColorSpace(profile));
+    if (space != uint32_t(cmsSigRgbData))
+        return {Status::UnsupportedFormat, what + " describes " + sigName(space) + " colours, not RGB ('RGB ')"};
+    const uint32_t cls = uint32_t(cmsGetDeviceClass(profile));
+    if (cls == uint32_t(cmsSigLinkClass) || cls == uint32_t(cmsSigAbstractClass) ||
+        cls == uint32_t(cmsSigNamedColorClass))
         return {Status::UnsupportedFormat,
-                what + " describes " + sigName(uint32_t(space)) + " colours, not RGB ('RGB ')"};
-    const cmsProfileClassSignature cls = cmsGetDeviceClass(profile);
-    if (cls == cmsSigLinkClass || cls == cmsSigAbstractClass || cls == cmsSigNamedColorClass)
-        return {Status::UnsupportedFormat,
-                what + " is of class " + sigName(uint32_t(cls)) + ", not a device or colour-space profile"};
+                what + " is of class " + sigName(cls) + ", not a device or colour-space profile"};
     return Result::success();
 }
 

@@ -91,38 +91,80 @@ void errorCallback(const char* msg, void* user) {
 
 void quietCallback(const char*, void*) {}
 
+// A codestream whose header has been read: the decoder, its stream and the image it describes.
+struct Codestream {
+    Buffer buf{};
+    std::string err;
+    std::unique_ptr<opj_stream_t, StreamDeleter> stream;
+    std::unique_ptr<opj_codec_t, CodecDeleter> codec;
+    std::unique_ptr<opj_image_t, ImageDeleter> image;
+};
+
+Result readHeader(const uint8_t* data, size_t size, Codestream& cs) {
+    if (!data || size == 0) return Result(Status::CorruptData, "empty JPEG 2000 tile");
+    cs.stream.reset(opj_stream_create(size, OPJ_TRUE));
+    cs.codec.reset(opj_create_decompress(OPJ_CODEC_J2K));
+    if (!cs.stream || !cs.codec) return Result(Status::OutOfMemory, "cannot create an OpenJPEG decoder");
+    cs.buf = Buffer{data, size, 0};
+    opj_stream_set_user_data(cs.stream.get(), &cs.buf, nullptr);
+    opj_stream_set_user_data_length(cs.stream.get(), size);
+    opj_stream_set_read_function(cs.stream.get(), readCallback);
+    opj_stream_set_skip_function(cs.stream.get(), skipCallback);
+    opj_stream_set_seek_function(cs.stream.get(), seekCallback);
+
+    opj_dparameters_t params;
+    opj_set_default_decoder_parameters(&params);
+    if (!opj_setup_decoder(cs.codec.get(), &params)) return Result(Status::CorruptData, "opj_setup_decoder() failed");
+    opj_set_error_handler(cs.codec.get(), errorCallback, &cs.err);
+    opj_set_warning_handler(cs.codec.get(), quietCallback, nullptr);
+    opj_set_info_handler(cs.codec.get(), quietCallback, nullptr);
+
+    opj_image_t* rawImage = nullptr;
+    if (!opj_read_header(cs.stream.get(), cs.codec.get(), &rawImage)) {
+        opj_image_destroy(rawImage);
+        return Result(Status::CorruptData,
+                      "OpenJPEG error: " + (cs.err.empty() ? std::string("opj_read_header() failed") : cs.err));
+    }
+    cs.image.reset(rawImage);
+    cs.err.clear();
+    return {};
+}
+
 } // namespace
+
+Result checkJp2kForOpenSlide(const uint8_t* data, size_t size, int width, int height) {
+    if (width <= 0 || height <= 0) return Result(Status::InvalidArgument, "bad JPEG 2000 tile size");
+    Codestream cs;
+    if (Result r = readHeader(data, size, cs); !r.ok()) return r;
+    const opj_image_t& image = *cs.image;
+    if (image.numcomps < 3) {
+        return Result(Status::CorruptData,
+                      "JPEG 2000 tile has " + std::to_string(image.numcomps) + " components, where OpenSlide reads 3");
+    }
+    // OpenSlide's unpack_argb samples component c at (y / (height / h_c)) · w_c + x / (width / w_c)
+    // for every x < width, y < height (its fast paths are special cases of the same index).
+    for (int c = 0; c < 3; ++c) {
+        const opj_image_comp_t& comp = image.comps[c];
+        const uint64_t subX = comp.w ? uint64_t(width) / comp.w : 0, subY = comp.h ? uint64_t(height) / comp.h : 0;
+        if (subX == 0 || subY == 0 || (uint64_t(width) - 1) / subX >= comp.w ||
+            (uint64_t(height) - 1) / subY >= comp.h) {
+            return Result(Status::CorruptData,
+                          "JPEG 2000 component " + std::to_string(c) + " is " + std::to_string(comp.w) + "x" +
+                              std::to_string(comp.h) + ", which OpenSlide 3.4.1 cannot sample for a " +
+                              std::to_string(width) + "x" + std::to_string(height) + " tile without reading past it");
+        }
+    }
+    return {};
+}
 
 Result decodeJp2kRgba(const uint8_t* data, size_t size, int width, int height, Jp2kColour colour, uint8_t* dst,
                       size_t pitch) {
     if (!data || size == 0) return Result(Status::CorruptData, "empty JPEG 2000 tile");
     if (width <= 0 || height <= 0) return Result(Status::InvalidArgument, "bad JPEG 2000 tile size");
-
-    std::unique_ptr<opj_stream_t, StreamDeleter> stream(opj_stream_create(size, OPJ_TRUE));
-    std::unique_ptr<opj_codec_t, CodecDeleter> codec(opj_create_decompress(OPJ_CODEC_J2K));
-    if (!stream || !codec) return Result(Status::OutOfMemory, "cannot create an OpenJPEG decoder");
-    Buffer buf{data, size, 0};
-    opj_stream_set_user_data(stream.get(), &buf, nullptr);
-    opj_stream_set_user_data_length(stream.get(), size);
-    opj_stream_set_read_function(stream.get(), readCallback);
-    opj_stream_set_skip_function(stream.get(), skipCallback);
-    opj_stream_set_seek_function(stream.get(), seekCallback);
-
-    opj_dparameters_t params;
-    opj_set_default_decoder_parameters(&params);
-    if (!opj_setup_decoder(codec.get(), &params)) return Result(Status::CorruptData, "opj_setup_decoder() failed");
-    std::string err;
-    opj_set_error_handler(codec.get(), errorCallback, &err);
-    opj_set_warning_handler(codec.get(), quietCallback, nullptr);
-    opj_set_info_handler(codec.get(), quietCallback, nullptr);
-
-    opj_image_t* rawImage = nullptr;
-    if (!opj_read_header(stream.get(), codec.get(), &rawImage)) {
-        opj_image_destroy(rawImage);
-        return Result(Status::CorruptData, "OpenJPEG error: " + (err.empty() ? std::string("opj_read_header() failed") : err));
-    }
-    std::unique_ptr<opj_image_t, ImageDeleter> image(rawImage);
-    err.clear();
+    Codestream cs;
+    if (Result r = readHeader(data, size, cs); !r.ok()) return r;
+    opj_image_t* const image = cs.image.get();
+    std::string& err = cs.err;
     if (image->x0 != 0 || image->y0 != 0 || image->x1 != OPJ_UINT32(width) || image->y1 != OPJ_UINT32(height)) {
         return Result(Status::CorruptData, "JPEG 2000 tile is " + std::to_string(image->x1) + "x" +
                                                std::to_string(image->y1) + ", expected " + std::to_string(width) +
@@ -140,7 +182,7 @@ Result decodeJp2kRgba(const uint8_t* data, size_t size, int width, int height, J
             return Result(Status::CorruptData, "JPEG 2000 tile has a component of impossible size");
         }
     }
-    if (!opj_decode(codec.get(), stream.get(), image.get())) { // no opj_end_decompress: OpenSlide does not ask for it
+    if (!opj_decode(cs.codec.get(), cs.stream.get(), image)) { // no opj_end_decompress: OpenSlide does not ask for it
         return Result(Status::CorruptData, "OpenJPEG error: " + (err.empty() ? std::string("opj_decode() failed") : err));
     }
     for (int c = 0; c < 3; ++c) {

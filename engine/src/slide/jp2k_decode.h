@@ -26,4 +26,13 @@ enum class Jp2kColour { YCbCr, Rgb };
 Result decodeJp2kRgba(const uint8_t* data, size_t size, int width, int height, Jp2kColour colour, uint8_t* dst,
                       size_t pitch);
 
+// Whether OpenSlide 3.4.1 can decode the codestream as a width × height tile without reading
+// past the end of a component. Its decoder (openslide-decode-jp2k.c) checks the image size only,
+// then samples component c at (y / (height / h_c)) · w_c + x / (width / w_c): a component of
+// another size than its subsampling implies is read past its end, and one larger than the tile
+// divides by zero. This reader clamps such indices itself, but OpenSlide decodes the first tile
+// of an Aperio JPEG 2000 slide when the file is opened (found by tests/fuzz). Reads the header
+// only. CorruptData saying which component is at fault when OpenSlide would read past it.
+Result checkJp2kForOpenSlide(const uint8_t* data, size_t size, int width, int height);
+
 } // namespace iris

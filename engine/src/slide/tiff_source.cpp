@@ -255,6 +255,46 @@ Result notMine(const std::string& name, const std::string& why) {
     return Result(Status::UnsupportedFormat, "'" + name + "' is not for the TIFF tile reader: " + why);
 }
 
+// OpenSlide 3.4.1 decodes tile 0 of the first directory when it opens an Aperio JPEG 2000 slide,
+// with a decoder that reads past the end of a component whose size does not fit its
+// subsampling, or divides by zero (checkJp2kForOpenSlide, jp2k_decode.h). Found by
+// tests/fuzz (regressions/tiff_reader/openslide-jp2k-first-tile-overread.fuzz): a file whose
+// first tile is such a codestream is refused before OpenSlide sees it. It is no valid slide
+// either, so the refusal is CorruptData, which the format table does not pass on to OpenSlide.
+// `h` is at the first directory. Tiles that cannot be read are OpenSlide's to report.
+Result checkFirstJp2kTile(Handle& h, const std::string& name) {
+    TIFF* tif = h.tif;
+    uint16_t compression = 0;
+    TIFFGetFieldDefaulted(tif, TIFFTAG_COMPRESSION, &compression);
+    if (!TIFFIsTiled(tif) || (compression != kAperioJp2kYCbCr && compression != kAperioJp2kRgb)) return {};
+    const char* description = nullptr;
+    if (!TIFFGetField(tif, TIFFTAG_IMAGEDESCRIPTION, &description) || !description ||
+        std::strncmp(description, "Aperio", 6) != 0) {
+        return {}; // OpenSlide's aperio reader takes only these; generic-tiff refuses 33003/33005
+    }
+    uint32_t tileW = 0, tileH = 0;
+    TIFFGetField(tif, TIFFTAG_TILEWIDTH, &tileW);
+    TIFFGetField(tif, TIFFTAG_TILELENGTH, &tileH);
+    int errorFlag = 0;
+    const uint64_t bytes = TIFFGetStrileByteCountWithErr(tif, 0, &errorFlag);
+    if (errorFlag || bytes == 0 || bytes > h.size || tileW == 0 || tileH == 0 || tileW > kMaxFileTileSide ||
+        tileH > kMaxFileTileSide) {
+        return {};
+    }
+    if (bytes > kMaxRawTileBytes) {
+        return Result(Status::CorruptData, "Cannot open '" + name + "': its first JPEG 2000 tile claims " +
+                                               std::to_string(bytes) + " bytes");
+    }
+    std::vector<uint8_t> raw(static_cast<size_t>(bytes));
+    if (TIFFReadRawTile(tif, 0, raw.data(), tmsize_t(bytes)) != tmsize_t(bytes)) return {};
+    h.lastError.clear();
+    if (Result r = checkJp2kForOpenSlide(raw.data(), raw.size(), int(tileW), int(tileH)); !r.ok()) {
+        return Result(Status::CorruptData,
+                      "Cannot open '" + name + "': its first JPEG 2000 tile is unusable (" + r.message() + ")");
+    }
+    return {};
+}
+
 } // namespace
 
 bool TiffTileSource::detect(const std::string& path) {
@@ -273,6 +313,19 @@ Expected<std::unique_ptr<SlideSource>> TiffTileSource::tryOpen(const std::string
     const std::string name = fileNameOf(path);
     if (!detect(path)) return notMine(name, "not a TIFF file");
 
+    // libtiff first: the file must pass checkFirstJp2kTile before OpenSlide opens it.
+    std::unique_ptr<TiffTileSource> src(new TiffTileSource());
+    src->fileName_ = name;
+    src->fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (src->fd_ < 0) return notMine(name, std::strerror(errno));
+    struct stat st {};
+    if (::fstat(src->fd_, &st) != 0 || st.st_size <= 0) return notMine(name, "cannot stat the file");
+    src->fileSize_ = uint64_t(st.st_size);
+    std::string err;
+    auto probe = openHandle(src->fd_, src->fileSize_, name, &err);
+    if (!probe) return notMine(name, "libtiff: " + err);
+    if (Result r = checkFirstJp2kTile(*probe, name); !r.ok()) return r;
+
     auto meta = OpenSlideSource::open(path);
     if (!meta.ok()) {
         // OpenSlide's own verdict: "not a slide" lets the next reader try; anything else
@@ -283,17 +336,6 @@ Expected<std::unique_ptr<SlideSource>> TiffTileSource::tryOpen(const std::string
     const SlideInfo& info = (*meta)->info();
     if (info.vendor != "aperio" && info.vendor != "generic-tiff") return notMine(name, "vendor " + info.vendor);
 
-    std::unique_ptr<TiffTileSource> src(new TiffTileSource());
-    src->fileName_ = name;
-    src->fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (src->fd_ < 0) return notMine(name, std::strerror(errno));
-    struct stat st {};
-    if (::fstat(src->fd_, &st) != 0 || st.st_size <= 0) return notMine(name, "cannot stat the file");
-    src->fileSize_ = uint64_t(st.st_size);
-
-    std::string err;
-    auto probe = openHandle(src->fd_, src->fileSize_, name, &err);
-    if (!probe) return notMine(name, "libtiff: " + err);
     std::vector<DirInfo> dirs;
     for (int i = 0; i < kMaxDirectories; ++i) {
         dirs.push_back(readDirInfo(probe->tif, TIFFCurrentDirectory(probe->tif)));

@@ -1,0 +1,153 @@
+// libFuzzer target for the direct TIFF/SVS reader (engine/src/slide/tiff_source.cpp, with
+// jp2k_decode.cpp and the libtiff codecs behind it), see README.md.
+//
+// Each input is one whole file. TiffTileSource::tryOpen takes a path, because its metadata
+// comes from OpenSlide (which opens paths only); so the input is written to a file in a
+// scratch folder first (tmpfs where there is one) and opened as the format table opens it.
+// Then, as showing the slide does: SlideInfo, a bounded walk of tiles on every level
+// (coarsest first; first, middle and bottom-right edge tile), requests outside the grid, and
+// every associated image.
+//
+// Besides the sanitizers it checks what the reader promises the engine and aborts when a
+// promise is broken:
+//   * open either succeeds or fails with UnsupportedFormat ("not mine": the next reader
+//     tries) or CorruptData, and the message names the file;
+//   * the SlideInfo is a pyramid the engine can use (levels of positive size, the engine's
+//     tile grid, downsamples from 1 increasing, sorted unique properties) of vendor aperio or
+//     generic-tiff;
+//   * a tile that reads is opaque and fills the whole tile (the buffer is pre-filled with a
+//     pattern whose alpha is not 255), with the edge rule of SlideSource::readTile past the
+//     level's edge, and nothing is written past the tile (a guard band: libtiff, libjpeg and
+//     OpenJPEG are not instrumented); reading it again gives the same pixels (the decoded
+//     file-tile cache);
+//   * a tile that does not read fails with CorruptData or IoError naming the file;
+//   * an associated image is w × h RGBA of positive size, or an error naming the file.
+#include <algorithm>
+#include <cstdint>
+#include <cstring>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <openslide.h>
+
+#include "fuzz_support.h"
+#include "slide/tiff_source.h"
+
+namespace {
+
+using namespace iris;
+
+constexpr const char* kName = "fuzz.svs";
+constexpr size_t kMaxTileReads = 16; // per input: a 16-Mpx file tile takes a while to decode
+constexpr uint64_t kMaxAssociatedPixels = uint64_t(1) << 26;
+
+const fuzz::ScratchDir& scratch() {
+    static const fuzz::ScratchDir dir;
+    return dir;
+}
+
+bool namesFile(const Result& r) { return fuzz::contains(r.message(), std::string("'") + kName + "'"); }
+
+void readTiles(SlideSource& src) {
+    const SlideInfo& info = src.info();
+    fuzz::TileBuffer buf, again;
+    for (const fuzz::TileRef& t : fuzz::tilesToRead(info, kMaxTileReads)) {
+        buf.reset();
+        const Result r = src.readTile(t.level, t.tx, t.ty, buf.data());
+        PROMISE(buf.guardIntact());
+        if (fuzz::verbose()) fuzz::note("tile", r);
+        if (!r.ok()) {
+            if (!(r.status() == Status::CorruptData || r.status() == Status::IoError) || !namesFile(r))
+                fuzz::note("tile", r);
+            PROMISE(r.status() == Status::CorruptData || r.status() == Status::IoError);
+            PROMISE(namesFile(r));
+            continue;
+        }
+        const LevelInfo& li = info.levels[size_t(t.level)];
+        PROMISE(buf.opaque());
+        PROMISE(buf.paddedFrom(fuzz::validWidth(li, t.tx), fuzz::validHeight(li, t.ty)));
+        again.reset();
+        PROMISE(src.readTile(t.level, t.tx, t.ty, again.data()).ok());
+        PROMISE(std::memcmp(buf.data(), again.data(), kTileBytes) == 0);
+    }
+    fuzz::checkOutOfGrid(src, buf.data());
+    PROMISE(buf.guardIntact());
+}
+
+// The size OpenSlide states for an associated image (0 × 0 when it cannot say).
+std::pair<int64_t, int64_t> associatedSize(const std::string& path, const std::string& name) {
+    int64_t w = 0, h = 0;
+    if (openslide_t* osr = openslide_open(path.c_str())) {
+        openslide_get_associated_image_dimensions(osr, name.c_str(), &w, &h);
+        openslide_close(osr);
+    }
+    return {w, h};
+}
+
+void readImages(SlideSource& src, const std::string& path) {
+    for (const std::string& name : src.info().associatedImages) {
+        // Known bug "openslide-associated-image" (README.md): OpenSlideSource allocates an
+        // associated image of up to 65536 × 65536 pixels (16 GiB) before reading it, so a file
+        // stating such a label takes the process down; past the bound of the other readers
+        // (2^26 pixels, DicomSource) it must be refused instead. And its refusal of impossible
+        // dimensions does not name the file.
+        const auto [w, h] = associatedSize(path, name);
+        const bool huge = uint64_t(std::max<int64_t>(w, 0)) * uint64_t(std::max<int64_t>(h, 0)) > kMaxAssociatedPixels;
+        if (huge && !fuzz::strict()) fuzz::knownBug("openslide-associated-image");
+        Expected<Image> img = src.readAssociatedImage(name);
+        if (huge) PROMISE(!img && img.error().status() == Status::CorruptData);
+        if (img) {
+            PROMISE(img->width > 0 && img->height > 0);
+            PROMISE(img->rgba.size() == size_t(img->width) * img->height * 4);
+        } else {
+            if (!namesFile(img.error()) && !fuzz::strict() &&
+                fuzz::contains(img.error().message(), "has impossible dimensions")) {
+                fuzz::knownBug("openslide-associated-image");
+            }
+            if (fuzz::verbose() || !namesFile(img.error())) fuzz::note(name.c_str(), img.error());
+            PROMISE(img.error().status() == Status::CorruptData);
+            PROMISE(namesFile(img.error()));
+        }
+    }
+    PROMISE(src.readAssociatedImage("no such image").error().status() == Status::InvalidArgument);
+}
+
+void readInput(const uint8_t* data, size_t size) {
+    const std::string path = scratch().write(kName, data, size);
+    if (!TiffTileSource::detect(path)) return; // the format table asks this reader only then
+
+    auto opened = TiffTileSource::tryOpen(path);
+    if (!opened) {
+        const Result& e = opened.error();
+        if (fuzz::verbose()) fuzz::note("open", e);
+        if (!(e.status() == Status::UnsupportedFormat || e.status() == Status::CorruptData) || !namesFile(e))
+            fuzz::note("open", e);
+        PROMISE(e.status() == Status::UnsupportedFormat || e.status() == Status::CorruptData);
+        PROMISE(namesFile(e));
+        return;
+    }
+    SlideSource& src = **opened;
+    const SlideInfo& info = src.info();
+    fuzz::checkSlideInfo(info);
+    PROMISE(info.vendor == "aperio" || info.vendor == "generic-tiff");
+    PROMISE(info.levels.front().downsample == 1.0);
+    PROMISE(info.iccProfile.size() < size);
+    if (fuzz::verbose()) {
+        std::fprintf(stderr, "opened: %s, %zu levels, %lldx%lld, %zu images, ICC %zu bytes\n", info.vendor.c_str(),
+                     info.levels.size(), (long long)info.width, (long long)info.height, info.associatedImages.size(),
+                     info.iccProfile.size());
+    }
+    readTiles(src);
+    readImages(src, path);
+}
+
+} // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+    if (size == 0) return 0; // the format table opens no empty file
+    try {
+        readInput(data, size);
+    } catch (const fuzz::KnownBug&) {}
+    return 0;
+}

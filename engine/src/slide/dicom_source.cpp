@@ -42,7 +42,6 @@ constexpr uint64_t kMaxFramePixels = uint64_t(1) << 24; // 16 Mpx: 64 MiB decode
 constexpr uint32_t kMaxFrames = uint32_t(1) << 24;      // per instance
 constexpr uint64_t kMaxGridCells = uint64_t(1) << 25;   // frame positions per level
 constexpr uint64_t kMaxMatrixSide = uint64_t(1) << 24;  // 16 Mpx across: beyond any scanner
-constexpr uint64_t kMaxAssociatedPixels = uint64_t(1) << 26;
 constexpr size_t kCacheBudgetBytes = size_t(32) << 20; // decoded frames kept
 
 // The attributes the mapping reads.
@@ -377,6 +376,17 @@ Result layoutSeries(const std::vector<InstanceDescription>& instances, const std
     }
     SeriesLayout layout;
     for (auto& [key, members] : bySize) {
+        // A level must be coarser than the one before it on both axes: the engine's level
+        // choice assumes downsamples that grow with the level. An instance of odd shape that is
+        // not (999x1 after 100x100, found by tests/fuzz: regressions/dicom_file/dicom-level-order.fuzz)
+        // is left out, as OpenSlide leaves out such a level.
+        const InstanceDescription& first = instances[members.front()];
+        if (!layout.levels.empty()) {
+            const Level& prev = layout.levels.back();
+            if (first.totalW > prev.width || first.totalH > prev.height ||
+                (first.totalW == prev.width && first.totalH == prev.height))
+                continue;
+        }
         Level L;
         if (Result r = buildLevel(instances, members, seriesName, layout.levels.size(), &L); !r.ok()) return r;
         layout.levels.push_back(std::move(L));

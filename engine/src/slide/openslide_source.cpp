@@ -156,9 +156,14 @@ Expected<Image> OpenSlideSource::readAssociatedImage(const std::string& name) {
     }
     int64_t w = 0, h = 0;
     openslide_get_associated_image_dimensions(osr_, name.c_str(), &w, &h);
-    if (w <= 0 || h <= 0 || w > 65536 || h > 65536) {
-        return Result(Status::CorruptData, "Associated image '" + name + "' has impossible dimensions");
-    }
+    // Checked before the allocation: a file stating a 60000×60000 label would otherwise ask for
+    // 14 GiB (found by tests/fuzz, regressions/tiff_reader/openslide-associated-image-14gib.fuzz).
+    const std::string size = std::to_string(w) + "x" + std::to_string(h);
+    const std::string where = "Associated image '" + name + "' of '" + std::filesystem::path(info_.path).filename().string() + "'";
+    if (w <= 0 || h <= 0 || w > 65536 || h > 65536)
+        return Result(Status::CorruptData, where + " has impossible dimensions " + size);
+    if (uint64_t(w) * uint64_t(h) > kMaxAssociatedPixels)
+        return Result(Status::CorruptData, where + " is too large: " + size + ", more than 64 megapixels");
     std::vector<uint32_t> argb(size_t(w) * size_t(h));
     openslide_read_associated_image(osr_, name.c_str(), argb.data());
     if (Result r = checkError(("Reading associated image '" + name + "'").c_str()); !r.ok()) return r;

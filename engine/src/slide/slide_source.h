@@ -18,6 +18,10 @@ namespace iris {
 
 inline constexpr int kTileSize = 256;                        // the engine's tile grid, every level
 inline constexpr int kTileBytes = kTileSize * kTileSize * 4; // RGBA8
+// The most pixels an associated image (label, macro, thumbnail) may have: 64 Mpx, 256 MiB as
+// RGBA. Scanners' are a few megapixels; a file stating more is refused before anything is
+// allocated for it.
+inline constexpr uint64_t kMaxAssociatedPixels = uint64_t(1) << 26;
 
 // One tile of the engine's grid.
 struct TileAddress {

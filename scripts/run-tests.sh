@@ -9,10 +9,11 @@
 #   2. the AddressSanitizer + UBSan build (asan preset): the suites labelled "asan"
 #      (open/close/reopen cycles, bad input, the API storm), where LeakSanitizer reports leaks;
 #   3. the ThreadSanitizer build (tsan preset, engine only): the suites labelled "tsan"
-#      (the lock-free tile map under concurrent pin/reclaim, the API storm);
+#      (the lock-free tile map under concurrent pin/reclaim, the API storm, DICOM reads);
 #   4. the fuzz build (fuzz preset: clang, libFuzzer, ASan + UBSan, the readers and decoders
 #      only): every target's seed corpus and committed regression inputs replayed (CTest label
-#      "fuzz"), then IRIS_FUZZ_SECONDS (120) of fuzzing per target; any crash, leak, timeout,
+#      "fuzz"), then IRIS_FUZZ_SECONDS (120) of fuzzing per file reader (half that for the
+#      DICOMweb source's multipart and DICOM JSON parsers); any crash, leak, timeout,
 #      sanitizer report or broken promise fails (see tests/fuzz/README.md);
 #   5. the Debian packages (scripts/test-deb.sh): the release build packed by cpack, installed
 #      with apt-get, its programs run, outside projects built against /usr, then purged.
@@ -36,14 +37,14 @@ echo "== asan build"
 cmake --preset asan >/dev/null
 # Only what the "asan" suites run (and their fixtures), to keep CI short.
 cmake --build --preset asan -j "$JOBS" --target iris_no_dlclose iris-sample tst_bad_input tst_lifecycle tst_tile_map tst_draw_list tst_config tst_storm \
-  tst_iris_reader tst_irisslideview tst_quit_midzoom tst_overlay tst_pyramid
+  tst_iris_reader tst_irisslideview tst_quit_midzoom tst_overlay tst_pyramid tst_color_lut tst_dicom tst_dicomweb
 echo "== asan tests"
 # (the sanitizer options and the LeakSanitizer suppressions come from tests/CMakeLists.txt)
 xvfb-run -a -s "-screen 0 1920x1080x24" ctest --preset asan -L asan -j 1
 
 echo "== tsan build"
 cmake --preset tsan >/dev/null
-cmake --build --preset tsan -j "$JOBS" --target iris-sample tst_tile_map tst_storm tst_pyramid
+cmake --build --preset tsan -j "$JOBS" --target iris-sample tst_tile_map tst_storm tst_pyramid tst_dicom
 echo "== tsan tests"
 ctest --preset tsan -L tsan -j 1
 
@@ -58,16 +59,18 @@ ctest --preset fuzz -L fuzz -j 1
 FUZZ_SECONDS="${IRIS_FUZZ_SECONDS:-120}"
 FUZZ=build/fuzz
 fuzz_failed=""
-# TARGET DICTIONARY (- for none): each fuzzed for FUZZ_SECONDS; corpus/<target> (kept between
-# runs of this build tree) takes what a run finds new. A failing target does not stop the
-# others; the stage fails at the end, naming them.
-while read -r target dict; do
-  echo "== fuzzing $target (${FUZZ_SECONDS} s)"
+# TARGET DICTIONARY SHARE (- for no dictionary): each fuzzed for SHARE × FUZZ_SECONDS (the
+# readers of files a user opens get the whole time, the DICOMweb source's two small parsers
+# half); corpus/<target> (kept between runs of this build tree) takes what a run finds new. A
+# failing target does not stop the others; the stage fails at the end, naming them.
+while read -r target dict share; do
+  seconds=$(( FUZZ_SECONDS * ${share%/*} / ${share#*/} ))
+  echo "== fuzzing $target (${seconds} s)"
   mkdir -p "$FUZZ/corpus/$target" "$FUZZ/artifacts/$target"
   dict_arg=()
   [ "$dict" = "-" ] || dict_arg=(-dict="$dict")
   log="$FUZZ/fuzz-$target.log"
-  if "$FUZZ/bin/fuzz_$target" "${dict_arg[@]}" -max_total_time="$FUZZ_SECONDS" -timeout=10 -rss_limit_mb=2048 \
+  if "$FUZZ/bin/fuzz_$target" "${dict_arg[@]}" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
       -artifact_prefix="$FUZZ/artifacts/$target/" -print_final_stats=1 \
       "$FUZZ/corpus/$target" "$FUZZ/tests/fuzz/seeds/$target" "tests/fuzz/regressions/$target" >"$log" 2>&1 </dev/null; then
     grep -E "INITED|DONE|^Done|stat::" "$log" || true
@@ -78,12 +81,14 @@ while read -r target dict; do
     fuzz_failed="$fuzz_failed $target"
   fi
 done <<'EOF'
-iris_reader tests/fuzz/iris.dict
-tiff_reader tests/fuzz/tiff.dict
-jp2k tests/fuzz/jp2k.dict
-pyramid -
-icc_profile tests/fuzz/icc.dict
-dicom_file tests/fuzz/dicom.dict
+iris_reader tests/fuzz/iris.dict 1/1
+tiff_reader tests/fuzz/tiff.dict 1/1
+jp2k tests/fuzz/jp2k.dict 1/1
+pyramid - 1/1
+icc_profile tests/fuzz/icc.dict 1/1
+dicom_file tests/fuzz/dicom.dict 1/1
+multipart - 1/2
+dicom_json - 1/2
 EOF
 if [ -n "$fuzz_failed" ]; then
   echo "fuzzing failed:$fuzz_failed"

@@ -46,7 +46,7 @@ build=$1
 out=$2
 max_bytes=${IRIS_FUZZ_SEED_MAX_BYTES:-262144}
 here="$(cd "$(dirname "$0")" && pwd)"
-targets="iris_reader tiff_reader jp2k pyramid icc_profile dicom_file"
+targets="iris_reader tiff_reader jp2k pyramid icc_profile dicom_file multipart dicom_json"
 
 for t in $targets; do
   rm -rf "${out:?}/$t"
@@ -162,6 +162,43 @@ EOF
 else
   echo "make-seeds: no --tool: no seeds for the TIFF, JPEG 2000, pyramid, ICC and DICOM targets" >&2
 fi
+
+# --- the DICOMweb source's parsers (multipart, dicom_json) -------------------------------
+# Written here: a frame answer as Orthanc sends one (the first line is the message's
+# Content-Type, the body follows), with one and with two parts, quoted and bare boundaries;
+# and a WADO-RS metadata answer of a two-level TILED_FULL series with a label, series 1.2.3.4.
+crlf() { sed 's/$/\r/'; }
+{
+  echo 'multipart/related; type="application/octet-stream"; transfer-syntax=1.2.840.10008.1.2.4.50; boundary=b0un'
+  { echo '--b0un'; echo 'Content-Type: application/octet-stream; transfer-syntax=1.2.840.10008.1.2.4.50'; echo
+    echo 'JPEGBYTES'; echo '--b0un--'; } | crlf
+} > "$out/multipart/one-part.bin"
+{
+  echo 'multipart/related; type=application/octet-stream; boundary="a b"'
+  { echo 'preamble'; echo '--a b'; echo 'Content-Type: application/octet-stream'; echo 'Content-Length: 5'; echo
+    echo 'frame'; echo '--a b'; echo 'Content-Type: image/jpeg'; echo; echo 'second'; echo '--a b--'
+    echo 'epilogue'; } | crlf
+} > "$out/multipart/two-parts.bin"
+instance() { # SOP instance, image type, total W, total H, frames
+  cat <<JSON
+{"00080016":{"vr":"UI","Value":["1.2.840.10008.5.1.4.1.1.77.1.6"]},
+ "00080018":{"vr":"UI","Value":["$1"]},"00080008":{"vr":"CS","Value":["ORIGINAL","PRIMARY","$2","NONE"]},
+ "00080070":{"vr":"LO","Value":["Iris"]},"0020000E":{"vr":"UI","Value":["1.2.3.4"]},
+ "00209311":{"vr":"CS","Value":["TILED_FULL"]},"00280002":{"vr":"US","Value":[3]},
+ "00280004":{"vr":"CS","Value":["YBR_FULL_422"]},"00280008":{"vr":"IS","Value":["$5"]},
+ "00280010":{"vr":"US","Value":[256]},"00280011":{"vr":"US","Value":[256]},
+ "00280100":{"vr":"US","Value":[8]},"00280101":{"vr":"US","Value":[8]},"00280103":{"vr":"US","Value":[0]},
+ "00480006":{"vr":"UL","Value":[$3]},"00480007":{"vr":"UL","Value":[$4]},
+ "00480112":{"vr":"DS","Value":[20]},
+ "52009229":{"vr":"SQ","Value":[{"00289110":{"vr":"SQ","Value":[{"00280030":{"vr":"DS","Value":[0.0005,0.0005]}}]}}]},
+ "00282000":{"vr":"OB","BulkDataURI":"http://fuzz/instances/$1/bulk/00282000"}}
+JSON
+}
+{
+  echo '['; instance 1.2.3.4.1 VOLUME 1000 600 12; echo ','; instance 1.2.3.4.2 VOLUME 250 150 1
+  echo ','; instance 1.2.3.4.3 LABEL 240 200 1; echo ']'
+} > "$out/dicom_json/series.json"
+echo '[]' > "$out/dicom_json/empty-array.json"
 
 status=0
 for t in $targets; do

@@ -3,20 +3,29 @@
 // interpolated. COLOR_MANAGED is a specialization constant: frames without a transform use
 // pipelines where the step is compiled out, so their bytes are unchanged.
 //
-// The interpolation is done here, in 32-bit float, from the eight nodes around the colour
-// (texelFetch), not by the sampler: a sampler's filter weights have 8 fractional bits
-// (subTexelPrecisionBits), and on NVIDIA that put 1.1 % of a steep profile's pixels more than
-// 1 ΔE2000 away on a wide-gamut display (p99 1.09 against 0.89 for lavapipe's filter).
+// On a GPU the interpolation is done here, in 32-bit float, from the eight nodes around the
+// colour (texelFetch): a sampler's filter weights have 8 fractional bits
+// (subTexelPrecisionBits), and a GPU's fixed-function path need not match the CPU model of the
+// table. On a CPU device (LUT_SAMPLED, constant 1) the sampler does it: llvmpipe's filter
+// matches the model, and costs a third of the eight fetches (docs/COLOR.md, "Cost").
 //
 // Tiles are premultiplied: the table applies to the unpremultiplied colour.
 
 layout(constant_id = 0) const bool COLOR_MANAGED = false;
+layout(constant_id = 1) const bool LUT_SAMPLED = false;
 layout(set = 0, binding = 1) uniform sampler3D colorLut; // N³ RGBA16F; node (r, g, b) = colour (r, g, b) / (N − 1)
 
 vec4 colorManaged(vec4 c) {
     if (!COLOR_MANAGED || c.a <= 0.0) return c;
     int n = textureSize(colorLut, 0).x;
     vec3 g = clamp(c.rgb / c.a, 0.0, 1.0) * float(n - 1);
+    vec3 rgb;
+    if (LUT_SAMPLED) {
+        // Node i's texel centre is (i + 0.5) / n.
+        rgb = textureLod(colorLut, (g + 0.5) / float(n), 0.0).rgb;
+        rgb = (floor(clamp(rgb, 0.0, 1.0) * 255.0 + 0.5) + 0.25) / 255.0; // as below
+        return vec4(rgb * c.a, c.a);
+    }
     ivec3 i = min(ivec3(g), ivec3(n - 2)); // the cell; its far corner is i + 1
     vec3 f = g - vec3(i);
     vec3 c000 = texelFetch(colorLut, i, 0).rgb;
@@ -27,7 +36,7 @@ vec4 colorManaged(vec4 c) {
     vec3 c101 = texelFetch(colorLut, i + ivec3(1, 0, 1), 0).rgb;
     vec3 c011 = texelFetch(colorLut, i + ivec3(0, 1, 1), 0).rgb;
     vec3 c111 = texelFetch(colorLut, i + ivec3(1, 1, 1), 0).rgb;
-    vec3 rgb = mix(mix(mix(c000, c100, f.x), mix(c010, c110, f.x), f.y),
+    rgb = mix(mix(mix(c000, c100, f.x), mix(c010, c110, f.x), f.y),
                    mix(mix(c001, c101, f.x), mix(c011, c111, f.x), f.y), f.z);
     // Rounded to the 8-bit targets' code here (round half up), a quarter code above it: the
     // conversion to UNORM that follows is the implementation's (Vulkan allows either neighbour,

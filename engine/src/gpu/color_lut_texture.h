@@ -18,6 +18,22 @@
 
 namespace iris::gpu {
 
+// The specialization constants of shaders/color_lut.glsl, for every pipeline that includes it:
+// constant 0 COLOR_MANAGED (the colour step at all), constant 1 LUT_SAMPLED (the table's
+// trilinear interpolation by the sampler rather than in float from its eight nodes: on a CPU
+// device, where the sampler is exact enough and three times cheaper; docs/COLOR.md).
+struct ColorSpecialization {
+    VkBool32 values[2];
+    VkSpecializationMapEntry entries[2] = {{.constantID = 0, .offset = 0, .size = sizeof(VkBool32)},
+                                           {.constantID = 1, .offset = sizeof(VkBool32), .size = sizeof(VkBool32)}};
+    VkSpecializationInfo info;
+    ColorSpecialization(bool managed, bool sampled)
+        : values{managed ? VK_TRUE : VK_FALSE, sampled ? VK_TRUE : VK_FALSE},
+          info{.mapEntryCount = 2, .pMapEntries = entries, .dataSize = sizeof(values), .pData = values} {}
+    ColorSpecialization(const ColorSpecialization&) = delete; // `info` points into the object
+    ColorSpecialization& operator=(const ColorSpecialization&) = delete;
+};
+
 class ColorLutTexture {
 public:
     static constexpr VkFormat kFormat = VK_FORMAT_R16G16B16A16_SFLOAT; // sampled + linear filter: mandatory

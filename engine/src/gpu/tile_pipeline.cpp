@@ -47,13 +47,11 @@ Expected<VkPipeline> TilePipeline::create(VkFormat format, bool seams, bool colo
         {.location = 4, .binding = 0, .format = VK_FORMAT_R32G32B32A32_SFLOAT, .offset = offsetof(TileInstance, corners)},
     };
     // Premultiplied "over": tiles are premultiplied RGBA; the target stays opaque.
-    // shaders/color_lut.glsl: constant_id 0, COLOR_MANAGED.
-    const VkBool32 managed = colorManaged ? VK_TRUE : VK_FALSE;
-    const VkSpecializationMapEntry entry{.constantID = 0, .offset = 0, .size = sizeof(VkBool32)};
-    const VkSpecializationInfo spec{.mapEntryCount = 1, .pMapEntries = &entry, .dataSize = sizeof(managed), .pData = &managed};
+    const ColorSpecialization spec(colorManaged,
+                                   device_.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU);
     Expected<VkPipeline> p = vk::createInstancedQuadPipeline(
         device_.device(), layout_.get(), (seams ? seamVert_ : vert_).get(), (seams ? seamFrag_ : frag_).get(),
-        sizeof(TileInstance), attrs, seams ? 5 : 4, format, &spec);
+        sizeof(TileInstance), attrs, seams ? 5 : 4, format, &spec.info);
     if (p) pipelines_.emplace(key, vk::Pipeline(device_.device(), *p));
     return p;
 }

@@ -51,10 +51,8 @@ Result ResolvePass::init(uint32_t frameSlots) {
                                           .pPushConstantRanges = nullptr};
     IRIS_VK_TRY(vkCreatePipelineLayout(dev, &plci, nullptr, layout_.replace(dev)));
     for (int managed = 0; managed < 2; ++managed) {
-        const VkBool32 value = managed ? VK_TRUE : VK_FALSE;
-        const VkSpecializationMapEntry entry{.constantID = 0, .offset = 0, .size = sizeof(VkBool32)};
-        const VkSpecializationInfo spec{
-            .mapEntryCount = 1, .pMapEntries = &entry, .dataSize = sizeof(value), .pData = &value};
+        const gpu::ColorSpecialization spec(managed != 0,
+                                            device_.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU);
         const VkComputePipelineCreateInfo cpci{
             .sType = VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO,
             .pNext = nullptr,
@@ -65,7 +63,7 @@ Result ResolvePass::init(uint32_t frameSlots) {
                       .stage = VK_SHADER_STAGE_COMPUTE_BIT,
                       .module = shader_.get(),
                       .pName = "main",
-                      .pSpecializationInfo = &spec},
+                      .pSpecializationInfo = &spec.info},
             .layout = layout_.get(),
             .basePipelineHandle = VK_NULL_HANDLE,
             .basePipelineIndex = -1,

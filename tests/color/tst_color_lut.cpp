@@ -32,20 +32,6 @@ namespace ref = iristest::color;
 
 namespace {
 
-// The ICC profile (TIFF tag 34675) of a TIFF's first directory; empty when it has none.
-std::vector<uint8_t> tiffIccProfile(const std::filesystem::path& path) {
-    TIFFSetWarningHandler(nullptr);
-    TIFF* tif = TIFFOpen(path.c_str(), "r");
-    if (!tif) return {};
-    uint32_t count = 0;
-    void* data = nullptr;
-    std::vector<uint8_t> out;
-    if (TIFFGetField(tif, TIFFTAG_ICCPROFILE, &count, &data) && data)
-        out.assign(static_cast<uint8_t*>(data), static_cast<uint8_t*>(data) + count);
-    TIFFClose(tif);
-    return out;
-}
-
 struct NamedProfile {
     std::string name;
     std::vector<uint8_t> bytes;
@@ -56,7 +42,7 @@ std::vector<NamedProfile> sourceProfiles() {
     std::vector<NamedProfile> out;
     if (auto dir = iristest::slidesDir()) {
         for (const char* f : {"aperio/tcga-cr-7395-01a-01-ts1.svs", "generic-tiff/boxes.tiff"}) {
-            auto bytes = tiffIccProfile(*dir / f);
+            auto bytes = iristest::tiffIccProfile(*dir / f);
             if (!bytes.empty()) out.push_back({std::filesystem::path(f).filename().string(), std::move(bytes)});
         }
     }
@@ -599,7 +585,7 @@ private slots:
             QCOMPARE(lut->sourceDescription, d);
         }
         if (auto dir = iristest::slidesDir()) {
-            const auto tcga = tiffIccProfile(*dir / "aperio/tcga-cr-7395-01a-01-ts1.svs");
+            const auto tcga = iristest::tiffIccProfile(*dir / "aperio/tcga-cr-7395-01a-01-ts1.svs");
             if (!tcga.empty()) QCOMPARE(profileDescription(tcga), std::string("sRGB IEC61966-2.1"));
         }
     }

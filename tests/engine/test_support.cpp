@@ -397,6 +397,19 @@ uint64_t countNotOpaque(const iris::Image& img) {
 
 // ---- OpenSlide reference --------------------------------------------------------------
 
+std::vector<uint8_t> tiffIccProfile(const fs::path& path) {
+    TIFFSetWarningHandler(nullptr);
+    TIFF* tif = TIFFOpen(path.c_str(), "r");
+    if (!tif) return {};
+    uint32_t count = 0;
+    void* data = nullptr;
+    std::vector<uint8_t> out;
+    if (TIFFGetField(tif, TIFFTAG_ICCPROFILE, &count, &data) && data)
+        out.assign(static_cast<uint8_t*>(data), static_cast<uint8_t*>(data) + count);
+    TIFFClose(tif);
+    return out;
+}
+
 bool writeOneLevelTiff(const fs::path& path, uint32_t width, uint32_t height,
                        const std::vector<std::pair<uint32_t, uint32_t>>& broken, std::string* error,
                        const std::vector<uint8_t>& icc) {

@@ -202,6 +202,9 @@ private:
     fs::path path_;
 };
 
+// The ICC profile (TIFF tag 34675) of a TIFF's first directory; empty when it has none.
+std::vector<uint8_t> tiffIccProfile(const fs::path& path);
+
 // Writes a one-directory tiled TIFF (256×256 tiles, 8-bit RGB, deflate) of width × height
 // whose pixel (x, y) is syntheticPixel's RGB. The tiles listed in `broken` (tile column, row)
 // hold bytes that do not inflate: a slide whose reads fail on exactly those tiles. A non-empty

@@ -33,19 +33,6 @@ namespace {
 
 constexpr uint32_t kW = 512, kH = 384;
 
-std::vector<uint8_t> tiffIccProfile(const fs::path& path) {
-    TIFFSetWarningHandler(nullptr);
-    TIFF* tif = TIFFOpen(path.c_str(), "r");
-    if (!tif) return {};
-    uint32_t count = 0;
-    void* data = nullptr;
-    std::vector<uint8_t> out;
-    if (TIFFGetField(tif, TIFFTAG_ICCPROFILE, &count, &data) && data)
-        out.assign(static_cast<uint8_t*>(data), static_cast<uint8_t*>(data) + count);
-    TIFFClose(tif);
-    return out;
-}
-
 struct Stats {
     double p99 = 0, max = 0;
     int maxLutStep = 0; // largest difference from the CPU model of the table, in 8-bit steps

@@ -92,28 +92,7 @@ bool isReadError(const Result& r) {
 }
 
 void readTiles(SlideSource& src) {
-    const SlideInfo& info = src.info();
-    fuzz::TileBuffer buf, again;
-    for (const fuzz::TileRef& t : fuzz::tilesToRead(info, kMaxTileReads)) {
-        buf.reset();
-        const Result r = src.readTile(t.level, t.tx, t.ty, buf.data());
-        PROMISE(buf.guardIntact());
-        if (fuzz::verbose()) fuzz::note("tile", r);
-        if (!r.ok()) {
-            if (!isReadError(r) || !namesFile(r)) fuzz::note("tile", r);
-            PROMISE(isReadError(r));
-            PROMISE(namesFile(r));
-            continue;
-        }
-        const LevelInfo& li = info.levels[size_t(t.level)];
-        PROMISE(buf.opaque());
-        PROMISE(buf.paddedFrom(fuzz::validWidth(li, t.tx), fuzz::validHeight(li, t.ty)));
-        again.reset();
-        PROMISE(src.readTile(t.level, t.tx, t.ty, again.data()).ok());
-        PROMISE(std::memcmp(buf.data(), again.data(), kTileBytes) == 0);
-    }
-    fuzz::checkOutOfGrid(src, buf.data());
-    PROMISE(buf.guardIntact());
+    fuzz::readTileSample(src, kMaxTileReads, [](const Result& r) { return isReadError(r) && namesFile(r); });
 }
 
 void readImages(SlideSource& src) {

@@ -255,4 +255,33 @@ inline void checkOutOfGrid(iris::SlideSource& src, uint8_t* tile) {
 
 inline bool contains(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
 
+// Reads up to `maxReads` tiles (tilesToRead) and checks each: nothing written past the tile; a
+// tile that reads is opaque, edge-padded from its valid area and the same when read again (a
+// reader's caches); a failure satisfies `acceptable` (its kind, and that it names the file).
+// Then requests outside the grid.
+template <class Acceptable>
+void readTileSample(iris::SlideSource& src, size_t maxReads, Acceptable&& acceptable) {
+    const iris::SlideInfo& info = src.info();
+    TileBuffer buf, again;
+    for (const TileRef& t : tilesToRead(info, maxReads)) {
+        buf.reset();
+        const iris::Result r = src.readTile(t.level, t.tx, t.ty, buf.data());
+        PROMISE(buf.guardIntact());
+        if (verbose()) note("tile", r);
+        if (!r.ok()) {
+            if (!acceptable(r)) note("tile", r);
+            PROMISE(acceptable(r));
+            continue;
+        }
+        const iris::LevelInfo& li = info.levels[size_t(t.level)];
+        PROMISE(buf.opaque());
+        PROMISE(buf.paddedFrom(validWidth(li, t.tx), validHeight(li, t.ty)));
+        again.reset();
+        PROMISE(src.readTile(t.level, t.tx, t.ty, again.data()).ok());
+        PROMISE(std::memcmp(buf.data(), again.data(), iris::kTileBytes) == 0);
+    }
+    checkOutOfGrid(src, buf.data());
+    PROMISE(buf.guardIntact());
+}
+
 } // namespace fuzz

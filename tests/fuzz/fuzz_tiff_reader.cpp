@@ -49,29 +49,7 @@ const fuzz::ScratchDir& scratch() {
 bool namesFile(const Result& r) { return fuzz::contains(r.message(), std::string("'") + kName + "'"); }
 
 void readTiles(SlideSource& src) {
-    const SlideInfo& info = src.info();
-    fuzz::TileBuffer buf, again;
-    for (const fuzz::TileRef& t : fuzz::tilesToRead(info, kMaxTileReads)) {
-        buf.reset();
-        const Result r = src.readTile(t.level, t.tx, t.ty, buf.data());
-        PROMISE(buf.guardIntact());
-        if (fuzz::verbose()) fuzz::note("tile", r);
-        if (!r.ok()) {
-            if (!(r.status() == Status::CorruptData || r.status() == Status::IoError) || !namesFile(r))
-                fuzz::note("tile", r);
-            PROMISE(r.status() == Status::CorruptData || r.status() == Status::IoError);
-            PROMISE(namesFile(r));
-            continue;
-        }
-        const LevelInfo& li = info.levels[size_t(t.level)];
-        PROMISE(buf.opaque());
-        PROMISE(buf.paddedFrom(fuzz::validWidth(li, t.tx), fuzz::validHeight(li, t.ty)));
-        again.reset();
-        PROMISE(src.readTile(t.level, t.tx, t.ty, again.data()).ok());
-        PROMISE(std::memcmp(buf.data(), again.data(), kTileBytes) == 0);
-    }
-    fuzz::checkOutOfGrid(src, buf.data());
-    PROMISE(buf.guardIntact());
+    fuzz::readTileSample(src, kMaxTileReads, [](const Result& r) { return (r.status() == Status::CorruptData || r.status() == Status::IoError) && namesFile(r); });
 }
 
 // The size OpenSlide states for an associated image (0 × 0 when it cannot say).

@@ -75,22 +75,9 @@ Result MipPipeline::init(EngineTuning::MipSchedule requested) {
                                           .pushConstantRangeCount = 1,
                                           .pPushConstantRanges = &push};
     IRIS_VK_TRY(vkCreatePipelineLayout(dev, &plci, nullptr, layout_.replace(dev)));
-    const VkComputePipelineCreateInfo cpci{
-        .sType = VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO,
-        .pNext = nullptr,
-        .flags = 0,
-        .stage = {.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO,
-                  .pNext = nullptr,
-                  .flags = 0,
-                  .stage = VK_SHADER_STAGE_COMPUTE_BIT,
-                  .module = module_.get(),
-                  .pName = "main",
-                  .pSpecializationInfo = nullptr},
-        .layout = layout_.get(),
-        .basePipelineHandle = VK_NULL_HANDLE,
-        .basePipelineIndex = -1,
-    };
-    IRIS_VK_TRY(vkCreateComputePipelines(dev, VK_NULL_HANDLE, 1, &cpci, nullptr, pipeline_.replace(dev)));
+    Expected<VkPipeline> pipeline = vk::createComputePipeline(dev, layout_.get(), module_.get());
+    if (!pipeline) return pipeline.error();
+    pipeline_ = vk::Pipeline(dev, *pipeline);
 
     const VkDescriptorPoolSize ps[2] = {{.type = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, .descriptorCount = kTileMipLevels},
                                         {.type = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, .descriptorCount = 2}};

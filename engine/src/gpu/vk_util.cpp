@@ -193,6 +193,28 @@ Result createShaderModule(VkDevice dev, const uint32_t* code, size_t bytes, VkSh
     return {};
 }
 
+Expected<VkPipeline> createComputePipeline(VkDevice dev, VkPipelineLayout layout, VkShaderModule module,
+                                           const VkSpecializationInfo* specialization) {
+    const VkComputePipelineCreateInfo cpci{
+        .sType = VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO,
+        .pNext = nullptr,
+        .flags = 0,
+        .stage = {.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO,
+                  .pNext = nullptr,
+                  .flags = 0,
+                  .stage = VK_SHADER_STAGE_COMPUTE_BIT,
+                  .module = module,
+                  .pName = "main",
+                  .pSpecializationInfo = specialization},
+        .layout = layout,
+        .basePipelineHandle = VK_NULL_HANDLE,
+        .basePipelineIndex = -1,
+    };
+    VkPipeline pipeline = VK_NULL_HANDLE;
+    IRIS_VK_TRY(vkCreateComputePipelines(dev, VK_NULL_HANDLE, 1, &cpci, nullptr, &pipeline));
+    return pipeline;
+}
+
 Expected<VkPipeline> createInstancedQuadPipeline(VkDevice dev, VkPipelineLayout layout, VkShaderModule vert,
                                                  VkShaderModule frag, uint32_t instanceStride,
                                                  const VkVertexInputAttributeDescription* attributes,

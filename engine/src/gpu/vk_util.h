@@ -200,6 +200,11 @@ Expected<VkPipeline> createInstancedQuadPipeline(VkDevice dev, VkPipelineLayout 
                                                  uint32_t attributeCount, VkFormat format,
                                                  const VkSpecializationInfo* fragSpecialization = nullptr);
 
+// A compute pipeline of `module`'s "main" with `layout` and, optionally, specialization
+// constants.
+Expected<VkPipeline> createComputePipeline(VkDevice dev, VkPipelineLayout layout, VkShaderModule module,
+                                           const VkSpecializationInfo* specialization = nullptr);
+
 // A host-visible buffer, persistently mapped, that owns its buffer and memory: they go with it
 // (freeing the memory unmaps it). Move-only. `buffer` and `mapped` show what it owns, as plain
 // fields because recording code takes the handle's address (vkCmdBindVertexBuffers): read

@@ -53,22 +53,9 @@ Result ResolvePass::init(uint32_t frameSlots) {
     for (int managed = 0; managed < 2; ++managed) {
         const gpu::ColorSpecialization spec(managed != 0,
                                             device_.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU);
-        const VkComputePipelineCreateInfo cpci{
-            .sType = VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO,
-            .pNext = nullptr,
-            .flags = 0,
-            .stage = {.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO,
-                      .pNext = nullptr,
-                      .flags = 0,
-                      .stage = VK_SHADER_STAGE_COMPUTE_BIT,
-                      .module = shader_.get(),
-                      .pName = "main",
-                      .pSpecializationInfo = &spec.info},
-            .layout = layout_.get(),
-            .basePipelineHandle = VK_NULL_HANDLE,
-            .basePipelineIndex = -1,
-        };
-        IRIS_VK_TRY(vkCreateComputePipelines(dev, VK_NULL_HANDLE, 1, &cpci, nullptr, pipelines_[managed].replace(dev)));
+        Expected<VkPipeline> pipeline = vk::createComputePipeline(dev, layout_.get(), shader_.get(), &spec.info);
+        if (!pipeline) return pipeline.error();
+        pipelines_[managed] = vk::Pipeline(dev, *pipeline);
     }
     const VkDescriptorPoolSize sizes[3] = {{VK_DESCRIPTOR_TYPE_COMBINED_IMAGE_SAMPLER, 2 * frameSlots},
                                            {VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, frameSlots},

@@ -12,7 +12,7 @@
 #      (the lock-free tile map under concurrent pin/reclaim, the API storm, DICOM reads);
 #   4. the fuzz build (fuzz preset: clang, libFuzzer, ASan + UBSan, the readers and decoders
 #      only): every target's seed corpus and committed regression inputs replayed (CTest label
-#      "fuzz"), then IRIS_FUZZ_SECONDS (120) of fuzzing per file reader (half that for the
+#      "fuzz"), then IRIS_FUZZ_SECONDS (120) of fuzzing per file reader, one target per core (half that for the
 #      DICOMweb source's multipart and DICOM JSON parsers); any crash, leak, timeout,
 #      sanitizer report or broken promise fails (see tests/fuzz/README.md);
 #   5. the Debian packages (scripts/test-deb.sh): the release build packed by cpack, installed
@@ -58,28 +58,53 @@ echo "== fuzz tests"
 ctest --preset fuzz -L fuzz -j 1
 FUZZ_SECONDS="${IRIS_FUZZ_SECONDS:-120}"
 FUZZ=build/fuzz
-fuzz_failed=""
 # TARGET DICTIONARY SHARE (- for no dictionary): each fuzzed for SHARE × FUZZ_SECONDS (the
 # readers of files a user opens get the whole time, the DICOMweb source's two small parsers
-# half); corpus/<target> (kept between runs of this build tree) takes what a run finds new. A
-# failing target does not stop the others; the stage fails at the end, naming them.
+# half); corpus/<target> (kept between runs of this build tree) takes what a run finds new.
+# libFuzzer fuzzes in one process on one core, so the targets run $JOBS at a time, each into
+# its own log, reported when it ends. A failing target does not stop the others; the stage
+# fails at the end, naming them.
+fuzz_one() {
+  local target="$1" dict="$2" seconds="$3"
+  mkdir -p "$FUZZ/corpus/$target" "$FUZZ/artifacts/$target"
+  local dict_arg=()
+  [ "$dict" = "-" ] || dict_arg=(-dict="$dict")
+  "$FUZZ/bin/fuzz_$target" "${dict_arg[@]}" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
+      -artifact_prefix="$FUZZ/artifacts/$target/" -print_final_stats=1 \
+      "$FUZZ/corpus/$target" "$FUZZ/tests/fuzz/seeds/$target" "tests/fuzz/regressions/$target" \
+      >"$FUZZ/fuzz-$target.log" 2>&1 </dev/null
+}
+fuzz_failed=""
+declare -A fuzz_pids=()
+# Reports and forgets every target whose fuzzer has ended.
+fuzz_reap() {
+  local t rc log
+  for t in "${!fuzz_pids[@]}"; do
+    kill -0 "${fuzz_pids[$t]}" 2>/dev/null && continue
+    rc=0
+    wait "${fuzz_pids[$t]}" || rc=$?
+    unset "fuzz_pids[$t]"
+    log="$FUZZ/fuzz-$t.log"
+    echo "== fuzzed $t"
+    if [ "$rc" -eq 0 ]; then
+      grep -E "INITED|DONE|^Done|stat::" "$log" || true
+    else
+      tail -n 100 "$log"
+      echo "fuzz_$t failed (log: $log). The input that did it is in $FUZZ/artifacts/$t/;"
+      echo "reproduce with: $FUZZ/bin/fuzz_$t $FUZZ/artifacts/$t/FILE"
+      fuzz_failed="$fuzz_failed $t"
+    fi
+  done
+}
 while read -r target dict share; do
+  while [ "${#fuzz_pids[@]}" -ge "$JOBS" ]; do
+    wait -n || true
+    fuzz_reap
+  done
   seconds=$(( FUZZ_SECONDS * ${share%/*} / ${share#*/} ))
   echo "== fuzzing $target (${seconds} s)"
-  mkdir -p "$FUZZ/corpus/$target" "$FUZZ/artifacts/$target"
-  dict_arg=()
-  [ "$dict" = "-" ] || dict_arg=(-dict="$dict")
-  log="$FUZZ/fuzz-$target.log"
-  if "$FUZZ/bin/fuzz_$target" "${dict_arg[@]}" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
-      -artifact_prefix="$FUZZ/artifacts/$target/" -print_final_stats=1 \
-      "$FUZZ/corpus/$target" "$FUZZ/tests/fuzz/seeds/$target" "tests/fuzz/regressions/$target" >"$log" 2>&1 </dev/null; then
-    grep -E "INITED|DONE|^Done|stat::" "$log" || true
-  else
-    tail -n 100 "$log"
-    echo "fuzz_$target failed (log: $log). The input that did it is in $FUZZ/artifacts/$target/;"
-    echo "reproduce with: $FUZZ/bin/fuzz_$target $FUZZ/artifacts/$target/FILE"
-    fuzz_failed="$fuzz_failed $target"
-  fi
+  fuzz_one "$target" "$dict" "$seconds" &
+  fuzz_pids[$target]=$!
 done <<'EOF'
 iris_reader tests/fuzz/iris.dict 1/1
 tiff_reader tests/fuzz/tiff.dict 1/1
@@ -90,6 +115,10 @@ dicom_file tests/fuzz/dicom.dict 1/1
 multipart - 1/2
 dicom_json - 1/2
 EOF
+while [ "${#fuzz_pids[@]}" -gt 0 ]; do
+  wait -n || true
+  fuzz_reap
+done
 if [ -n "$fuzz_failed" ]; then
   echo "fuzzing failed:$fuzz_failed"
   exit 1

@@ -10,17 +10,20 @@
 layout(set = 0, binding = 0) uniform sampler2DArray atlas; // 256×256 RGBA8 premultiplied, full mips
 
 #include "color_lut.glsl"
+#include "tile_turn.glsl"
 
 layout(location = 0) flat in vec2 inOrigin;
 layout(location = 1) flat in vec4 inTexel;  // valid w, valid h, layer, lod
 layout(location = 2) flat in float inScale;
+layout(location = 5) flat in vec4 inTurn;   // the view's turn and its centre (tile_turn.glsl)
+layout(location = 6) flat in vec2 inCentre;
 
 layout(location = 0) out vec4 outColor;
 
 const float TILE = 256.0;
 
 void main() {
-    vec2 texel = (gl_FragCoord.xy - inOrigin) * inScale;
+    vec2 texel = (turnFromTarget(gl_FragCoord.xy, inTurn, inCentre) - inOrigin) * inScale;
     // Clamp into the tile's valid area so edge tiles never sample their padding at level 0.
     texel = clamp(texel, vec2(0.5), inTexel.xy - vec2(0.5));
     outColor = colorManaged(textureLod(atlas, vec3(texel / TILE, inTexel.z), inTexel.w));

@@ -13,20 +13,28 @@ layout(location = 3) in vec4 inSides;  // neighbours' atlas layers: left, right,
 layout(push_constant) uniform Push {
     vec2 targetSize; // pixels
     int edge;        // the seam pass's band; unused here
+    float unused;
+    vec4 turn;       // the view's turn (tile_turn.glsl)
+    vec2 centre;     // its centre, target pixels
 } pc;
 
 layout(location = 0) flat out vec2 outOrigin;
 layout(location = 1) flat out vec4 outTexel;
 layout(location = 2) flat out float outScale;
+layout(location = 5) flat out vec4 outTurn;
+layout(location = 6) flat out vec2 outCentre;
 
 #include "tile_bands.glsl"
+#include "tile_turn.glsl"
 
 void main() {
     vec2 corner = vec2(gl_VertexIndex & 1, (gl_VertexIndex >> 1) & 1);
     vec4 r = tileInterior(inRect, inTexel, inScale, inSides);
-    vec2 p = mix(r.xy, r.zw, corner);
+    vec2 p = turnToTarget(mix(r.xy, r.zw, corner), pc.turn, pc.centre);
     gl_Position = vec4(p / pc.targetSize * 2.0 - 1.0, 0.0, 1.0);
     outOrigin = inRect.xy;
     outTexel = inTexel;
     outScale = inScale;
+    outTurn = pc.turn;
+    outCentre = pc.centre;
 }

@@ -14,6 +14,7 @@ layout(local_size_x = 16, local_size_y = 16) in;
 
 layout(set = 0, binding = 0) uniform sampler2DArray atlas;
 #include "color_lut.glsl"
+#include "tile_turn.glsl"
 layout(set = 0, binding = 2, rgba8) uniform writeonly image2D target;
 
 struct Layer {
@@ -25,6 +26,8 @@ struct Layer {
 layout(std430, set = 0, binding = 3) readonly buffer PageTable {
     vec4 background;
     ivec4 info;     // target width, target height, layer count, unused
+    vec4 turn;      // the view's turn (tile_turn.glsl): the layers' geometry is unturned
+    vec4 centre;    // xy: its centre, target pixels
     Layer layers[3]; // finest first
     int tiles[];
 } table;
@@ -127,9 +130,10 @@ void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
     if (px.x >= table.info.x || px.y >= table.info.y) return;
     vec4 color = table.background;
+    vec2 u = turnFromTarget(vec2(px) + 0.5, table.turn, table.centre.xy);
     for (int l = 0; l < table.info.z; ++l) {
         Layer L = table.layers[l];
-        vec2 q = L.geometry.xy + (vec2(px) + 0.5) * L.geometry.z;
+        vec2 q = L.geometry.xy + u * L.geometry.z;
         bool ok = true;
         vec4 s = sampleLayer(l, q, ok);
         if (ok) {

@@ -12,10 +12,13 @@
 layout(set = 0, binding = 0) uniform sampler2DArray atlas; // 256×256 RGBA8 premultiplied, full mips
 
 #include "color_lut.glsl"
+#include "tile_turn.glsl"
 
 layout(location = 0) flat in vec2 inOrigin;
 layout(location = 1) flat in vec4 inTexel;   // valid w, valid h, layer, lod
 layout(location = 2) flat in float inScale;
+layout(location = 5) flat in vec4 inTurn;   // the view's turn and its centre (tile_turn.glsl)
+layout(location = 6) flat in vec2 inCentre;
 layout(location = 3) flat in vec4 inSides;   // left, right, above, below: atlas layers, -1 none
 layout(location = 4) flat in vec4 inCorners; // above-left, above-right, below-left, below-right
 
@@ -58,7 +61,7 @@ vec4 bilinear(vec2 p, int m) {
 }
 
 void main() {
-    vec2 p = (gl_FragCoord.xy - inOrigin) * inScale;
+    vec2 p = (turnFromTarget(gl_FragCoord.xy, inTurn, inCentre) - inOrigin) * inScale;
     // tile.frag's clamp into the valid area, on the sides without a neighbour (across a seam
     // the position runs on into the neighbour).
     vec2 lo = vec2(inSides.x >= 0.0 ? -1e9 : 0.5, inSides.z >= 0.0 ? -1e9 : 0.5);

@@ -106,6 +106,7 @@ struct Engine::Impl {
     // Applies a view change with the downsample clamped and the numbers sanitised.
     void setViewLocked(Snapshot& s, View v) {
         if (!std::isfinite(v.centerX) || !std::isfinite(v.centerY)) return;
+        v.rotation = normalizedRotation(v.rotation);
         if (s.slide) {
             v.downsample = clampDownsample(s.slide->info, s.viewport.width, s.viewport.height, v.downsample);
         } else if (!(v.downsample > 0) || !std::isfinite(v.downsample)) {
@@ -305,8 +306,12 @@ void Engine::translate(double dx, double dy) {
     if (!std::isfinite(dx) || !std::isfinite(dy)) return;
     impl_->shared.update([&](Snapshot& s) {
         View v = s.viewport.view;
-        v.centerX -= dx * v.downsample;
-        v.centerY -= dy * v.downsample;
+        // The image follows the pointer: the target's centre moves to the slide point that
+        // lay at (centre − delta).
+        const ViewTransform t = ViewTransform::of(v, s.viewport.width, s.viewport.height);
+        const auto to = t.toSlide(t.targetCX - dx, t.targetCY - dy);
+        v.centerX = to[0];
+        v.centerY = to[1];
         if (s.slide) {
             // Panning never pushes the slide out of the target: the centre may not move past
             // the slide's edge (a centre already outside, set by setView, is not pulled back).
@@ -326,13 +331,23 @@ void Engine::zoom(double factor, double anchorX, double anchorY) {
     impl_->shared.update([&](Snapshot& s) {
         View v = s.viewport.view;
         // The level-0 point under the anchor before and after must coincide.
-        const double ax = anchorX - s.viewport.width * 0.5, ay = anchorY - s.viewport.height * 0.5;
-        const double px = v.centerX + ax * v.downsample, py = v.centerY + ay * v.downsample;
+        const auto p = ViewTransform::of(v, s.viewport.width, s.viewport.height).toSlide(anchorX, anchorY);
         double ds = v.downsample / factor;
         if (s.slide) ds = clampDownsample(s.slide->info, s.viewport.width, s.viewport.height, ds);
         v.downsample = ds;
-        v.centerX = px - ax * ds;
-        v.centerY = py - ay * ds;
+        keepUnder(v, p, anchorX, anchorY, s.viewport);
+        impl_->setViewLocked(s, v);
+    });
+}
+
+void Engine::rotate(double degrees, double anchorX, double anchorY) {
+    if (!std::isfinite(degrees) || !std::isfinite(anchorX) || !std::isfinite(anchorY)) return;
+    impl_->shared.update([&](Snapshot& s) {
+        View v = s.viewport.view;
+        // The slide turns clockwise on screen about the anchor: the slide point there stays.
+        const auto p = ViewTransform::of(v, s.viewport.width, s.viewport.height).toSlide(anchorX, anchorY);
+        v.rotation = normalizedRotation(v.rotation + degrees);
+        keepUnder(v, p, anchorX, anchorY, s.viewport);
         impl_->setViewLocked(s, v);
     });
 }
@@ -346,7 +361,7 @@ View Engine::view() const { return impl_->shared.snapshot().viewport.view; }
 View Engine::fitView() const {
     const Snapshot s = impl_->shared.snapshot();
     if (!s.slide) return s.viewport.view;
-    return iris::fitView(s.slide->info, s.viewport.width, s.viewport.height);
+    return iris::fitView(s.slide->info, s.viewport.width, s.viewport.height, s.viewport.view);
 }
 
 std::pair<uint32_t, uint32_t> Engine::targetSize() const {
@@ -443,6 +458,15 @@ namespace {
 bool validOverlay(Overlay o) { return int(o) >= 0 && int(o) < kOverlayCount; }
 bool labelled(Overlay o) { return o == Overlay::ScaleBar || o == Overlay::Magnification; }
 } // namespace
+
+void Engine::setCrosshair(std::optional<std::array<double, 2>> slidePos) {
+    if (slidePos && (!std::isfinite((*slidePos)[0]) || !std::isfinite((*slidePos)[1]))) slidePos.reset();
+    impl_->shared.update([&](Snapshot& s) { s.overlays.crosshair = slidePos; });
+}
+
+std::optional<std::array<double, 2>> Engine::crosshair() const {
+    return impl_->shared.snapshot().overlays.crosshair;
+}
 
 void Engine::setOverlayVisible(Overlay overlay, bool visible) {
     if (!validOverlay(overlay)) return;

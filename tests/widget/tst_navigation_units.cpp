@@ -38,6 +38,11 @@ struct Recorder final : IrisWidget::NavigationTarget {
     QList<double> factors;
     int fits = 0;
     QList<int> presets;
+    double turned = 0;       // sum of rotate() angles
+    int turns = 0;
+    QList<QPointF> turnAnchors;
+    int flips = 0;
+    int resets = 0;
 
     bool canNavigate() const override { return slide; }
     void pan(QPointF d) override { panned += d; ++pans; }
@@ -49,6 +54,14 @@ struct Recorder final : IrisWidget::NavigationTarget {
         anchors << a;
         factors << f;
     }
+    void rotate(double degrees, QPointF a) override
+    {
+        turned += degrees;
+        ++turns;
+        turnAnchors << a;
+    }
+    void flip() override { ++flips; }
+    void resetOrientation() override { ++resets; }
     QPointF viewportCentre() const override { return {320, 240}; }
     void fit() override { ++fits; }
     void showMagnificationPreset(int i) override { presets << i; }
@@ -64,9 +77,10 @@ std::unique_ptr<QMouseEvent> mouse(QEvent::Type type, QPointF pos, Qt::MouseButt
 }
 
 std::unique_ptr<QWheelEvent> wheel(QPointF pos, QPoint angle, QPoint pixels = {},
-                                   Qt::ScrollPhase phase = Qt::NoScrollPhase)
+                                   Qt::ScrollPhase phase = Qt::NoScrollPhase,
+                                   Qt::KeyboardModifiers modifiers = Qt::NoModifier)
 {
-    return std::make_unique<QWheelEvent>(pos, pos, pixels, angle, Qt::NoButton, Qt::NoModifier, phase, false);
+    return std::make_unique<QWheelEvent>(pos, pos, pixels, angle, Qt::NoButton, modifiers, phase, false);
 }
 
 bool near(double a, double b, double tolerance = 1e-12)
@@ -90,6 +104,10 @@ private Q_SLOTS:
     void keys_data();
     void keys();
     void chordsAreLeftToShortcuts();
+    void turnKeysAnimateExactRightAngles();
+    void shiftWheelTurnsAboutThePointer();
+    void ctrlDragTurnsWithThePointersAngle();
+    void flipAndResetKeys();
     void magnificationRule();
     void fpsMeter();
 };
@@ -352,6 +370,82 @@ void TstNavigationUnits::fpsMeter()
     QVERIFY(near(meter.fps(), 62.5));
     QCOMPARE(meter.add(2000), 0.0); // a pause restarts the run
     QVERIFY(near(meter.add(10), 100));
+}
+
+void TstNavigationUnits::turnKeysAnimateExactRightAngles()
+{
+    Recorder target;
+    ViewNavigator nav(&target);
+    QKeyEvent r(QEvent::KeyPress, Qt::Key_R, Qt::NoModifier);
+    QVERIFY(nav.keyPress(&r));
+    QVERIFY(nav.zoomAnimator().isActive()); // animated, like a zoom
+    QSignalSpy finished(&nav.zoomAnimator(), &ZoomAnimator::finished);
+    QVERIFY(finished.wait(2000));
+    QVERIFY(target.turns >= 2);
+    QVERIFY(near(target.turned, ViewNavigator::kKeyTurnDegrees, 1e-9));
+    for (const QPointF &a : std::as_const(target.turnAnchors))
+        QCOMPARE(a, target.viewportCentre());
+    QKeyEvent shiftR(QEvent::KeyPress, Qt::Key_R, Qt::ShiftModifier);
+    QVERIFY(nav.keyPress(&shiftR));
+    nav.zoomAnimator().finish();
+    QVERIFY(near(target.turned, 0, 1e-9));
+    QCOMPARE(target.zoomed, 1.0); // a turn zooms nothing
+}
+
+void TstNavigationUnits::shiftWheelTurnsAboutThePointer()
+{
+    Recorder target;
+    ViewNavigator nav(&target);
+    const QPointF anchor(100, 50);
+    auto notch = wheel(anchor, {0, 120}, {}, Qt::NoScrollPhase, Qt::ShiftModifier);
+    QVERIFY(nav.wheel(notch.get()));
+    auto back = wheel(anchor, {0, -60}, {}, Qt::NoScrollPhase, Qt::ShiftModifier);
+    QVERIFY(nav.wheel(back.get()));
+    nav.zoomAnimator().finish();
+    QVERIFY(near(target.turned, ViewNavigator::kWheelNotchDegrees / 2, 1e-9));
+    QCOMPARE(target.zooms, 0);
+    for (const QPointF &a : std::as_const(target.turnAnchors))
+        QCOMPARE(a, anchor);
+}
+
+void TstNavigationUnits::ctrlDragTurnsWithThePointersAngle()
+{
+    Recorder target;
+    ViewNavigator nav(&target);
+    const QPointF c = target.viewportCentre();
+    // From straight right of the centre to straight below it: a quarter turn clockwise, in
+    // steps, across the ±180° wrap too (then on to straight left and above).
+    auto press = mouse(QEvent::MouseButtonPress, c + QPointF(100, 0), Qt::LeftButton, Qt::LeftButton, 10,
+                       Qt::ControlModifier);
+    QVERIFY(nav.mousePress(press.get()));
+    QVERIFY(nav.isDragging());
+    const QList<QPointF> path{{70.7, 70.7}, {0, 100}, {-100, 1}, {-100, -1}, {0, -100}};
+    int t = 20;
+    for (const QPointF &p : path) {
+        auto move = mouse(QEvent::MouseMove, c + p, Qt::NoButton, Qt::LeftButton, quint64(t += 10), Qt::ControlModifier);
+        QVERIFY(nav.mouseMove(move.get()));
+    }
+    QVERIFY(near(target.turned, 270, 1e-6));
+    QCOMPARE(target.pans, 0);
+    auto release = mouse(QEvent::MouseButtonRelease, c + QPointF(0, -100), Qt::LeftButton, Qt::NoButton, 200);
+    QVERIFY(nav.mouseRelease(release.get()));
+    QVERIFY(!nav.isDragging());
+    QVERIFY(!nav.kineticPanner().isActive()); // a turn never glides
+    for (const QPointF &a : std::as_const(target.turnAnchors))
+        QCOMPARE(a, c);
+}
+
+void TstNavigationUnits::flipAndResetKeys()
+{
+    Recorder target;
+    ViewNavigator nav(&target);
+    QKeyEvent f(QEvent::KeyPress, Qt::Key_F, Qt::NoModifier);
+    QVERIFY(nav.keyPress(&f));
+    QCOMPARE(target.flips, 1);
+    QKeyEvent reset(QEvent::KeyPress, Qt::Key_Home, Qt::ShiftModifier);
+    QVERIFY(nav.keyPress(&reset));
+    QCOMPARE(target.resets, 1);
+    QCOMPARE(target.fits, 0); // Shift+Home resets the orientation only
 }
 
 QTEST_MAIN(TstNavigationUnits)

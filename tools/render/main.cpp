@@ -2,12 +2,13 @@
 // and writes it as PNG.
 //
 //   iris-render SLIDE --out FILE.png [--size WxH] [--center X,Y] [--downsample D]
-//               [--enhance on|off] [--color-managed on|off] [--display-profile FILE.icc]
+//               [--rotate DEG] [--flip h|v|hv] [--enhance on|off] [--color-managed on|off] [--display-profile FILE.icc]
 //               [--intent perceptual|relative] [--timeout S] [--validation] [--verbose]
 //
 // --center is in level-0 pixels and --downsample is level-0 pixels per output pixel, so the
 // output's top-left pixel covers level-0 (X − W/2·D, Y − H/2·D). Without them the whole slide
-// is fitted into the output.
+// is fitted into the output. --rotate turns the slide clockwise about the centre and --flip
+// mirrors it first (h: left-right, v: top-bottom), as the viewer does (iris::View).
 #include <chrono>
 #include <fstream>
 #include <iterator>
@@ -48,14 +49,16 @@ bool parseSize(const std::string& s, double& w, double& h) {
 int main(int argc, char** argv) {
     std::string slide, out, size = "1920x1080", center, enhance = "on", colorManaged = "on", displayProfile,
         intent = "perceptual";
-    double ds = 0, timeout = 60;
+    std::string flip;
+    double ds = 0, timeout = 60, rotate = 0;
     bool validation = false, verbose = false;
     CLI::App app{"Render one frame of a slide headless and write it as PNG.\n"
                  "\n"
                  "The frame is written once every visible tile is resident. --center is in\n"
                  "level-0 pixels and --downsample is level-0 pixels per output pixel, so the\n"
                  "output's top-left pixel covers level-0 (X - W/2*D, Y - H/2*D). Without them the\n"
-                 "whole slide is fitted into the output.\n",
+                 "whole slide is fitted into the output. --rotate turns the slide clockwise about\n"
+                 "the centre; --flip mirrors it before the turn.\n",
                  "iris-render"};
     iris::tools::setUpApp(app, "iris-render");
     app.add_option("SLIDE", slide, "The slide: any file Iris View opens, or\nsynthetic:WIDTHxHEIGHT")->required();
@@ -74,6 +77,14 @@ int main(int argc, char** argv) {
         ->check(iris::tools::textCheck([](const std::string& v) { double d = 0; return parseNumber(v, d) && d > 0; },
                           "a positive number"))
         ->default_str("the whole slide fitted");
+    app.add_option("--rotate", rotate, "Turn the slide clockwise by DEG degrees about the\nview centre")
+        ->option_text("DEG")
+        ->check(iris::tools::textCheck([](const std::string& v) { double d = 0; return parseNumber(v, d); },
+                          "a finite number of degrees"))
+        ->default_str("0");
+    app.add_option("--flip", flip, "Mirror the slide before the turn: h left-right,\nv top-bottom, hv both")
+        ->option_text("h|v|hv")
+        ->check(CLI::IsMember({"h", "v", "hv", "vh"}).description(""));
     app.add_option("--enhance", enhance,
                    "Reduction-enhancement of the mip levels (a sharpened\n"
                    "area average); off gives the exact area average")
@@ -148,6 +159,14 @@ int main(int argc, char** argv) {
                      cs.applied ? "the slide's profile is applied" : "no transform",
                      cs.slideProfile.empty() ? "none" : cs.slideProfile.c_str(), cs.displayProfile.c_str());
     }
+    {
+        // Fitted as turned (the turned slide's bounding box fills the output).
+        iris::View turned = e.view();
+        turned.rotation = rotate;
+        turned.flipH = flip.find('h') != std::string::npos;
+        turned.flipV = flip.find('v') != std::string::npos;
+        e.setView(turned);
+    }
     iris::View v = e.fitView();
     if (haveCenter) {
         v.centerX = cx;
@@ -175,8 +194,12 @@ int main(int argc, char** argv) {
         return 1;
     }
     if (verbose) {
-        std::fprintf(stderr, "iris-render: %s on %s: complete frame in %.1f ms, view centre (%.1f, %.1f) downsample %.4g\n",
-                     out.c_str(), e.device().name.c_str(), ms, frame->view.centerX, frame->view.centerY, frame->view.downsample);
+        std::fprintf(stderr,
+                     "iris-render: %s on %s: complete frame in %.1f ms, view centre (%.1f, %.1f) downsample %.4g "
+                     "rotation %.4g%s%s\n",
+                     out.c_str(), e.device().name.c_str(), ms, frame->view.centerX, frame->view.centerY,
+                     frame->view.downsample, frame->view.rotation, frame->view.flipH ? " flipped-h" : "",
+                     frame->view.flipV ? " flipped-v" : "");
     }
     if (validation && e.validationMessageCount() > 0) {
         std::fprintf(stderr, "iris-render: %llu Vulkan validation messages\n",

@@ -134,6 +134,10 @@ void EngineHost::applyOverlays(const EngineSettings &settings)
     m_settings.overlayFont = settings.overlayFont;
     for (int i = 0; i < iris::kOverlayCount; ++i)
         m_engine->setOverlayVisible(iris::Overlay(i), settings.overlayVisible[size_t(i)]);
+    m_settings.crosshair = settings.crosshair;
+    m_engine->setCrosshair(settings.crosshair ? std::optional(std::array<double, 2>{settings.crosshair->x(),
+                                                                                   settings.crosshair->y()})
+                                              : std::nullopt);
 }
 
 void EngineHost::applyColor(const EngineSettings &settings)

@@ -10,9 +10,11 @@
 
 #include <array>
 #include <memory>
+#include <optional>
 
 #include <QtCore/QByteArray>
 #include <QtCore/QObject>
+#include <QtCore/QPointF>
 #include <QtCore/QSize>
 #include <QtCore/QString>
 
@@ -40,6 +42,7 @@ struct EngineSettings {
     std::array<iris::Corner, iris::kOverlayCount> overlayCorner{iris::Corner::BottomLeft, iris::Corner::TopLeft,
                                                                 iris::Corner::TopRight};
     QString overlayFont; // empty: the engine's default
+    std::optional<QPointF> crosshair; // level-0 position; none: hidden
     // Colour management; displayProfile is the one in use (the host's or the screen's).
     bool colorManaged = iris::EngineConfig{}.color.managed;
     iris::RenderingIntent intent = iris::EngineConfig{}.color.intent;

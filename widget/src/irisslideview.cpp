@@ -172,16 +172,103 @@ void IrisSlideView::setDownsample(double downsample)
     d->setView(view);
 }
 
+double IrisSlideView::rotation() const
+{
+    Q_D(const IrisSlideView);
+    if (!d->engine() || !d->slide)
+        return 0;
+    return d->engine()->view().rotation;
+}
+
+bool IrisSlideView::isFlippedHorizontally() const
+{
+    Q_D(const IrisSlideView);
+    return d->engine() && d->slide && d->engine()->view().flipH;
+}
+
+bool IrisSlideView::isFlippedVertically() const
+{
+    Q_D(const IrisSlideView);
+    return d->engine() && d->slide && d->engine()->view().flipV;
+}
+
+void IrisSlideView::setRotation(double degrees)
+{
+    Q_D(IrisSlideView);
+    if (!d->engine() || !d->slide || !std::isfinite(degrees))
+        return;
+    d->navigator.stopMotion();
+    iris::View view = d->engine()->view();
+    view.rotation = degrees;
+    d->setView(view);
+}
+
+void IrisSlideView::rotateBy(double degrees)
+{
+    Q_D(IrisSlideView);
+    d->navigator.stopMotion();
+    d->rotate(degrees, d->viewportCentre());
+}
+
+void IrisSlideView::rotateBy(double degrees, const QPointF &widgetAnchor)
+{
+    Q_D(IrisSlideView);
+    d->navigator.stopMotion();
+    d->rotate(degrees, widgetAnchor);
+}
+
+void IrisSlideView::setFlipped(bool horizontally, bool vertically)
+{
+    Q_D(IrisSlideView);
+    if (!d->engine() || !d->slide)
+        return;
+    d->navigator.stopMotion();
+    iris::View view = d->engine()->view();
+    view.flipH = horizontally;
+    view.flipV = vertically;
+    d->setView(view);
+}
+
+void IrisSlideView::setFlippedHorizontally(bool on)
+{
+    setFlipped(on, isFlippedVertically());
+}
+
+void IrisSlideView::setFlippedVertically(bool on)
+{
+    setFlipped(isFlippedHorizontally(), on);
+}
+
+void IrisSlideView::resetOrientation()
+{
+    Q_D(IrisSlideView);
+    d->navigator.stopMotion();
+    d->resetOrientation();
+}
+
+void IrisSlideView::setView(const QPointF &centre, double downsample, double rotation)
+{
+    Q_D(IrisSlideView);
+    if (!d->engine() || !d->slide || !std::isfinite(rotation))
+        return;
+    d->navigator.stopMotion();
+    iris::View view = d->engine()->view();
+    view.centerX = centre.x();
+    view.centerY = centre.y();
+    view.downsample = downsample;
+    view.rotation = rotation;
+    d->setView(view);
+}
+
 QPointF IrisSlideView::mapToSlide(const QPointF &widgetPos) const
 {
     Q_D(const IrisSlideView);
     if (!d->engine() || !d->slide)
         return {};
-    const iris::View view = d->engine()->view();
     const auto [width, height] = d->engine()->targetSize();
     const QPointF t = d->toTarget(widgetPos);
-    return {view.centerX + (t.x() - width / 2.0) * view.downsample,
-            view.centerY + (t.y() - height / 2.0) * view.downsample};
+    const auto s = iris::ViewTransform::of(d->engine()->view(), width, height).toSlide(t.x(), t.y());
+    return {s[0], s[1]};
 }
 
 QPointF IrisSlideView::mapFromSlide(const QPointF &slidePos) const
@@ -189,11 +276,31 @@ QPointF IrisSlideView::mapFromSlide(const QPointF &slidePos) const
     Q_D(const IrisSlideView);
     if (!d->engine() || !d->slide)
         return {};
-    const iris::View view = d->engine()->view();
     const auto [width, height] = d->engine()->targetSize();
-    const QPointF t((slidePos.x() - view.centerX) / view.downsample + width / 2.0,
-                    (slidePos.y() - view.centerY) / view.downsample + height / 2.0);
-    return d->fromTarget(t);
+    const auto t = iris::ViewTransform::of(d->engine()->view(), width, height).toTarget(slidePos.x(), slidePos.y());
+    return d->fromTarget(QPointF(t[0], t[1]));
+}
+
+void IrisSlideView::setCrosshair(const QPointF &slidePos)
+{
+    Q_D(IrisSlideView);
+    if (!std::isfinite(slidePos.x()) || !std::isfinite(slidePos.y()))
+        return;
+    d->settings.crosshair = slidePos;
+    d->host.applyOverlays(d->settings);
+}
+
+void IrisSlideView::clearCrosshair()
+{
+    Q_D(IrisSlideView);
+    d->settings.crosshair.reset();
+    d->host.applyOverlays(d->settings);
+}
+
+bool IrisSlideView::hasCrosshair() const
+{
+    Q_D(const IrisSlideView);
+    return d->settings.crosshair.has_value();
 }
 
 QSize IrisSlideView::targetSize() const

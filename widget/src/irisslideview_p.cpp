@@ -369,7 +369,7 @@ void IrisSlideViewPrivate::notifyViewChanged()
     const auto same = [](const std::optional<iris::View> &a, const std::optional<iris::View> &b) {
         if (a.has_value() != b.has_value())
             return false;
-        return !a || (a->centerX == b->centerX && a->centerY == b->centerY && a->downsample == b->downsample);
+        return !a || *a == *b;
     };
     if (same(now, notifiedView))
         return;
@@ -472,6 +472,37 @@ void IrisSlideViewPrivate::zoom(double factor, QPointF logicalAnchor)
     const QPointF anchor = toTarget(logicalAnchor);
     engine()->zoom(effective, anchor.x(), anchor.y());
     notifyViewChanged();
+}
+
+void IrisSlideViewPrivate::rotate(double degrees, QPointF logicalAnchor)
+{
+    if (!canNavigate() || !std::isfinite(degrees) || degrees == 0)
+        return;
+    const QPointF anchor = toTarget(logicalAnchor);
+    engine()->rotate(degrees, anchor.x(), anchor.y());
+    notifyViewChanged();
+}
+
+void IrisSlideViewPrivate::flip()
+{
+    if (!canNavigate())
+        return;
+    // The image mirrored left-right on screen, whatever its rotation: mirroring the slide
+    // before a turn by r equals mirroring the screen after a turn by -r.
+    iris::View view = engine()->view();
+    view.flipH = !view.flipH;
+    view.rotation = -view.rotation;
+    setView(view);
+}
+
+void IrisSlideViewPrivate::resetOrientation()
+{
+    if (!canNavigate())
+        return;
+    iris::View view = engine()->view();
+    view.rotation = 0;
+    view.flipH = view.flipV = false;
+    setView(view);
 }
 
 QPointF IrisSlideViewPrivate::viewportCentre() const

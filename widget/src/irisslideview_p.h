@@ -73,6 +73,9 @@ public:
     void pan(QPointF logicalDelta) override;
     void panFields(int fieldsX, int fieldsY) override;
     void zoom(double factor, QPointF logicalAnchor) override;
+    void rotate(double degrees, QPointF logicalAnchor) override;
+    void flip() override;
+    void resetOrientation() override;
     QPointF viewportCentre() const override;
     void fit() override;
     void showMagnificationPreset(int index) override;

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include <QtCore/QLineF>
 #include <QtGui/QKeyEvent>
 #include <QtGui/QMouseEvent>
 #include <QtGui/QWheelEvent>
@@ -12,7 +13,8 @@ ViewNavigator::ViewNavigator(NavigationTarget *target, QObject *parent)
     : QObject(parent)
     , m_target(target)
     , m_kinetic([target](QPointF delta) { target->pan(delta); })
-    , m_zoom([target](double factor, QPointF anchor) { target->zoom(factor, anchor); })
+    , m_zoom([target](double factor, QPointF anchor) { target->zoom(factor, anchor); },
+             [target](double degrees, QPointF anchor) { target->rotate(degrees, anchor); })
 {
 }
 
@@ -27,8 +29,17 @@ void ViewNavigator::stopMotion()
 {
     m_kinetic.stop();
     m_zoom.cancel();
+    m_turning = false;
     setDragging(false);
 }
+
+namespace {
+// The pointer's angle about the view's centre, degrees clockwise on screen (y points down).
+double angleAbout(QPointF pos, QPointF centre)
+{
+    return std::atan2(pos.y() - centre.y(), pos.x() - centre.x()) * (180.0 / 3.14159265358979323846);
+}
+} // namespace
 
 void ViewNavigator::setDragging(bool dragging)
 {
@@ -45,6 +56,11 @@ bool ViewNavigator::mousePress(const QMouseEvent *event)
     m_kinetic.reset();
     m_zoom.finish();
     m_lastPos = event->position();
+    if (event->modifiers() & Qt::ControlModifier) {
+        m_turning = true;
+        m_lastAngle = angleAbout(m_lastPos, m_target->viewportCentre());
+        return true;
+    }
     m_kinetic.track(m_lastPos, event->timestamp());
     setDragging(true);
     return true;
@@ -52,6 +68,26 @@ bool ViewNavigator::mousePress(const QMouseEvent *event)
 
 bool ViewNavigator::mouseMove(const QMouseEvent *event)
 {
+    if (m_turning) {
+        if (!(event->buttons() & Qt::LeftButton)) {
+            m_turning = false;
+            return false;
+        }
+        const QPointF centre = m_target->viewportCentre();
+        // Near the centre the angle is noise: wait for the pointer to move out.
+        if (QLineF(event->position(), centre).length() < 8)
+            return true;
+        const double angle = angleAbout(event->position(), centre);
+        double delta = angle - m_lastAngle;
+        if (delta > 180)
+            delta -= 360;
+        else if (delta < -180)
+            delta += 360;
+        m_lastAngle = angle;
+        if (delta != 0)
+            m_target->rotate(delta, centre);
+        return true;
+    }
     if (!m_dragging)
         return false;
     if (!(event->buttons() & Qt::LeftButton)) { // the release went elsewhere
@@ -69,6 +105,10 @@ bool ViewNavigator::mouseMove(const QMouseEvent *event)
 
 bool ViewNavigator::mouseRelease(const QMouseEvent *event)
 {
+    if (event->button() == Qt::LeftButton && m_turning) {
+        m_turning = false;
+        return true;
+    }
     if (event->button() != Qt::LeftButton || !m_dragging)
         return false;
     const QPointF delta = event->position() - m_lastPos;
@@ -99,6 +139,15 @@ bool ViewNavigator::wheel(const QWheelEvent *event)
     if (!m_target->canNavigate())
         return false;
     m_kinetic.stop();
+    if (event->modifiers() & Qt::ShiftModifier) {
+        // Shift+wheel turns (X11 and Windows report Shift+wheel as a vertical delta; macOS
+        // as a horizontal one).
+        const QPoint angle = event->angleDelta();
+        const int eighths = angle.y() != 0 ? angle.y() : angle.x();
+        if (eighths != 0)
+            m_zoom.rotateBy(eighths / 120.0 * kWheelNotchDegrees, event->position());
+        return true;
+    }
     const QPoint pixels = event->pixelDelta();
     if (!pixels.isNull() && event->phase() != Qt::NoScrollPhase) {
         // A trackpad: its deltas arrive in a smooth stream already; follow them directly.
@@ -130,6 +179,11 @@ bool ViewNavigator::nativeGesture(const QNativeGestureEvent *event)
         if (event->value() > -1)
             m_target->zoom(1 + event->value(), event->position());
         return true;
+    case Qt::RotateNativeGesture:
+        // value() is the change of angle since the previous event, degrees anticlockwise
+        // (QNativeGestureEvent); the slide turns with the fingers.
+        m_target->rotate(-event->value(), event->position());
+        return true;
     case Qt::SmartZoomNativeGesture:
         m_zoom.zoomBy(kDoubleClickFactor, event->position());
         return true;
@@ -147,6 +201,7 @@ bool ViewNavigator::keyPress(const QKeyEvent *event)
     // Leave chords to shortcuts; Shift and Keypad are part of typing + and digits.
     if (event->modifiers() & (Qt::ControlModifier | Qt::AltModifier | Qt::MetaModifier))
         return false;
+    const bool shift = event->modifiers() & Qt::ShiftModifier;
     const auto zoomAboutCentre = [this](double factor) {
         m_kinetic.stop();
         m_zoom.zoomBy(factor, m_target->viewportCentre());
@@ -177,10 +232,24 @@ bool ViewNavigator::keyPress(const QKeyEvent *event)
     case Qt::Key_Underscore:
         zoomAboutCentre(1 / kKeyZoomFactor);
         return true;
-    case Qt::Key_0:
     case Qt::Key_Home:
+        if (shift) {
+            stopMotion();
+            m_target->resetOrientation();
+            return true;
+        }
+        [[fallthrough]];
+    case Qt::Key_0:
         stopMotion();
         m_target->fit();
+        return true;
+    case Qt::Key_R:
+        m_kinetic.stop();
+        m_zoom.rotateBy(shift ? -kKeyTurnDegrees : kKeyTurnDegrees, m_target->viewportCentre());
+        return true;
+    case Qt::Key_F:
+        stopMotion();
+        m_target->flip();
         return true;
     case Qt::Key_1:
     case Qt::Key_2:

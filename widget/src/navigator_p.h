@@ -2,11 +2,16 @@
 //
 //   left drag        pans; the image point under the pointer stays under it
 //   drag release     with speed, glides on and decelerates (KineticPanner)
+//   Ctrl+left drag   turns the slide about the view's centre, following the pointer's angle
 //   wheel            zooms about the pointer, animated (ZoomAnimator); trackpad pixel
 //                    deltas and pinch gestures zoom at once, following the fingers
+//   Shift+wheel      turns the slide about the pointer, 15° a notch, animated; a trackpad's
+//                    rotate gesture turns it at once, following the fingers
 //   double click     zooms 2× about the pointer (Shift: 0.5×)
 //   arrows           move exactly one field (one target width or height)
 //   + / −            zoom 2× / 0.5× about the centre; 0 or Home fits; 1–4: 5×, 10×, 20×, 40×
+//   R / Shift+R      turn 90° clockwise / anticlockwise about the centre, animated
+//   F                mirrors the image left-right; Shift+Home: rotation 0 and no mirroring
 //
 // Positions are logical widget pixels; the target converts them to device pixels.
 #pragma once
@@ -35,6 +40,9 @@ public:
     virtual void pan(QPointF logicalDelta) = 0;           // the image moves by this much
     virtual void panFields(int fieldsX, int fieldsY) = 0; // (1, 0) shows the next field to the right
     virtual void zoom(double factor, QPointF logicalAnchor) = 0;
+    virtual void rotate(double degrees, QPointF logicalAnchor) = 0; // clockwise on screen
+    virtual void flip() = 0;                                        // mirror left-right on screen
+    virtual void resetOrientation() = 0;                            // rotation 0, no flips
     virtual QPointF viewportCentre() const = 0;           // logical pixels
     virtual void fit() = 0;
     virtual void showMagnificationPreset(int index) = 0;  // index into kMagnificationPresets
@@ -57,7 +65,7 @@ public:
     // Ends any glide and drops any zoom still animating (before fit, open, close, …).
     void stopMotion();
     bool isMoving() const { return m_kinetic.isActive() || m_zoom.isActive(); }
-    bool isDragging() const { return m_dragging; }
+    bool isDragging() const { return m_dragging || m_turning; }
 
     void setKineticEnabled(bool on);
     bool kineticEnabled() const { return m_kineticEnabled; }
@@ -68,6 +76,8 @@ public:
     static constexpr double kPixelsPerDoubling = 300;                // trackpad pixel deltas
     static constexpr double kKeyZoomFactor = 2;
     static constexpr double kDoubleClickFactor = 2;
+    static constexpr double kWheelNotchDegrees = 15;
+    static constexpr double kKeyTurnDegrees = 90;
 
 Q_SIGNALS:
     void draggingChanged(bool dragging);
@@ -80,6 +90,8 @@ private:
     ZoomAnimator m_zoom;
     QPointF m_lastPos;
     bool m_dragging = false;
+    bool m_turning = false; // a Ctrl+drag turns: m_lastAngle is the pointer's about the centre
+    double m_lastAngle = 0;
     bool m_kineticEnabled = true;
 };
 

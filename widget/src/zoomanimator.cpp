@@ -15,9 +15,11 @@ double ease(double t)
 }
 } // namespace
 
-ZoomAnimator::ZoomAnimator(std::function<void(double, QPointF)> step, QObject *parent)
+ZoomAnimator::ZoomAnimator(std::function<void(double, QPointF)> step, std::function<void(double, QPointF)> turn,
+                           QObject *parent)
     : QObject(parent)
     , m_step(std::move(step))
+    , m_turn(std::move(turn))
 {
     m_timer.setInterval(16);
     m_timer.setTimerType(Qt::PreciseTimer);
@@ -32,17 +34,35 @@ void ZoomAnimator::zoomBy(double factor, QPointF anchor)
         m_step(factor, anchor);
         return;
     }
-    double remaining = 0;
+    start(anchor, std::log(factor), 0);
+}
+
+void ZoomAnimator::rotateBy(double degrees, QPointF anchor)
+{
+    if (!std::isfinite(degrees) || degrees == 0 || !m_turn)
+        return;
+    if (m_durationMs <= 0) {
+        m_turn(degrees, anchor);
+        return;
+    }
+    start(anchor, 0, degrees);
+}
+
+void ZoomAnimator::start(QPointF anchor, double logFactor, double degrees)
+{
+    double remainingLog = 0, remainingDegrees = 0;
     if (m_timer.isActive()) {
         if ((anchor - m_anchor).manhattanLength() > 0.5) {
             finish();
         } else {
-            remaining = m_logFactor * (1 - m_appliedEased);
+            remainingLog = m_logFactor * (1 - m_appliedEased);
+            remainingDegrees = m_degrees * (1 - m_appliedEased);
             m_timer.stop();
         }
     }
     m_anchor = anchor;
-    m_logFactor = remaining + std::log(factor);
+    m_logFactor = remainingLog + logFactor;
+    m_degrees = remainingDegrees + degrees;
     m_appliedEased = 0;
     m_clock.start();
     m_timer.start();
@@ -78,9 +98,12 @@ void ZoomAnimator::tick()
 void ZoomAnimator::applyUpTo(double eased)
 {
     const double delta = m_logFactor * (eased - m_appliedEased);
+    const double turn = m_degrees * (eased - m_appliedEased);
     m_appliedEased = eased;
     if (delta != 0)
         m_step(std::exp(delta), m_anchor);
+    if (turn != 0 && m_turn)
+        m_turn(turn, m_anchor);
 }
 
 } // namespace IrisWidget

@@ -128,9 +128,16 @@ public:
     // Multiplies the magnification by factor (>1 zooms in), keeping the level-0 point
     // under the target pixel (anchorX, anchorY) where it is.
     void zoom(double factor, double anchorX, double anchorY);
+    // Turns the slide clockwise on screen by `degrees` (negative: anticlockwise) about target
+    // pixel (anchorX, anchorY), whose level-0 point stays where it is.
+    void rotate(double degrees, double anchorX, double anchorY);
+    // The view as given (rotation kept in [0, 360), downsample clamped); View's rotation and
+    // flips turn and mirror the slide about the target's centre (ViewTransform maps target
+    // pixels to level-0 pixels and back).
     void setView(const View& view);
     View view() const;
-    // The view that shows the whole slide in the current target.
+    // The view that shows the whole slide in the current target, turned and mirrored as the
+    // current view is.
     View fitView() const;
     // Target size in pixels as last bound or resized.
     std::pair<uint32_t, uint32_t> targetSize() const;
@@ -197,6 +204,11 @@ public:
     Result setOverlayFont(const std::string& path);
     // The overlays of the last frame rendered (into either kind of target): for hit-testing.
     OverlayLayout overlayLayout() const;
+    // A cross-hair marker over the slide at a level-0 position (a linked view's cursor), drawn
+    // over the tiles and the other overlays, turned with the view; std::nullopt hides it
+    // (the default).
+    void setCrosshair(std::optional<std::array<double, 2>> slidePos);
+    std::optional<std::array<double, 2>> crosshair() const;
     // Whether target pixel (x, y) lies on the overview map's thumbnail of the last frame
     // shown for the open slide. If it does and `out` is given, *out is the current view
     // moved to be centred on the slide point under (x, y).

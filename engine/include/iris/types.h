@@ -151,9 +151,74 @@ inline double SlideInfo::effectiveObjectivePower() const {
 // The view: which level-0 point is at the centre of the target, and how many
 // level-0 pixels one target pixel covers. The target's size comes from bind/resize.
 struct View {
-    double centerX = 0;
+    double centerX = 0;    // level-0 pixels: the slide point at the target's centre
     double centerY = 0;
-    double downsample = 1;
+    double downsample = 1; // level-0 pixels per target pixel
+    // The slide turned clockwise on screen by this many degrees about the target's centre;
+    // the engine keeps it in [0, 360).
+    double rotation = 0;
+    // The slide mirrored before it is turned: flipH swaps its left and right, flipV its top
+    // and bottom (as seen at rotation 0).
+    bool flipH = false;
+    bool flipV = false;
+
+    bool operator==(const View&) const = default;
+};
+
+// `degrees` brought into [0, 360); a non-finite angle gives 0. An angle within 1e-9° of a
+// multiple of 90° is that multiple (a turn made of animated steps lands on it exactly, and
+// such views are drawn exactly).
+inline double normalizedRotation(double degrees) {
+    if (!std::isfinite(degrees)) return 0;
+    double r = std::fmod(degrees, 360.0);
+    if (r < 0) r += 360.0;
+    const double right = std::round(r / 90.0) * 90.0;
+    if (std::abs(r - right) < 1e-9) r = right;
+    return r >= 360.0 ? 0.0 : r;
+}
+
+// The map between target pixels and level-0 slide pixels under a view (docs/ARCHITECTURE.md,
+// "Rotation"): slide = centre + downsample · Mᵀ · (target − target centre), where M = R·F turns
+// the slide clockwise by the rotation (R) after mirroring it (F). Multiples of 90° use exact
+// sines and cosines, so such a view maps pixel centres onto pixel centres as an unturned one
+// does.
+struct ViewTransform {
+    // M, row-major: a target offset (dx, dy) from the target's centre is M · (slide offset) /
+    // downsample.
+    std::array<double, 4> m{1, 0, 0, 1};
+    double centerX = 0, centerY = 0, downsample = 1; // the view's
+    double targetCX = 0, targetCY = 0;               // the target's centre, target pixels
+
+    static ViewTransform of(const View& v, double targetWidth, double targetHeight) {
+        constexpr double kPi = 3.14159265358979323846;
+        ViewTransform t;
+        const double r = normalizedRotation(v.rotation);
+        double c, s;
+        if (r == 0) c = 1, s = 0;
+        else if (r == 90) c = 0, s = 1;
+        else if (r == 180) c = -1, s = 0;
+        else if (r == 270) c = 0, s = -1;
+        else c = std::cos(r * (kPi / 180.0)), s = std::sin(r * (kPi / 180.0));
+        const double fx = v.flipH ? -1 : 1, fy = v.flipV ? -1 : 1;
+        t.m = {c * fx, -s * fy, s * fx, c * fy};
+        t.centerX = v.centerX, t.centerY = v.centerY, t.downsample = v.downsample;
+        t.targetCX = targetWidth * 0.5, t.targetCY = targetHeight * 0.5;
+        return t;
+    }
+    // Whether the turn is a multiple of 90°: the slide's axes stay on the target's.
+    bool axisAligned() const { return (m[0] == 0 || m[1] == 0) && (m[2] == 0 || m[3] == 0); }
+    // Whether the view is neither turned nor mirrored.
+    bool identity() const { return m[0] == 1 && m[1] == 0 && m[2] == 0 && m[3] == 1; }
+    // Level-0 slide position of target position (x, y).
+    std::array<double, 2> toSlide(double x, double y) const {
+        const double dx = x - targetCX, dy = y - targetCY;
+        return {centerX + (m[0] * dx + m[2] * dy) * downsample, centerY + (m[1] * dx + m[3] * dy) * downsample};
+    }
+    // Target position of level-0 slide position (sx, sy).
+    std::array<double, 2> toTarget(double sx, double sy) const {
+        const double dx = (sx - centerX) / downsample, dy = (sy - centerY) / downsample;
+        return {targetCX + m[0] * dx + m[1] * dy, targetCY + m[2] * dx + m[3] * dy};
+    }
 };
 
 // An RGBA8 image, rows top to bottom, 4 bytes a pixel, no padding, straight (not premultiplied) alpha.
@@ -255,7 +320,11 @@ struct OverlayLayout {
     // the outline drawn is this rectangle clipped to the thumbnail).
     PixelRect overviewImage;
     double overviewDownsample = 0;
-    std::array<double, 4> overviewField{}; // x0, y0, x1, y1
+    // The view's field on the thumbnail, target pixels: its corners (target's top-left,
+    // top-right, bottom-right, bottom-left; a turned view's field is turned) and their
+    // bounding box (x0, y0, x1, y1).
+    std::array<double, 8> overviewFieldCorners{};
+    std::array<double, 4> overviewField{};
 };
 
 // A rendered frame read back from the offscreen target.

@@ -20,6 +20,12 @@ namespace iris::gpu {
 struct TilePush {
     float targetSize[2];
     int32_t edge = 0; // the seam pass's band: 1 left, 2 right, 3 top, 4 bottom
+    float unused = 0;
+    // The view's turn (ViewTransform::m, row-major), applied about the target's centre to the
+    // instances' unturned rectangles (shaders/tile_turn.glsl); identity for unturned views and
+    // the overview's thumbnail.
+    float turn[4] = {1, 0, 0, 1};
+    float centre[2] = {0, 0}; // the turn's centre: the view's target centre, target pixels
 };
 
 class TilePipeline {

@@ -1,15 +1,16 @@
 #include "metrics/field_metrics.h"
 
+#include "view/view_model.h"
+
 #include <algorithm>
 #include <utility>
 
 namespace iris::metrics {
 
 bool isNewField(const View& a, const View& b, double w, double h) {
-    const double ax0 = a.centerX - w / 2 * a.downsample, ax1 = a.centerX + w / 2 * a.downsample;
-    const double ay0 = a.centerY - h / 2 * a.downsample, ay1 = a.centerY + h / 2 * a.downsample;
-    const double bx0 = b.centerX - w / 2 * b.downsample, bx1 = b.centerX + w / 2 * b.downsample;
-    const double by0 = b.centerY - h / 2 * b.downsample, by1 = b.centerY + h / 2 * b.downsample;
+    // The fields' bounding boxes in level-0 pixels (a turned view's is larger than its field).
+    const auto [ax0, ay0, ax1, ay1] = fieldBounds(Viewport{a, uint32_t(w), uint32_t(h)});
+    const auto [bx0, by0, bx1, by1] = fieldBounds(Viewport{b, uint32_t(w), uint32_t(h)});
     const double eps = 1e-3 * std::max(a.downsample, b.downsample);
     const bool overlap = ax0 + eps < bx1 && bx0 + eps < ax1 && ay0 + eps < by1 && by0 + eps < ay1;
     return !overlap;

@@ -206,16 +206,45 @@ OverlayPlan layoutOverlays(const SlideInfo* slide, const Viewport& vp, const Ove
             out.overviewImage = img;
             out.overviewDownsample = thumbDownsample;
             // The view's field in target pixels, then the part of it on the slide, outlined.
-            const double fx0 = img.x + (v.centerX - vp.width * 0.5 * v.downsample) / thumbDownsample;
-            const double fy0 = img.y + (v.centerY - vp.height * 0.5 * v.downsample) / thumbDownsample;
-            const double fx1 = img.x + (v.centerX + vp.width * 0.5 * v.downsample) / thumbDownsample;
-            const double fy1 = img.y + (v.centerY + vp.height * 0.5 * v.downsample) / thumbDownsample;
+            const ViewTransform vt = ViewTransform::of(v, vp.width, vp.height);
+            const double W0 = vp.width, H0 = vp.height;
+            const std::array<std::array<double, 2>, 4> targetCorners{{{0, 0}, {W0, 0}, {W0, H0}, {0, H0}}};
+            std::array<std::array<double, 2>, 4> corner{};
+            for (size_t k = 0; k < 4; ++k) {
+                const auto sp = vt.toSlide(targetCorners[k][0], targetCorners[k][1]);
+                corner[k] = {img.x + sp[0] / thumbDownsample, img.y + sp[1] / thumbDownsample};
+                out.overviewFieldCorners[2 * k] = corner[k][0];
+                out.overviewFieldCorners[2 * k + 1] = corner[k][1];
+            }
+            const auto [bx0, by0, bx1, by1] = fieldBounds(vp);
+            const double fx0 = img.x + bx0 / thumbDownsample, fy0 = img.y + by0 / thumbDownsample;
+            const double fx1 = img.x + bx1 / thumbDownsample, fy1 = img.y + by1 / thumbDownsample;
             out.overviewField = {fx0, fy0, fx1, fy1};
             const double sx1 = img.x + double(slide->width) / thumbDownsample;
             const double sy1 = img.y + double(slide->height) / thumbDownsample;
             const double cx0 = std::max(fx0, double(img.x)), cx1 = std::min(fx1, sx1);
             const double cy0 = std::max(fy0, double(img.y)), cy1 = std::min(fy1, sy1);
-            if (cx0 < cx1 && cy0 < cy1) {
+            if (!vt.axisAligned()) {
+                // A turned field: its four sides stroked as runs of t×t squares, one per pixel
+                // step along each side (the overlay pipeline draws axis-aligned quads only),
+                // within the thumbnail.
+                const int32_t t = std::max(1, px(Metrics::kFieldLine));
+                const double clipX1 = std::min(sx1, double(img.x + img.width));
+                const double clipY1 = std::min(sy1, double(img.y + img.height));
+                for (size_t k = 0; k < 4; ++k) {
+                    const auto& a = corner[k];
+                    const auto& b = corner[(k + 1) % 4];
+                    const double len = std::max(std::abs(b[0] - a[0]), std::abs(b[1] - a[1]));
+                    const int steps = int(std::min(4096.0, std::ceil(len)));
+                    for (int i = 0; i <= steps; ++i) {
+                        const double f = steps > 0 ? double(i) / steps : 0.0;
+                        const int32_t x = int32_t(std::lround(a[0] + (b[0] - a[0]) * f - t / 2.0));
+                        const int32_t y = int32_t(std::lround(a[1] + (b[1] - a[1]) * f - t / 2.0));
+                        if (x < img.x || y < img.y || x + t > clipX1 || y + t > clipY1) continue;
+                        d.over.push_back(quad({x, y, t, t}, kFieldColour));
+                    }
+                }
+            } else             if (cx0 < cx1 && cy0 < cy1) {
                 const int32_t minSide = std::min({px(Metrics::kFieldMin), img.width, img.height});
                 const auto span = [minSide](double a, double b, int32_t lo, int32_t hi) {
                     int32_t i0 = int32_t(std::lround(a)), i1 = int32_t(std::lround(b));
@@ -237,6 +266,24 @@ OverlayPlan layoutOverlays(const SlideInfo* slide, const Viewport& vp, const Ove
             }
         }
         plan.draws.push_back(std::move(d));
+    }
+
+    // The cross-hair: a plus of light arms on a dark outline, centred on the slide point's
+    // pixel, over everything else; left out when its centre is off the target.
+    if (s.crosshair) {
+        const auto p = ViewTransform::of(v, vp.width, vp.height).toTarget((*s.crosshair)[0], (*s.crosshair)[1]);
+        if (std::isfinite(p[0]) && std::isfinite(p[1]) && p[0] >= 0 && p[1] >= 0 && p[0] < vp.width &&
+            p[1] < vp.height) {
+            const int32_t cx = int32_t(std::floor(p[0])), cy = int32_t(std::floor(p[1]));
+            const int32_t arm = px(Metrics::kCrosshairArm), line = std::max(1, px(1));
+            OverlayDraw d;
+            d.rect = {cx - arm - line, cy - arm - line, 2 * (arm + line) + line, 2 * (arm + line) + line};
+            d.over.push_back(quad({cx - arm - line, cy - line, 2 * (arm + line) + line, 3 * line}, kCrosshairOutline));
+            d.over.push_back(quad({cx - line, cy - arm - line, 3 * line, 2 * (arm + line) + line}, kCrosshairOutline));
+            d.over.push_back(quad({cx - arm, cy, 2 * arm + line, line}, kCrosshairColour));
+            d.over.push_back(quad({cx, cy - arm, line, 2 * arm + line}, kCrosshairColour));
+            plan.draws.push_back(std::move(d));
+        }
     }
     return plan;
 }

@@ -35,6 +35,7 @@ struct Metrics {
     static constexpr int kOverviewPad = 3;
     static constexpr int kFieldLine = 2;      // the field outline's width
     static constexpr int kFieldMin = 4;       // the outline is at least this big
+    static constexpr int kCrosshairArm = 12;  // the cross-hair's arms, from its centre
 };
 
 // Colours, straight alpha.
@@ -42,6 +43,8 @@ inline constexpr std::array<float, 4> kPlateColour{0.0f, 0.0f, 0.0f, 0.6f};
 inline constexpr std::array<float, 4> kTextColour{1.0f, 1.0f, 1.0f, 1.0f};
 inline constexpr std::array<float, 4> kBarColour{1.0f, 1.0f, 1.0f, 1.0f};
 inline constexpr std::array<float, 4> kFieldColour{0.0f, 1.0f, 1.0f, 1.0f};
+inline constexpr std::array<float, 4> kCrosshairColour{1.0f, 1.0f, 0.0f, 1.0f};
+inline constexpr std::array<float, 4> kCrosshairOutline{0.0f, 0.0f, 0.0f, 0.8f};
 
 // The scale bar's length: the largest 1, 2 or 5 × 10^n µm that is at most maxPixels long at
 // `micronsPerPixel`; the 1-2-5 steps are at most 2.5 apart, so it is at least maxPixels / 2.5.

@@ -4,6 +4,7 @@
 
 #include <array>
 #include <memory>
+#include <optional>
 
 #include "iris/types.h"
 #include "overlay/font.h"
@@ -15,8 +16,10 @@ struct OverlaySettings {
     std::array<Corner, kOverlayCount> corner{Corner::BottomLeft, Corner::TopLeft, Corner::TopRight};
     double devicePixelRatio = 1;
     std::shared_ptr<const FontData> font; // null: no usable font, labels are not drawn
+    // A cross-hair at this level-0 slide position (Engine::setCrosshair); none: not drawn.
+    std::optional<std::array<double, 2>> crosshair;
 
-    bool visibleAny() const { return visible[0] || visible[1] || visible[2]; }
+    bool visibleAny() const { return visible[0] || visible[1] || visible[2] || crosshair.has_value(); }
 };
 
 } // namespace iris::overlay

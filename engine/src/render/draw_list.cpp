@@ -18,6 +18,14 @@ gpu::TileInstance instanceOf(const TilePlacement& p, double originX, double orig
     };
 }
 
+uint32_t visibleCount(const Footprint& area) {
+    if (!area.turned) return uint32_t(area.range.count());
+    uint32_t n = 0;
+    for (int64_t ty = area.range.y0; ty <= area.range.y1; ++ty)
+        for (int64_t tx = area.range.x0; tx <= area.range.x1; ++tx) n += area.contains(tx, ty) ? 1 : 0;
+    return n;
+}
+
 // The mip LOD a level is sampled at: log2 of target pixels' size in the level's pixels.
 double lodOf(const LevelInfo& level, const Viewport& vp) {
     return std::max(0.0, std::log2(vp.view.downsample / level.downsample));
@@ -42,14 +50,14 @@ void DrawList::copyInstances(gpu::TileInstance* out) const {
 bool coveredBy(const LevelInfo& coarse, int64_t tx, int64_t ty, const LevelInfo& fine, const LevelDraw& drawn,
                const Viewport& vp) {
     // In level-0 units: the coarse tile, clipped to the target's field.
+    // (A turned view's field is clipped to its bounding box; fine tiles outside the field
+    // count as covering, below.)
     const double ds = vp.view.downsample;
-    const double vx0 = vp.view.centerX - vp.width * 0.5 * ds, vy0 = vp.view.centerY - vp.height * 0.5 * ds;
-    double x0 = std::max(double(tx * kTileSize) * coarse.downsample, vx0);
-    double y0 = std::max(double(ty * kTileSize) * coarse.downsample, vy0);
-    double x1 = std::min(double(std::min<int64_t>((tx + 1) * kTileSize, coarse.width)) * coarse.downsample,
-                         vx0 + vp.width * ds);
-    double y1 = std::min(double(std::min<int64_t>((ty + 1) * kTileSize, coarse.height)) * coarse.downsample,
-                         vy0 + vp.height * ds);
+    const std::array<double, 4> field = fieldBounds(vp);
+    double x0 = std::max(double(tx * kTileSize) * coarse.downsample, field[0]);
+    double y0 = std::max(double(ty * kTileSize) * coarse.downsample, field[1]);
+    double x1 = std::min(double(std::min<int64_t>((tx + 1) * kTileSize, coarse.width)) * coarse.downsample, field[2]);
+    double y1 = std::min(double(std::min<int64_t>((ty + 1) * kTileSize, coarse.height)) * coarse.downsample, field[3]);
     // One target pixel of margin: the two levels' tile edges are placed by different
     // expressions, so an edge they share in exact arithmetic may round to different pixels.
     // With the margin, coarse tiles along the slide's edges (where the levels' extents differ
@@ -64,7 +72,7 @@ bool coveredBy(const LevelInfo& coarse, int64_t tx, int64_t ty, const LevelInfo&
     if (r.empty() || fx0 < r.x0 || fy0 < r.y0 || fx1 > r.x1 || fy1 > r.y1) return false;
     for (int64_t y = fy0; y <= fy1; ++y)
         for (int64_t x = fx0; x <= fx1; ++x)
-            if (!drawn.isDrawn(x, y)) return false;
+            if (!drawn.isDrawn(x, y) && drawn.area.contains(x, y)) return false;
     return true;
 }
 
@@ -103,10 +111,11 @@ void linkNeighbours(const LevelInfo& level, int levelIndex, uint32_t generation,
 
 bool allResident(const SlideInfo& info, uint32_t generation, int level, const Viewport& vp,
                  const TileResidency& tiles) {
-    const TileRange range = visibleTiles(info.levels[size_t(level)], vp, 0);
+    const Footprint area = footprint(info.levels[size_t(level)], vp, 0);
+    const TileRange& range = area.range;
     for (int64_t ty = range.y0; ty <= range.y1; ++ty)
         for (int64_t tx = range.x0; tx <= range.x1; ++tx)
-            if (!tiles.isActive(TileKey::make(generation, level, tx, ty))) return false;
+            if (area.contains(tx, ty) && !tiles.isActive(TileKey::make(generation, level, tx, ty))) return false;
     return true;
 }
 
@@ -115,6 +124,7 @@ void buildDrawList(const SlideInfo& info, uint32_t generation, const Viewport& v
     for (LevelDraw& d : out.levels) {
         d.level = -1;
         d.range = TileRange{};
+        d.area = Footprint{};
         d.layers.clear();
         d.instances.clear();
         d.linked = false;
@@ -134,7 +144,7 @@ void buildDrawList(const SlideInfo& info, uint32_t generation, const Viewport& v
     out.lrComplete = options.sizeMatches;
     // LR left out of the order (it is the base level) is still counted for LR-TeFOV.
     if (c.lr >= 0 && order[1] < 0) {
-        out.lrTiles = uint32_t(visibleTiles(info.levels[size_t(c.lr)], vp, 0).count());
+        out.lrTiles = visibleCount(footprint(info.levels[size_t(c.lr)], vp, 0));
         if (!allResident(info, generation, c.lr, vp, tiles)) out.lrComplete = false;
     }
     // Finest first, so that a coarser tile lying wholly under finer tiles already drawn is
@@ -146,14 +156,16 @@ void buildDrawList(const SlideInfo& info, uint32_t generation, const Viewport& v
         LevelDraw& d = out.levels[size_t(oi)];
         const LevelInfo& level = info.levels[size_t(li)];
         d.level = li;
-        d.range = visibleTiles(level, vp, 0);
+        d.area = footprint(level, vp, 0);
+        d.range = d.area.range;
         d.layers.assign(size_t(d.range.count()), -1);
         const bool isHr = li == c.hr, isLr = li == c.lr;
-        if (isHr) out.hrTiles = uint32_t(d.range.count());
-        if (isLr) out.lrTiles = uint32_t(d.range.count());
+        if (isHr) out.hrTiles = visibleCount(d.area);
+        if (isLr) out.lrTiles = visibleCount(d.area);
         const double lod = lodOf(level, vp);
         for (int64_t ty = d.range.y0; ty <= d.range.y1; ++ty) {
             for (int64_t tx = d.range.x0; tx <= d.range.x1; ++tx) {
+                if (!d.area.contains(tx, ty)) continue; // a turned view's corner: not visible
                 const uint64_t key = TileKey::make(generation, li, tx, ty);
                 bool covered = false;
                 for (int fi = oi + 1; fi <= 2 && !covered && !options.drawCovered; ++fi) {

@@ -50,7 +50,8 @@ struct DrawOptions {
 // range, -1 where none) and their instances.
 struct LevelDraw {
     int level = -1; // -1: not drawn this frame
-    TileRange range;
+    TileRange range; // area.range
+    Footprint area;  // what the target shows of the level: tiles of the range outside it are not visible
     std::vector<int32_t> layers;
     std::vector<gpu::TileInstance> instances;
     std::vector<int32_t> around; // scratch: layers of the range grown by one tile (linkNeighbours)

@@ -29,7 +29,7 @@ void HudPass::recordUploads(VkCommandBuffer cmd, const FrameContext& frame) {
 
 Result HudPass::recordDraws(VkCommandBuffer cmd, const FrameContext& frame) {
     return overlays_.recordDraws(cmd, frame.slot, frame_, frame.format, frame.extent, [&](const overlay::OverlayDraw&) {
-        tiles_.drawSpan(cmd, frame, thumbFirst_, thumbCount_, false);
+        tiles_.drawSpan(cmd, frame, thumbFirst_, thumbCount_, false, false);
     });
 }
 

@@ -17,6 +17,8 @@ struct LayerHeader {
 struct TableHeader {
     float background[4];
     int32_t info[4];
+    float turn[4];   // the view's turn (ViewTransform::m) about `centre`
+    float centre[4]; // x, y: the view's target centre; unused
     LayerHeader layers[3];
 };
 constexpr uint32_t kMaxEntries = 65536; // tiles of the three layers' visible ranges
@@ -105,6 +107,12 @@ Result ResolvePass::prepare(const FrameContext& frame, const DrawList& list, con
     std::memcpy(header->background, background.data(), sizeof(header->background));
     header->info[0] = int32_t(frame.extent.width);
     header->info[1] = int32_t(frame.extent.height);
+    {
+        const ViewTransform t = ViewTransform::of(frame.viewport.view, frame.viewport.width, frame.viewport.height);
+        for (int i = 0; i < 4; ++i) header->turn[i] = float(t.m[size_t(i)]);
+        header->centre[0] = float(t.targetCX);
+        header->centre[1] = float(t.targetCY);
+    }
     int32_t layers = 0;
     uint32_t used = 0;
     colorManaged_ = frame.snap.colorLut != nullptr;

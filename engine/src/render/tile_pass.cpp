@@ -68,13 +68,14 @@ Result TilePass::recordDraws(VkCommandBuffer cmd, const FrameContext& frame) {
     uint32_t first = first_;
     for (const LevelDraw& d : drawList_.levels) {
         const uint32_t n = uint32_t(d.instances.size());
-        if (n > 0) drawSpan(cmd, frame, first, n, d.linked);
+        if (n > 0) drawSpan(cmd, frame, first, n, d.linked, true);
         first += n;
     }
     return {};
 }
 
-void TilePass::drawSpan(VkCommandBuffer cmd, const FrameContext& frame, uint32_t first, uint32_t n, bool seams) {
+void TilePass::drawSpan(VkCommandBuffer cmd, const FrameContext& frame, uint32_t first, uint32_t n, bool seams,
+                        bool turned) {
     if (!pipe_ || n == 0) return; // prepare failed to make the pipelines (and said so)
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipe_);
     const VkViewport viewport{0, 0, float(frame.extent.width), float(frame.extent.height), 0, 1};
@@ -82,6 +83,12 @@ void TilePass::drawSpan(VkCommandBuffer cmd, const FrameContext& frame, uint32_t
     VkDescriptorSet set = pipeline_.descriptorSet();
     vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline_.layout(), 0, 1, &set, 0, nullptr);
     gpu::TilePush push{{float(frame.extent.width), float(frame.extent.height)}};
+    if (turned) {
+        const ViewTransform t = ViewTransform::of(frame.viewport.view, frame.viewport.width, frame.viewport.height);
+        for (int i = 0; i < 4; ++i) push.turn[i] = float(t.m[size_t(i)]);
+        push.centre[0] = float(t.targetCX);
+        push.centre[1] = float(t.targetCY);
+    }
     vkCmdPushConstants(cmd, pipeline_.layout(), VK_SHADER_STAGE_VERTEX_BIT, 0, sizeof(push), &push);
     const VkDeviceSize offset = 0;
     vkCmdBindVertexBuffers(cmd, 0, 1, &frame.instances.buffer, &offset);

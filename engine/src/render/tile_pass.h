@@ -34,7 +34,10 @@ public:
     // Records instances [first, first + n) of the frame's arena as tile quads; with `seams`,
     // then the seam pass's four bands of each. Binds its own pipeline and state. Only after
     // this frame's prepare() (which makes the pipelines for the frame's format).
-    void drawSpan(VkCommandBuffer cmd, const FrameContext& frame, uint32_t first, uint32_t n, bool seams);
+    // `turned`: the instances are the view's tiles, in its unturned frame (the view's rotation
+    // and flips are applied); else they are placed as they are (the thumbnail).
+    void drawSpan(VkCommandBuffer cmd, const FrameContext& frame, uint32_t first, uint32_t n, bool seams,
+                  bool turned);
 
 private:
     gpu::TilePipeline& pipeline_;

@@ -17,30 +17,78 @@ LevelChoice chooseLevels(const SlideInfo& info, double downsample) {
     return c;
 }
 
-TileRange visibleTiles(const LevelInfo& level, const Viewport& vp, int64_t margin) {
-    TileRange r;
-    if (vp.width == 0 || vp.height == 0 || level.tilesX == 0) return r;
+Footprint footprint(const LevelInfo& level, const Viewport& vp, int64_t margin) {
+    Footprint f;
+    if (vp.width == 0 || vp.height == 0 || level.tilesX == 0) return f;
+    const ViewTransform t = ViewTransform::of(vp.view, vp.width, vp.height);
     const double s = vp.view.downsample / level.downsample; // level px per target px
-    const double ox = (vp.view.centerX - vp.width * 0.5 * vp.view.downsample) / level.downsample;
-    const double oy = (vp.view.centerY - vp.height * 0.5 * vp.view.downsample) / level.downsample;
-    const double ex = ox + vp.width * s, ey = oy + vp.height * s;
+    // The target's axes in the level (Mᵀ's columns) and the footprint's bounding box, in
+    // target pixels along the level's axes. Unturned or turned by a multiple of 90°, the box
+    // is the footprint and the expressions reduce exactly to the unturned ones.
+    f.ux = t.m[0], f.uy = t.m[1], f.vx = t.m[2], f.vy = t.m[3];
+    const double bw = std::abs(t.m[0]) * vp.width + std::abs(t.m[2]) * vp.height;
+    const double bh = std::abs(t.m[1]) * vp.width + std::abs(t.m[3]) * vp.height;
+    const double ox = (vp.view.centerX - bw * 0.5 * vp.view.downsample) / level.downsample;
+    const double oy = (vp.view.centerY - bh * 0.5 * vp.view.downsample) / level.downsample;
+    const double ex = ox + bw * s, ey = oy + bh * s;
+    f.turned = !t.axisAligned();
+    f.cx = vp.view.centerX / level.downsample;
+    f.cy = vp.view.centerY / level.downsample;
+    f.hu = vp.width * 0.5 * s + double(margin * kTileSize);
+    f.hv = vp.height * 0.5 * s + double(margin * kTileSize);
     // A tile is visible when it overlaps [o, e) by any amount.
     const auto lo = [](double v) { return int64_t(std::floor(v / kTileSize)); };
     const auto hi = [](double v) { return int64_t(std::ceil(v / kTileSize)) - 1; };
-    r.x0 = std::max<int64_t>(0, lo(ox) - margin);
-    r.y0 = std::max<int64_t>(0, lo(oy) - margin);
-    r.x1 = std::min<int64_t>(level.tilesX - 1, hi(ex) + margin);
-    r.y1 = std::min<int64_t>(level.tilesY - 1, hi(ey) + margin);
+    TileRange& r = f.range;
+    // A turned footprint grown along its own sides reaches further along the level's axes.
+    const int64_t reach = f.turned ? int64_t(std::ceil(margin * (std::abs(f.ux) + std::abs(f.vx) + 1e-9))) : margin;
+    const int64_t reachY = f.turned ? int64_t(std::ceil(margin * (std::abs(f.uy) + std::abs(f.vy) + 1e-9))) : margin;
+    r.x0 = std::max<int64_t>(0, lo(ox) - reach);
+    r.y0 = std::max<int64_t>(0, lo(oy) - reachY);
+    r.x1 = std::min<int64_t>(level.tilesX - 1, hi(ex) + reach);
+    r.y1 = std::min<int64_t>(level.tilesY - 1, hi(ey) + reachY);
     if (ex <= 0 || ey <= 0 || ox >= double(level.width) || oy >= double(level.height)) {
         if (margin == 0) r = TileRange{};
     }
-    return r;
+    return f;
+}
+
+bool Footprint::contains(int64_t tx, int64_t ty) const {
+    if (!range.contains(tx, ty)) return false;
+    if (!turned) return true;
+    // Separating axes: the level's (the range) and the footprint's own two.
+    const double h = kTileSize * 0.5;
+    const double dx = (double(tx) * kTileSize + h) - cx, dy = (double(ty) * kTileSize + h) - cy;
+    const double du = std::abs(dx * ux + dy * uy), rU = h * (std::abs(ux) + std::abs(uy));
+    const double dv = std::abs(dx * vx + dy * vy), rV = h * (std::abs(vx) + std::abs(vy));
+    return du < hu + rU && dv < hv + rV;
+}
+
+TileRange visibleTiles(const LevelInfo& level, const Viewport& vp, int64_t margin) {
+    return footprint(level, vp, margin).range;
+}
+
+std::array<double, 4> fieldBounds(const Viewport& vp) {
+    const ViewTransform t = ViewTransform::of(vp.view, vp.width, vp.height);
+    const double bw = std::abs(t.m[0]) * vp.width + std::abs(t.m[2]) * vp.height;
+    const double bh = std::abs(t.m[1]) * vp.width + std::abs(t.m[3]) * vp.height;
+    const double ds = vp.view.downsample;
+    return {vp.view.centerX - bw * 0.5 * ds, vp.view.centerY - bh * 0.5 * ds, vp.view.centerX + bw * 0.5 * ds,
+            vp.view.centerY + bh * 0.5 * ds};
+}
+
+void keepUnder(View& v, const std::array<double, 2>& slide, double x, double y, const Viewport& vp) {
+    const ViewTransform t = ViewTransform::of(v, vp.width, vp.height);
+    const double dx = x - t.targetCX, dy = y - t.targetCY;
+    v.centerX = slide[0] - (t.m[0] * dx + t.m[2] * dy) * v.downsample;
+    v.centerY = slide[1] - (t.m[1] * dx + t.m[3] * dy) * v.downsample;
 }
 
 namespace {
 
 void appendRange(std::vector<TileRef>& out, std::unordered_set<uint64_t>& seen, const LevelInfo& level, int li,
-                 uint32_t gen, const TileRange& range, const TileRange* exclude, const Viewport& vp, TileRole role) {
+                 uint32_t gen, const Footprint& area, const Footprint* exclude, const Viewport& vp, TileRole role) {
+    const TileRange& range = area.range;
     if (range.empty()) return;
     const size_t first = out.size();
     // Centre of the view in this level's tile units, to order by distance.
@@ -48,7 +96,7 @@ void appendRange(std::vector<TileRef>& out, std::unordered_set<uint64_t>& seen, 
     const double cy = vp.view.centerY / level.downsample / kTileSize - 0.5;
     for (int64_t y = range.y0; y <= range.y1; ++y) {
         for (int64_t x = range.x0; x <= range.x1; ++x) {
-            if (exclude && exclude->contains(x, y)) continue;
+            if (!area.contains(x, y) || (exclude && exclude->contains(x, y))) continue;
             const uint64_t k = TileKey::make(gen, li, x, y);
             if (!seen.insert(k).second) continue;
             out.push_back({k, li, x, y, role});
@@ -71,10 +119,11 @@ std::vector<TileRef> bufferRegion(const SlideInfo& info, uint32_t gen, const Vie
     const LevelInfo& base = info.levels[size_t(c.base)];
     const auto appendBase = [&] {
         if (base.tilesX * base.tilesY <= kMaxResidentBaseTiles) {
-            appendRange(out, seen, base, c.base, gen, TileRange{0, 0, base.tilesX - 1, base.tilesY - 1}, nullptr, vp,
-                        TileRole::Base);
+            Footprint whole;
+            whole.range = TileRange{0, 0, base.tilesX - 1, base.tilesY - 1};
+            appendRange(out, seen, base, c.base, gen, whole, nullptr, vp, TileRole::Base);
         } else {
-            appendRange(out, seen, base, c.base, gen, visibleTiles(base, vp, 0), nullptr, vp, TileRole::Base);
+            appendRange(out, seen, base, c.base, gen, footprint(base, vp, 0), nullptr, vp, TileRole::Base);
         }
     };
     // A stored base costs one tile read per tile and comes first: the screen is never empty.
@@ -83,20 +132,20 @@ std::vector<TileRef> bufferRegion(const SlideInfo& info, uint32_t gen, const Vie
     // visible and perimeter tiles come first and the base fills in behind them.
     const bool baseLast = base.synthetic && !info.levels[size_t(c.hr)].synthetic;
     if (!baseLast) appendBase();
-    const TileRange hrVis = visibleTiles(info.levels[size_t(c.hr)], vp, 0);
-    TileRange lrVis;
+    const LevelInfo& hr = info.levels[size_t(c.hr)];
+    const Footprint hrVis = footprint(hr, vp, 0);
+    Footprint lrVis;
     if (c.lr >= 0) {
-        lrVis = visibleTiles(info.levels[size_t(c.lr)], vp, 0);
+        lrVis = footprint(info.levels[size_t(c.lr)], vp, 0);
         appendRange(out, seen, info.levels[size_t(c.lr)], c.lr, gen, lrVis, nullptr, vp, TileRole::LRVisible);
     }
-    appendRange(out, seen, info.levels[size_t(c.hr)], c.hr, gen, hrVis, nullptr, vp, TileRole::HRVisible);
+    appendRange(out, seen, hr, c.hr, gen, hrVis, nullptr, vp, TileRole::HRVisible);
     if (perimeter > 0) {
         if (c.lr >= 0) {
             appendRange(out, seen, info.levels[size_t(c.lr)], c.lr, gen,
-                        visibleTiles(info.levels[size_t(c.lr)], vp, perimeter), &lrVis, vp, TileRole::LRPerimeter);
+                        footprint(info.levels[size_t(c.lr)], vp, perimeter), &lrVis, vp, TileRole::LRPerimeter);
         }
-        appendRange(out, seen, info.levels[size_t(c.hr)], c.hr, gen,
-                    visibleTiles(info.levels[size_t(c.hr)], vp, perimeter), &hrVis, vp, TileRole::HRPerimeter);
+        appendRange(out, seen, hr, c.hr, gen, footprint(hr, vp, perimeter), &hrVis, vp, TileRole::HRPerimeter);
     }
     if (baseLast) appendBase();
     return out;
@@ -122,12 +171,19 @@ TilePlacement placeTile(const LevelInfo& level, const Viewport& vp, int64_t tx, 
     return p;
 }
 
-View fitView(const SlideInfo& info, uint32_t width, uint32_t height) {
+View fitView(const SlideInfo& info, uint32_t width, uint32_t height, const View& orientation) {
     View v;
+    v.rotation = normalizedRotation(orientation.rotation);
+    v.flipH = orientation.flipH;
+    v.flipV = orientation.flipV;
     v.centerX = double(info.width) * 0.5;
     v.centerY = double(info.height) * 0.5;
     if (width == 0 || height == 0 || info.width <= 0 || info.height <= 0) return v;
-    v.downsample = std::max(double(info.width) / width, double(info.height) / height);
+    // The turned slide's bounding box on screen, per unit of downsample.
+    const ViewTransform t = ViewTransform::of(v, width, height);
+    const double sw = std::abs(t.m[0]) * double(info.width) + std::abs(t.m[1]) * double(info.height);
+    const double sh = std::abs(t.m[2]) * double(info.width) + std::abs(t.m[3]) * double(info.height);
+    v.downsample = std::max(sw / width, sh / height);
     return v;
 }
 

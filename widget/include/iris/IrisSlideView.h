@@ -35,6 +35,11 @@ class IRIS_WIDGET_EXPORT IrisSlideView : public QWidget {
     Q_PROPERTY(double magnification READ magnification WRITE setMagnification NOTIFY viewChanged STORED false)
     Q_PROPERTY(QPointF centre READ centre WRITE setCentre NOTIFY viewChanged STORED false)
     Q_PROPERTY(double downsample READ downsample WRITE setDownsample NOTIFY viewChanged STORED false)
+    Q_PROPERTY(double rotation READ rotation WRITE setRotation NOTIFY viewChanged STORED false)
+    Q_PROPERTY(bool flippedHorizontally READ isFlippedHorizontally WRITE setFlippedHorizontally NOTIFY viewChanged
+                   STORED false)
+    Q_PROPERTY(
+        bool flippedVertically READ isFlippedVertically WRITE setFlippedVertically NOTIFY viewChanged STORED false)
     Q_PROPERTY(QColor backgroundColor READ backgroundColor WRITE setBackgroundColor NOTIFY backgroundColorChanged)
     Q_PROPERTY(bool enhance READ enhance WRITE setEnhance NOTIFY enhanceChanged)
     Q_PROPERTY(bool kineticPanning READ kineticPanning WRITE setKineticPanning)
@@ -92,9 +97,21 @@ public:
     double magnification() const;
     QPointF centre() const;
     double downsample() const;
-    // Level-0 slide position under a widget position (logical pixels), and back.
+    // The slide turned clockwise on screen, degrees in [0, 360), about the view's centre.
+    double rotation() const;
+    // The slide mirrored before it is turned: left and right swapped (horizontally), top and
+    // bottom swapped (vertically), as seen at rotation 0.
+    bool isFlippedHorizontally() const;
+    bool isFlippedVertically() const;
+    // Level-0 slide position under a widget position (logical pixels), and back; rotation and
+    // flips included.
     QPointF mapToSlide(const QPointF &widgetPos) const;
     QPointF mapFromSlide(const QPointF &slidePos) const;
+    // A cross-hair marker drawn by the engine over the slide at a level-0 position (a linked
+    // view's cursor: IrisViewGroup); hidden until set, and by clearCrosshair().
+    void setCrosshair(const QPointF &slidePos);
+    void clearCrosshair();
+    bool hasCrosshair() const;
     // The render target's size in device pixels (the widget's size × devicePixelRatio).
     QSize targetSize() const;
 
@@ -194,6 +211,18 @@ public Q_SLOTS:
     void setMagnification(double magnification);
     void setCentre(const QPointF &slidePos);
     void setDownsample(double downsample);
+    void setRotation(double degrees);
+    // Turns the slide clockwise by `degrees` (negative: anticlockwise) about the view's
+    // centre, or about a widget position, whose slide point stays put. Not animated.
+    void rotateBy(double degrees);
+    void rotateBy(double degrees, const QPointF &widgetAnchor);
+    void setFlipped(bool horizontally, bool vertically);
+    void setFlippedHorizontally(bool on);
+    void setFlippedVertically(bool on);
+    // Rotation 0 and no flips, about the view's centre.
+    void resetOrientation();
+    // Centre, downsample and rotation at once (one viewChanged; flips as they are).
+    void setView(const QPointF &centre, double downsample, double rotation);
     // Moves the image by delta logical pixels, as a drag of that length would.
     void panBy(const QPointF &delta);
     // Multiplies the magnification by factor (>1 zooms in) about the view's centre.

@@ -13,7 +13,7 @@ layout(location = 3) in vec4 inSides;  // neighbours' atlas layers: left, right,
 layout(push_constant) uniform Push {
     vec2 targetSize; // pixels
     int edge;        // the seam pass's band; unused here
-    float unused;
+    float fullBands; // 1: a turned view's fixed 3 × 3 cut (tile_bands.glsl)
     vec4 turn;       // the view's turn (tile_turn.glsl)
     vec2 centre;     // its centre, target pixels
 } pc;
@@ -29,7 +29,7 @@ layout(location = 6) flat out vec2 outCentre;
 
 void main() {
     vec2 corner = vec2(gl_VertexIndex & 1, (gl_VertexIndex >> 1) & 1);
-    vec4 r = tileInterior(inRect, inTexel, inScale, inSides);
+    vec4 r = tileInterior(inRect, inTexel, inScale, inSides, pc.fullBands > 0.5);
     vec2 p = turnToTarget(mix(r.xy, r.zw, corner), pc.turn, pc.centre);
     gl_Position = vec4(p / pc.targetSize * 2.0 - 1.0, 0.0, 1.0);
     outOrigin = inRect.xy;

@@ -14,6 +14,13 @@
 // half its width).
 //   left and right bands: the tile's full height;
 //   top and bottom bands: between the left and right bands.
+// A view turned by other than a right angle (`full`) cuts every tile the same way, 3 × 3,
+// whatever its neighbours: the interior, four sides and four corners, each side band and
+// corner drawn by the seam pass (which clamps where a neighbour is missing, as the sampler
+// would). Turned edges are no longer axis-aligned, so a vertex lying on another piece's edge (a
+// T-junction: a top band's corner on a full-height left band) would round off it and leave
+// single-pixel cracks; the fixed 3 × 3 cut gives neighbouring pieces, and neighbouring tiles of
+// a level, whole shared edges.
 
 // The band's width in the tile's (level-0) texels: half a texel of the coarsest mip read (the
 // atlas has mips 0-8; 8 is one texel).
@@ -21,8 +28,9 @@ float bandTexels(float lod) {
     return 0.5 * exp2(min(ceil(lod), 8.0));
 }
 
-// The part of `rect` (x0, y0, x1, y1) the tile pass draws.
-vec4 tileInterior(vec4 rect, vec4 texel, float scale, vec4 sides) {
+// The part of `rect` (x0, y0, x1, y1) the tile pass draws (`full`: every side has a band).
+vec4 tileInterior(vec4 rect, vec4 texel, float scale, vec4 sides, bool full) {
+    if (full) sides = vec4(0.0);
     precise vec4 r = rect;
     precise float b = bandTexels(texel.w);
     precise float bx = min(b, 0.5 * texel.x);
@@ -34,10 +42,20 @@ vec4 tileInterior(vec4 rect, vec4 texel, float scale, vec4 sides) {
     return r;
 }
 
-// Band `edge` (1 left, 2 right, 3 top, 4 bottom) of `rect`; empty (x1 <= x0) where that side
-// has no band.
-vec4 tileBand(int edge, vec4 rect, vec4 texel, float scale, vec4 sides) {
-    vec4 i = tileInterior(rect, texel, scale, sides);
+// Band `edge` (1 left, 2 right, 3 top, 4 bottom; `full` also 5-8: the corners above-left,
+// above-right, below-left, below-right) of `rect`; empty (x1 <= x0) where that side has no band.
+vec4 tileBand(int edge, vec4 rect, vec4 texel, float scale, vec4 sides, bool full) {
+    vec4 i = tileInterior(rect, texel, scale, sides, full);
+    if (full) {
+        if (edge == 1) return vec4(rect.x, i.y, i.x, i.w);
+        if (edge == 2) return vec4(i.z, i.y, rect.z, i.w);
+        if (edge == 3) return vec4(i.x, rect.y, i.z, i.y);
+        if (edge == 4) return vec4(i.x, i.w, i.z, rect.w);
+        if (edge == 5) return vec4(rect.x, rect.y, i.x, i.y);
+        if (edge == 6) return vec4(i.z, rect.y, rect.z, i.y);
+        if (edge == 7) return vec4(rect.x, i.w, i.x, rect.w);
+        return vec4(i.z, i.w, rect.z, rect.w);
+    }
     if (edge == 1) return sides.x >= 0.0 ? vec4(rect.x, rect.y, i.x, rect.w) : vec4(0.0);
     if (edge == 2) return sides.y >= 0.0 ? vec4(i.z, rect.y, rect.z, rect.w) : vec4(0.0);
     if (edge == 3) return sides.z >= 0.0 ? vec4(i.x, rect.y, i.z, i.y) : vec4(0.0);

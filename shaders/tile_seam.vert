@@ -12,8 +12,8 @@ layout(location = 4) in vec4 inCorners; // above-left, above-right, below-left, 
 
 layout(push_constant) uniform Push {
     vec2 targetSize; // pixels
-    int edge;        // 1 left, 2 right, 3 top, 4 bottom
-    float unused;
+    int edge;        // 1 left, 2 right, 3 top, 4 bottom; 5-8 the corners (fullBands)
+    float fullBands; // 1: a turned view's fixed 3 × 3 cut (tile_bands.glsl)
     vec4 turn;       // the view's turn (tile_turn.glsl)
     vec2 centre;     // its centre, target pixels
 } pc;
@@ -31,7 +31,7 @@ layout(location = 4) flat out vec4 outCorners;
 
 void main() {
     vec2 corner = vec2(gl_VertexIndex & 1, (gl_VertexIndex >> 1) & 1);
-    vec4 r = tileBand(pc.edge, inRect, inTexel, inScale, inSides);
+    vec4 r = tileBand(pc.edge, inRect, inTexel, inScale, inSides, pc.fullBands > 0.5);
     vec2 p = turnToTarget(mix(r.xy, r.zw, corner), pc.turn, pc.centre);
     gl_Position = vec4(p / pc.targetSize * 2.0 - 1.0, 0.0, 1.0);
     outOrigin = inRect.xy;

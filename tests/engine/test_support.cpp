@@ -246,6 +246,15 @@ std::optional<iris::Frame> renderView(iris::Engine& engine, const iris::View& vi
     return f;
 }
 
+iris::View turnedViewAt(int64_t kx, int64_t ky, double downsample, double rotation, bool flipH, bool flipV,
+                        uint32_t width, uint32_t height) {
+    iris::View v{0, 0, downsample, rotation, flipH, flipV};
+    const auto first = iris::ViewTransform::of(v, width, height).toSlide(0.5, 0.5); // about a centre at 0
+    v.centerX = (double(kx) + 0.5) * downsample - first[0];
+    v.centerY = (double(ky) + 0.5) * downsample - first[1];
+    return v;
+}
+
 iris::View viewWithOrigin(double x0, double y0, double downsample, uint32_t width, uint32_t height) {
     iris::View v;
     v.centerX = x0 + double(width) * 0.5 * downsample;

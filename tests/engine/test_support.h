@@ -109,6 +109,11 @@ std::optional<iris::Frame> renderView(iris::Engine& engine, const iris::View& vi
 // The view whose frame (width × height at `downsample`) has its top-left corner at the
 // level-0 point (x0, y0): centre = (x0, y0) + (width, height)/2 · downsample.
 iris::View viewWithOrigin(double x0, double y0, double downsample, uint32_t width, uint32_t height);
+// A view turned by `rotation` (a multiple of 90°) and mirrored as given, at `downsample`,
+// whose output pixel (0, 0) shows the centre of pixel (kx, ky) of a level with that
+// downsample: every output pixel centre then lands on a level pixel centre.
+iris::View turnedViewAt(int64_t kx, int64_t ky, double downsample, double rotation, bool flipH, bool flipV,
+                        uint32_t width, uint32_t height);
 
 // ---- images ---------------------------------------------------------------------------
 

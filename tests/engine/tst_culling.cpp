@@ -107,6 +107,11 @@ private slots:
             {"ds 3.3, right and bottom edge", {w - 200.3, h - 150.7, 3.3}},
             {"ds 1.9, top-left corner", {120.25, 90.75, 1.9}},
             {"zoomed in 3x", {w * 0.3 + 0.1, h * 0.6 + 0.3, 1.0 / 3}},
+            // Turned views: coarse tiles under the turned field's drawn finer tiles are culled,
+            // those at its corners (fine tiles outside the field are not drawn) are not.
+            {"turned 30, ds 1.37", {w * 0.43 + 0.37, h * 0.51 + 0.61, 1.37, 30}},
+            {"turned 90 flipped, ds 2.6", {w * 0.55 + 0.2, h * 0.47 + 0.9, 2.6, 90, true}},
+            {"turned 217, top-left corner", {120.25, 90.75, 1.9, 217}},
             {"fitted", fit},
         };
         int fewer = 0;

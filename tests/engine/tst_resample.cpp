@@ -127,17 +127,24 @@ std::optional<Reference> buildReference(OpenSlideRef& os, const iris::SlideInfo&
     const double dsL = li.downsample;
     r.s = view.downsample / dsL;
     const double s = r.s;
-    const double ox = (view.centerX - double(kW) * 0.5 * view.downsample) / dsL + shift * s;
-    const double oy = (view.centerY - double(kH) * 0.5 * view.downsample) / dsL + shift * s;
-    const auto px = [&](uint32_t i) { return ox + (double(i) + 0.5) * s; };
-    const auto py = [&](uint32_t j) { return oy + (double(j) + 0.5) * s; };
+    // Output pixel (i, j)'s position in L's pixels (turned views: through the view's turn; the
+    // reference's box stays aligned with L's axes, the engine's trilinear footprint is round).
+    const iris::ViewTransform turn = iris::ViewTransform::of(view, kW, kH);
+    const auto at2 = [&](double i, double j) {
+        const auto p = turn.toSlide(i, j);
+        return std::array<double, 2>{p[0] / dsL + shift * s, p[1] / dsL + shift * s};
+    };
+    double bx0 = 1e300, by0 = 1e300, bx1 = -1e300, by1 = -1e300;
+    for (const auto& c : {at2(0.5, 0.5), at2(kW - 0.5, 0.5), at2(0.5, kH - 0.5), at2(kW - 0.5, kH - 0.5)}) {
+        bx0 = std::min(bx0, c[0]), by0 = std::min(by0, c[1]), bx1 = std::max(bx1, c[0]), by1 = std::max(by1, c[1]);
+    }
 
     // The level pixels the support of the whole frame touches.
     const double reach = std::max(s, 1.0) + 1.0;
-    const int64_t rx0 = std::max<int64_t>(0, int64_t(std::floor(px(0) - reach)));
-    const int64_t ry0 = std::max<int64_t>(0, int64_t(std::floor(py(0) - reach)));
-    const int64_t rx1 = std::min<int64_t>(li.width, int64_t(std::ceil(px(kW - 1) + reach)) + 1);
-    const int64_t ry1 = std::min<int64_t>(li.height, int64_t(std::ceil(py(kH - 1) + reach)) + 1);
+    const int64_t rx0 = std::max<int64_t>(0, int64_t(std::floor(bx0 - reach)));
+    const int64_t ry0 = std::max<int64_t>(0, int64_t(std::floor(by0 - reach)));
+    const int64_t rx1 = std::min<int64_t>(li.width, int64_t(std::ceil(bx1 + reach)) + 1);
+    const int64_t ry1 = std::min<int64_t>(li.height, int64_t(std::ceil(by1 + reach)) + 1);
 
     const auto bg = backgroundBytes();
     r.image = makeImage(kW, kH, {bg[0], bg[1], bg[2], 255});
@@ -161,9 +168,8 @@ std::optional<Reference> buildReference(OpenSlideRef& os, const iris::SlideInfo&
     const double margin = std::max(1.0, s); // level pixels kept clear of the level's edge
 
     for (uint32_t j = 0; j < kH; ++j) {
-        const double y = py(j);
         for (uint32_t i = 0; i < kW; ++i) {
-            const double x = px(i);
+            const auto [x, y] = at2(i + 0.5, j + 0.5);
             const std::size_t idx = std::size_t(j) * kW + i;
             // Level-0 centre of the pixel: background when a whole output pixel away from
             // the slide and from every level's extent.
@@ -273,17 +279,23 @@ private slots:
         QTest::addColumn<double>("downsample");
         QTest::addColumn<double>("fx"); // view centre as a fraction of the slide, plus an odd offset
         QTest::addColumn<double>("fy");
+        QTest::addColumn<double>("rotation");
         std::vector<std::pair<QString, std::filesystem::path>> slides;
         if (auto s = sampleSlidePath()) slides.emplace_back("sample", *s);
         if (auto d = slidesDir("aperio")) slides.emplace_back("CMU-1-Small-Region", *d / "CMU-1-Small-Region.svs");
         if (slides.empty()) {
-            QTest::newRow("no test data") << QString() << 1.0 << 0.0 << 0.0;
+            QTest::newRow("no test data") << QString() << 1.0 << 0.0 << 0.0 << 0.0;
             return;
         }
         for (const auto& [name, path] : slides) {
             for (double ds : {1.37, 2.6, 5.3, 0.5, 0.3}) {
                 QTest::addRow("%s ds %.2f", name.toUtf8().constData(), ds)
-                    << QString::fromStdString(path.string()) << ds << 0.43 << 0.57;
+                    << QString::fromStdString(path.string()) << ds << 0.43 << 0.57 << 0.0;
+            }
+            // Turned by other than a right angle (issue 17): the same bounds.
+            for (const auto& [ds, rotation] : {std::pair{1.37, 30.0}, std::pair{2.6, 217.5}, std::pair{0.5, 333.0}}) {
+                QTest::addRow("%s ds %.2f turned %.1f", name.toUtf8().constData(), ds, rotation)
+                    << QString::fromStdString(path.string()) << ds << 0.43 << 0.57 << rotation;
             }
         }
     }
@@ -292,6 +304,7 @@ private slots:
         QFETCH(double, downsample);
         QFETCH(double, fx);
         QFETCH(double, fy);
+        QFETCH(double, rotation);
         if (path.isEmpty()) QSKIP("no test data (set IRIS_TESTDATA or IRIS_TESTDATA_DEFAULT)");
         const std::filesystem::path p = path.toStdString();
         std::string err;
@@ -305,6 +318,7 @@ private slots:
         view.centerX = std::floor(double(info->width) * fx) + 0.37;
         view.centerY = std::floor(double(info->height) * fy) + 0.71;
         view.downsample = downsample;
+        view.rotation = rotation;
         auto frame = renderView(*e_.engine, view, kW, kH, 30s, &err);
         QVERIFY2(frame.has_value(), err.c_str());
         QCOMPARE(countNotOpaque(frame->image), uint64_t(0));

@@ -91,6 +91,11 @@ private slots:
             {"level 1 aligned", viewWithOrigin(cx - 600, cy - 400, l1, kW, kH), l1 == std::round(l1)},
             {"zoomed in 0.6", {cx + 0.37, cy + 0.71, 0.6}, false},
             {"between levels 1.37", {cx + 0.37, cy + 0.71, 1.37}, false},
+            // Turned: both paths map each pixel into the unturned frame by the same exact
+            // expression at multiples of 90° (tile_turn.glsl).
+            {"1:1 aligned, turned 90", turnedViewAt(int64_t(cx), int64_t(cy), 1.0, 90, false, false, kW, kH), true},
+            {"1:1 aligned, turned 270 and flipped", turnedViewAt(int64_t(cx), int64_t(cy), 1.0, 270, true, false, kW, kH), true},
+            {"between levels 1.37, turned 30", {cx + 0.37, cy + 0.71, 1.37, 30}, false},
         };
         for (const Case& c : cases) {
             std::string why;

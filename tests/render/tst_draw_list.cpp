@@ -119,6 +119,60 @@ int pinsOf(const LevelDraw& d, const LevelInfo& level, const FakeMap& map) {
     return int(pinned.size());
 }
 
+// What each pixel of a turned target shows: as rasterise(), the pixel's centre taken into the
+// view's unturned frame (what tile.frag and tile_resolve.comp do; the quads' corners are turned
+// by the same orthonormal map, so a centre lies in a turned quad iff its unturned position lies
+// in the quad's rect).
+std::vector<int> rasteriseTurned(const std::vector<iris::gpu::TileInstance>& instances, const Viewport& vp) {
+    const iris::ViewTransform t = iris::ViewTransform::of(vp.view, vp.width, vp.height);
+    std::vector<int> top(size_t(vp.width) * vp.height, -1);
+    for (const iris::gpu::TileInstance& i : instances) {
+        // The pixels of the turned quad's bounding box, each tested in the unturned frame.
+        double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
+        for (const auto& [cx, cy] : {std::pair{i.rect[0], i.rect[1]}, std::pair{i.rect[2], i.rect[1]},
+                                     std::pair{i.rect[0], i.rect[3]}, std::pair{i.rect[2], i.rect[3]}}) {
+            const double dx = cx - t.targetCX, dy = cy - t.targetCY;
+            const double px = t.targetCX + t.m[0] * dx + t.m[1] * dy, py = t.targetCY + t.m[2] * dx + t.m[3] * dy;
+            x0 = std::min(x0, px), y0 = std::min(y0, py), x1 = std::max(x1, px), y1 = std::max(y1, py);
+        }
+        const int64_t px0 = std::max<int64_t>(0, int64_t(std::floor(x0)) - 1), py0 = std::max<int64_t>(0, int64_t(std::floor(y0)) - 1);
+        const int64_t px1 = std::min<int64_t>(vp.width, int64_t(std::ceil(x1)) + 1), py1 = std::min<int64_t>(vp.height, int64_t(std::ceil(y1)) + 1);
+        for (int64_t y = py0; y < py1; ++y) {
+            for (int64_t x = px0; x < px1; ++x) {
+                const double dx = double(x) + 0.5 - t.targetCX, dy = double(y) + 0.5 - t.targetCY;
+                const double ux = t.targetCX + t.m[0] * dx + t.m[2] * dy, uy = t.targetCY + t.m[1] * dx + t.m[3] * dy;
+                if (ux >= i.rect[0] && ux < i.rect[2] && uy >= i.rect[1] && uy < i.rect[3])
+                    top[size_t(y) * vp.width + size_t(x)] = int(i.texel[2]);
+            }
+        }
+    }
+    return top;
+}
+
+// The tiles of `level` that the target rectangle overlaps: what a turned field truly shows of
+// the level. Sampled every pixel inside and every 1/64 pixel along its edges (a tile, larger
+// than a pixel, that overlaps the rectangle without holding an inner sample crosses an edge).
+std::set<std::pair<int64_t, int64_t>> tilesUnderTarget(const LevelInfo& level, const Viewport& vp) {
+    const iris::ViewTransform t = iris::ViewTransform::of(vp.view, vp.width, vp.height);
+    std::vector<char> hit(size_t(level.tilesX * level.tilesY), 0);
+    const auto sample = [&](double x, double y) {
+        const auto s = t.toSlide(x, y);
+        const double lx = s[0] / level.downsample, ly = s[1] / level.downsample;
+        if (lx < 0 || ly < 0 || lx >= double(level.width) || ly >= double(level.height)) return;
+        hit[size_t((int64_t(ly) / iris::kTileSize) * level.tilesX + int64_t(lx) / iris::kTileSize)] = 1;
+    };
+    for (uint32_t y = 0; y < vp.height; ++y)
+        for (uint32_t x = 0; x < vp.width; ++x) sample(x + 0.5, y + 0.5);
+    const double e = 1e-9; // just inside the closed rectangle
+    for (double k = 0; k <= vp.width; k += 1.0 / 64) sample(k, e), sample(k, vp.height - e);
+    for (double k = 0; k <= vp.height; k += 1.0 / 64) sample(e, k), sample(vp.width - e, k);
+    std::set<std::pair<int64_t, int64_t>> out;
+    for (int64_t ty = 0; ty < level.tilesY; ++ty)
+        for (int64_t tx = 0; tx < level.tilesX; ++tx)
+            if (hit[size_t(ty * level.tilesX + tx)]) out.insert({tx, ty});
+    return out;
+}
+
 DrawList build(const SlideInfo& s, const Viewport& vp, FakeMap& map, DrawOptions options = {}) {
     DrawList list;
     iris::render::buildDrawList(s, kGen, vp, options, map, list);
@@ -140,7 +194,135 @@ private slots:
     void syntheticBase();
     void thumbnail();
     void zoomedInTilesNameTheirNeighbours();
+    void viewTransformRoundTrips();
+    void turnedViewsHaveNoHoles_data();
+    void turnedViewsHaveNoHoles();
+    void turnedBufferRegionFollowsTheFootprint();
 };
+
+void TestDrawList::viewTransformRoundTrips() {
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<double> u(0, 1);
+    for (int i = 0; i < 2000; ++i) {
+        iris::View v{u(rng) * 1e5, u(rng) * 1e5, 0.01 + u(rng) * 300, u(rng) * 720 - 360, u(rng) < 0.5, u(rng) < 0.5};
+        const iris::ViewTransform t = iris::ViewTransform::of(v, 1000 + 999 * u(rng), 700 + 777 * u(rng));
+        const double x = u(rng) * 3000 - 500, y = u(rng) * 3000 - 500;
+        const auto s = t.toSlide(x, y);
+        const auto back = t.toTarget(s[0], s[1]);
+        QVERIFY2(std::abs(back[0] - x) < 1e-6 && std::abs(back[1] - y) < 1e-6, "target -> slide -> target");
+        // The target's centre shows the view's centre, and M is orthonormal (a turn keeps scale).
+        const auto c = t.toSlide(t.targetCX, t.targetCY);
+        QCOMPARE(c[0], v.centerX);
+        QCOMPARE(c[1], v.centerY);
+        const auto one = t.toSlide(t.targetCX + 1, t.targetCY);
+        QVERIFY(std::abs(std::hypot(one[0] - c[0], one[1] - c[1]) - v.downsample) < 1e-9 * v.downsample);
+    }
+    // Clockwise on screen: at 90° the slide's +x points down the target.
+    const iris::ViewTransform q = iris::ViewTransform::of({100, 100, 1, 90}, 200, 200);
+    const auto right = q.toTarget(101, 100);
+    QCOMPARE(right[0], 100.0);
+    QCOMPARE(right[1], 101.0);
+    // Mirrored: at rotation 0 flipH swaps left and right, flipV top and bottom.
+    const auto mirrored = iris::ViewTransform::of({100, 100, 1, 0, true, true}, 200, 200).toTarget(101, 99);
+    QCOMPARE(mirrored[0], 99.0);
+    QCOMPARE(mirrored[1], 101.0);
+    // Right angles are exact: with the target's first pixel centre on a slide pixel centre,
+    // every pixel centre lands on one.
+    for (double r : {90.0, 180.0, 270.0, 450.0, -90.0}) {
+        iris::View v{0, 0, 1, r, true};
+        const auto first = iris::ViewTransform::of(v, 333, 257).toSlide(0.5, 0.5);
+        v.centerX = 1000.5 - first[0];
+        v.centerY = 2000.5 - first[1];
+        const iris::ViewTransform e = iris::ViewTransform::of(v, 333, 257);
+        QVERIFY(e.axisAligned());
+        for (int k = 0; k < 50; ++k) {
+            const auto s = e.toSlide(k * 7 + 0.5, k * 5 + 0.5);
+            QCOMPARE(s[0] - std::floor(s[0]), 0.5);
+            QCOMPARE(s[1] - std::floor(s[1]), 0.5);
+        }
+    }
+    QCOMPARE(iris::normalizedRotation(-90), 270.0);
+    QCOMPARE(iris::normalizedRotation(720), 0.0);
+    QCOMPARE(iris::normalizedRotation(89.9999999999999), 90.0); // animated steps land on the right angle
+    QCOMPARE(iris::normalizedRotation(std::nan("")), 0.0);
+}
+
+void TestDrawList::turnedViewsHaveNoHoles_data() {
+    QTest::addColumn<double>("rotation");
+    QTest::addColumn<bool>("flip");
+    QTest::addColumn<double>("downsample");
+    for (double r : {30.0, 45.0, 137.0, 217.5, 333.0})
+        for (double ds : {1.0, 2.6})
+            QTest::addRow("%.1f° ds %.1f", r, ds) << r << false << ds;
+    QTest::newRow("30° flipped ds 1.7") << 30.0 << true << 1.7;
+    QTest::newRow("90° ds 1.3") << 90.0 << false << 1.3;
+}
+
+void TestDrawList::turnedViewsHaveNoHoles() {
+    QFETCH(double, rotation);
+    QFETCH(bool, flip);
+    QFETCH(double, downsample);
+    const SlideInfo s = scan();
+    FakeMap map;
+    for (int li = 0; li < 3; ++li) map.addLevel(s, li);
+    Viewport vp{.view = {9000.3, 6000.7, downsample, rotation, flip}, .width = 640, .height = 480};
+    const DrawList list = build(s, vp, map);
+    QVERIFY(list.hrComplete);
+    QVERIFY(list.lrComplete);
+    const int hr = iris::chooseLevels(s, downsample).hr;
+    // Every pixel shows an HR tile: none of the field's corners is left to coarser levels.
+    const std::vector<int> top = rasteriseTurned(instancesOf(list), vp);
+    for (size_t i = 0; i < top.size(); ++i) {
+        QVERIFY2(top[i] >= 0, "a pixel shows the background");
+        QCOMPARE(TileKey::level(map.keyOf(top[i])), hr);
+    }
+    // Exactly the HR tiles the field touches are drawn and counted (not the bounding range's
+    // corners); culling a coarse tile never changes a pixel.
+    const std::set<std::pair<int64_t, int64_t>> under = tilesUnderTarget(s.levels[size_t(hr)], vp);
+    const LevelDraw& d = list.levels[2];
+    QCOMPARE(size_t(list.hrTiles), d.instances.size());
+    std::set<std::pair<int64_t, int64_t>> drawn;
+    for (int64_t ty = d.range.y0; ty <= d.range.y1; ++ty)
+        for (int64_t tx = d.range.x0; tx <= d.range.x1; ++tx)
+            if (d.isDrawn(tx, ty)) drawn.insert({tx, ty});
+    QVERIFY2(drawn == under, qPrintable(QString("drawn %1 HR tiles, the field touches %2 (bounding range %3)")
+                                            .arg(drawn.size()).arg(under.size()).arg(d.range.count())));
+    if (std::fmod(rotation, 90.0) != 0) QVERIFY(int64_t(drawn.size()) < d.range.count());
+    DrawOptions all;
+    all.drawCovered = true;
+    QCOMPARE(rasteriseTurned(instancesOf(build(s, vp, map, all)), vp), top);
+}
+
+void TestDrawList::turnedBufferRegionFollowsTheFootprint() {
+    const SlideInfo s = scan();
+    for (double r : {30.0, 60.0, 200.0}) {
+        const Viewport vp{.view = {9000.3, 6000.7, 2.2, r}, .width = 800, .height = 600};
+        const int perimeter = 1;
+        const std::vector<iris::TileRef> region = iris::bufferRegion(s, kGen, vp, perimeter);
+        const iris::LevelChoice c = iris::chooseLevels(s, vp.view.downsample);
+        for (int li : {c.hr, c.lr}) {
+            const LevelInfo& l = s.levels[size_t(li)];
+            const auto under = tilesUnderTarget(l, vp);
+            std::set<std::pair<int64_t, int64_t>> listed;
+            for (const iris::TileRef& t : region)
+                if (t.level == li) listed.insert({t.tx, t.ty});
+            // Every tile the field touches is buffered …
+            for (const auto& t : under) QVERIFY2(listed.count(t), "a visible tile is missing from the buffer region");
+            // … and nothing further from it than the perimeter (Chebyshev distance in tiles,
+            // plus one for the footprint's growth along its own turned sides).
+            for (const auto& t : listed) {
+                int64_t best = INT64_MAX;
+                for (const auto& v : under)
+                    best = std::min(best, std::max(std::abs(v.first - t.first), std::abs(v.second - t.second)));
+                QVERIFY2(best <= perimeter + 1, qPrintable(QString("tile (%1, %2) of level %3 is %4 tiles from the field")
+                                                                .arg(t.first).arg(t.second).arg(li).arg(best)));
+            }
+            // The bounding range's corners are not loaded.
+            const iris::TileRange box = iris::visibleTiles(l, vp, perimeter);
+            QVERIFY(int64_t(listed.size()) < box.count());
+        }
+    }
+}
 
 void TestDrawList::nothingResidentDrawsNothing() {
     const SlideInfo s = scan();

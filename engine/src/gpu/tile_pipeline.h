@@ -19,8 +19,10 @@ namespace iris::gpu {
 
 struct TilePush {
     float targetSize[2];
-    int32_t edge = 0; // the seam pass's band: 1 left, 2 right, 3 top, 4 bottom
-    float unused = 0;
+    int32_t edge = 0; // the seam pass's band: 1 left, 2 right, 3 top, 4 bottom; 5-8 corners (fullBands)
+    // 1: every tile is cut 3 × 3 into an interior and eight seam-pass pieces, whatever its
+    // neighbours (a view turned by other than a right angle; shaders/tile_bands.glsl).
+    float fullBands = 0;
     // The view's turn (ViewTransform::m, row-major), applied about the target's centre to the
     // instances' unturned rectangles (shaders/tile_turn.glsl); identity for unturned views and
     // the overview's thumbnail.

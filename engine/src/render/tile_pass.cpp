@@ -83,8 +83,13 @@ void TilePass::drawSpan(VkCommandBuffer cmd, const FrameContext& frame, uint32_t
     VkDescriptorSet set = pipeline_.descriptorSet();
     vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline_.layout(), 0, 1, &set, 0, nullptr);
     gpu::TilePush push{{float(frame.extent.width), float(frame.extent.height)}};
+    int edges = 4;
     if (turned) {
         const ViewTransform t = ViewTransform::of(frame.viewport.view, frame.viewport.width, frame.viewport.height);
+        if (!t.axisAligned()) {
+            push.fullBands = 1;
+            edges = 8;
+        }
         for (int i = 0; i < 4; ++i) push.turn[i] = float(t.m[size_t(i)]);
         push.centre[0] = float(t.targetCX);
         push.centre[1] = float(t.targetCY);
@@ -95,7 +100,7 @@ void TilePass::drawSpan(VkCommandBuffer cmd, const FrameContext& frame, uint32_t
     vkCmdDraw(cmd, 4, n, 0, first);
     if (!seams) return;
     vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, seamPipe_);
-    for (push.edge = 1; push.edge <= 4; ++push.edge) {
+    for (push.edge = 1; push.edge <= edges; ++push.edge) {
         vkCmdPushConstants(cmd, pipeline_.layout(), VK_SHADER_STAGE_VERTEX_BIT, 0, sizeof(push), &push);
         vkCmdDraw(cmd, 4, n, 0, first);
     }

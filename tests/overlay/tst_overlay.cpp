@@ -365,6 +365,95 @@ private slots:
         }
     }
 
+    // A turned view's field is outlined turned: its reported corners are the target's corners
+    // mapped through the view, and every outline pixel lies on the quadrilateral's sides (and
+    // each side has outline pixels along it). The thumbnail itself stays unturned.
+    void overviewOutlinesATurnedField() {
+        openEngine();
+        e_->setOverlayVisible(Overlay::Overview, true);
+        for (const iris::View v : {iris::View{30000, 20000, 20, 30}, iris::View{22000, 15000, 25, 117.5, true}}) {
+            auto f = render(v);
+            QVERIFY(f);
+            const iris::OverlayLayout& l = f->overlays;
+            const PixelRect& img = l.overviewImage;
+            QVERIFY(!img.empty());
+            const double ds = l.overviewDownsample;
+            const iris::ViewTransform t = iris::ViewTransform::of(v, kW, kH);
+            const std::array<std::array<double, 2>, 4> target{{{0, 0}, {double(kW), 0}, {double(kW), double(kH)}, {0, double(kH)}}};
+            std::array<std::array<double, 2>, 4> q{};
+            for (size_t k = 0; k < 4; ++k) {
+                const auto s = t.toSlide(target[k][0], target[k][1]);
+                q[k] = {img.x + s[0] / ds, img.y + s[1] / ds};
+                QVERIFY(std::abs(l.overviewFieldCorners[2 * k] - q[k][0]) < 1e-6);
+                QVERIFY(std::abs(l.overviewFieldCorners[2 * k + 1] - q[k][1]) < 1e-6);
+            }
+            // Distance from (x, y) to side k.
+            const auto toSide = [&](double x, double y, size_t k) {
+                const auto& a = q[k];
+                const auto& b = q[(k + 1) % 4];
+                const double dx = b[0] - a[0], dy = b[1] - a[1];
+                const double u = std::clamp(((x - a[0]) * dx + (y - a[1]) * dy) / (dx * dx + dy * dy), 0.0, 1.0);
+                return std::hypot(x - (a[0] + u * dx), y - (a[1] + u * dy));
+            };
+            std::array<int, 4> onSide{};
+            int cyan = 0;
+            for (int32_t y = img.y; y < img.y + img.height; ++y) {
+                for (int32_t x = img.x; x < img.x + img.width; ++x) {
+                    if (!same(pixel(f->image, uint32_t(x), uint32_t(y)), kFieldCyan)) continue;
+                    ++cyan;
+                    double best = 1e9;
+                    size_t side = 0;
+                    for (size_t k = 0; k < 4; ++k) {
+                        const double d = toSide(x + 0.5, y + 0.5, k);
+                        if (d < best) best = d, side = k;
+                    }
+                    QVERIFY2(best <= 2.5, qPrintable(QString("outline pixel (%1, %2) is %3 px off the field").arg(x).arg(y).arg(best)));
+                    ++onSide[side];
+                }
+            }
+            save(f->image, "overview.turned");
+            QVERIFY(cyan > 0);
+            for (size_t k = 0; k < 4; ++k) {
+                const double len = std::hypot(q[(k + 1) % 4][0] - q[k][0], q[(k + 1) % 4][1] - q[k][1]);
+                // Sides inside the thumbnail are drawn along their length (clipped ones may not be).
+                bool inside = true;
+                for (const auto& p : {q[k], q[(k + 1) % 4]})
+                    inside = inside && p[0] >= img.x + 2 && p[1] >= img.y + 2 && p[0] <= img.x + img.width - 2 &&
+                             p[1] <= img.y + img.height - 2;
+                if (inside) QVERIFY2(onSide[k] >= len, qPrintable(QString("side %1: %2 px for %3 px").arg(k).arg(onSide[k]).arg(len)));
+            }
+        }
+    }
+
+    // The cross-hair: drawn at the slide point (turned views included), over the tiles, and gone
+    // when cleared.
+    void crosshairMarksASlidePoint() {
+        openEngine();
+        for (const iris::View v : {iris::View{30000, 20000, 20}, iris::View{30000, 20000, 20, 41}}) {
+            const std::array<double, 2> point{30000 + 1234.0, 20000 - 987.0};
+            e_->setCrosshair(point);
+            QVERIFY(e_->crosshair().has_value());
+            auto f = render(v);
+            QVERIFY(f);
+            const auto at = iris::ViewTransform::of(v, kW, kH).toTarget(point[0], point[1]);
+            const uint32_t cx = uint32_t(std::floor(at[0])), cy = uint32_t(std::floor(at[1]));
+            const std::array<uint8_t, 3> yellow{255, 255, 0};
+            QVERIFY2(same(pixel(f->image, cx, cy), yellow), "no cross-hair at the point");
+            QVERIFY(same(pixel(f->image, cx + 10, cy), yellow) && same(pixel(f->image, cx, cy - 10), yellow));
+            QVERIFY(!same(pixel(f->image, cx + 10, cy + 10), yellow)); // a plus, not a box
+            e_->setCrosshair(std::nullopt);
+            auto g = render(iris::View{v.centerX + 1, v.centerY, v.downsample, v.rotation}); // a new frame
+            QVERIFY(g);
+            int left = 0;
+            for (uint32_t y = 0; y < kH; ++y)
+                for (uint32_t x = 0; x < kW; ++x) left += same(pixel(g->image, x, y), yellow) ? 1 : 0;
+            QCOMPARE(left, 0);
+        }
+        // A non-finite point is no cross-hair.
+        e_->setCrosshair(std::array<double, 2>{std::nan(""), 0});
+        QVERIFY(!e_->crosshair().has_value());
+    }
+
     // A point of the thumbnail maps to the slide point under it; elsewhere nothing is hit.
     void overviewHitMapsToTheSlide() {
         openEngine();

@@ -30,6 +30,7 @@
 #include <QtWidgets/QVBoxLayout>
 
 #include <iris/IrisSlideView.h>
+#include <iris/types.h>
 
 #include "enginehost_p.h"
 #include "navigator_p.h"
@@ -112,6 +113,7 @@ private Q_SLOTS:
     void propertiesAndSignals();
     void twoViewsOnTwoSlides();
     void closingWhileTilesLoad();
+    void turnsAndMirrors();
 
 private:
     // Shows m_w with the sample slide and waits for a complete frame.
@@ -828,6 +830,86 @@ void TstIrisSlideView::closingWhileTilesLoad()
     delete w.view;
     QCOMPARE(IrisWidget::EngineHost::liveEngineCount(), m_baselineEngines);
     QTest::qWait(50); // no queued frame reaches the deleted view
+}
+
+void TstIrisSlideView::turnsAndMirrors()
+{
+    showSample();
+    IrisSlideView *view = m_w->view;
+    view->setCentre(QPointF(2400, 1700));
+    view->setDownsample(3.0);
+    QVERIFY(m_w->frames->waitForCompleteFrame());
+    QCOMPARE(view->rotation(), 0.0);
+
+    // R: a quarter turn clockwise about the centre, animated, landing on 90 exactly.
+    const QPointF centre = view->centre();
+    QSignalSpy viewChanges(view, &IrisSlideView::viewChanged);
+    QTest::keyClick(m_w->surface(), Qt::Key_R);
+    QTRY_COMPARE(view->rotation(), 90.0);
+    QVERIFY2(viewChanges.count() >= 2, "the turn was not animated");
+    QVERIFY(length(view->centre() - centre) < 1e-6);
+    // Clockwise: the slide's +x now points down the screen.
+    const QPointF c = view->mapFromSlide(centre);
+    const QPointF right = view->mapFromSlide(centre + QPointF(100, 0));
+    QVERIFY2(std::abs(right.x() - c.x()) < 1e-6 && right.y() > c.y(), "not clockwise");
+    QVERIFY(m_w->frames->waitForCompleteFrame());
+    checkPresentedMatchesHeadless(view, m_sample, QStringLiteral("turned90"));
+
+    // Shift+wheel turns 15° a notch about the pointer, whose slide point stays put.
+    const QPointF p(130, 95);
+    const QPointF under = view->mapToSlide(p);
+    QWheelEvent wheel(p, m_w->surface()->mapToGlobal(p), QPoint(), QPoint(0, 120), Qt::NoButton,
+                      Qt::ShiftModifier, Qt::NoScrollPhase, false);
+    QCoreApplication::sendEvent(m_w->surface(), &wheel);
+    QTRY_VERIFY(near(view->rotation(), 105, 1e-9));
+    QVERIFY(length(view->mapFromSlide(under) - p) * m_w->dpr() <= 1e-6);
+    QCOMPARE(view->downsample(), 3.0); // a turn zooms nothing
+    // mapToSlide and mapFromSlide are inverses at any angle.
+    for (const QPointF q : {QPointF(0, 0), QPointF(17.5, 203.25), QPointF(311, 7)})
+        QVERIFY(length(view->mapFromSlide(view->mapToSlide(q)) - q) < 1e-6);
+    QVERIFY(m_w->frames->waitForCompleteFrame());
+    checkPresentedMatchesHeadless(view, m_sample, QStringLiteral("turned105"));
+
+    // F mirrors the image left-right on screen: a point right of the centre goes left of it.
+    const QPointF before = view->mapFromSlide(centre + QPointF(300, 200)) - view->mapFromSlide(centre);
+    QTest::keyClick(m_w->surface(), Qt::Key_F);
+    QTRY_VERIFY(view->isFlippedHorizontally());
+    const QPointF after = view->mapFromSlide(centre + QPointF(300, 200)) - view->mapFromSlide(centre);
+    QVERIFY2(std::abs(after.x() + before.x()) < 1e-6 && std::abs(after.y() - before.y()) < 1e-6,
+             "F did not mirror the screen left-right");
+    QVERIFY(m_w->frames->waitForCompleteFrame());
+    checkPresentedMatchesHeadless(view, m_sample, QStringLiteral("turnedMirrored"));
+
+    // Ctrl+drag turns with the pointer's angle about the centre: a quarter circle clockwise.
+    const QPointF mid = QPointF(view->width(), view->height()) / 2;
+    const double turned = view->rotation();
+    const QPointF dragCentre = view->centre();
+    QTest::mousePress(m_w->surface(), Qt::LeftButton, Qt::ControlModifier, mid.toPoint() + QPoint(80, 0));
+    for (int k = 1; k <= 9; ++k) {
+        const double a = k * 10 * 3.14159265358979323846 / 180;
+        const QPointF at = QPointF(mid.toPoint()) + QPointF(80 * std::cos(a), 80 * std::sin(a));
+        QMouseEvent move(QEvent::MouseMove, at, m_w->surface()->mapToGlobal(at), Qt::NoButton, Qt::LeftButton,
+                         Qt::ControlModifier);
+        QCoreApplication::sendEvent(m_w->surface(), &move);
+    }
+    QTest::mouseRelease(m_w->surface(), Qt::LeftButton, Qt::ControlModifier, mid.toPoint() + QPoint(0, 80));
+    const double swept = iris::normalizedRotation(view->rotation() - turned);
+    QVERIFY2(std::abs(swept - 90) < 1.5, qPrintable(QStringLiteral("turned by %1").arg(swept)));
+    QVERIFY(length(view->centre() - dragCentre) < 1e-6); // about the view's centre
+
+    // Shift+Home: upright and unmirrored again; setRotation and setFlipped set them directly.
+    QTest::keyClick(m_w->surface(), Qt::Key_Home, Qt::ShiftModifier);
+    QTRY_COMPARE(view->rotation(), 0.0);
+    QVERIFY(!view->isFlippedHorizontally() && !view->isFlippedVertically());
+    view->setRotation(-30);
+    QCOMPARE(view->rotation(), 330.0);
+    view->setFlipped(false, true);
+    QVERIFY(view->isFlippedVertically());
+    view->setView(QPointF(1000, 800), 2.0, 45);
+    QCOMPARE(view->rotation(), 45.0);
+    QCOMPARE(view->centre(), QPointF(1000, 800));
+    QVERIFY(m_w->frames->waitForCompleteFrame());
+    checkPresentedMatchesHeadless(view, m_sample, QStringLiteral("turned45flipped"));
 }
 
 IRIS_WIDGET_TEST_MAIN(TstIrisSlideView)

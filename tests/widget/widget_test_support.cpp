@@ -140,7 +140,13 @@ QImage renderHeadless(const QString &path, QSize targetSize, QPointF centre, dou
             engine.setOverlayVisible(iris::Overlay(int(o)), overlaysOf->isOverlayVisible(o));
         }
     }
-    engine.setView(iris::View{centre.x(), centre.y(), downsample});
+    iris::View view{centre.x(), centre.y(), downsample};
+    if (overlaysOf) {
+        view.rotation = overlaysOf->rotation();
+        view.flipH = overlaysOf->isFlippedHorizontally();
+        view.flipV = overlaysOf->isFlippedVertically();
+    }
+    engine.setView(view);
     if (auto r = engine.waitForFrame(std::chrono::seconds(30)); !r) {
         *error = QStringLiteral("waitForFrame: ") + QString::fromStdString(r.message());
         return {};

@@ -61,7 +61,8 @@ bool presentedPixelIs(IrisSlideView *view, QPoint at, const QColor &expected, in
 // Renders path headless at the given view into a targetSize offscreen target and returns it
 // (RGBA8888); on failure returns a null image and sets *error. With overlaysOf, the engine
 // draws the overlays that view shows, where it shows them, at its device pixel ratio (and
-// the frame must have every one of them); without, none.
+// the frame must have every one of them), and turns and mirrors the slide as it does;
+// without, no overlays and no turn.
 QImage renderHeadless(const QString &path, QSize targetSize, QPointF centre, double downsample,
                       const QColor &background, QString *error, const IrisSlideView *overlaysOf = nullptr);
 

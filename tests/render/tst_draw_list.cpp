@@ -276,8 +276,10 @@ void TestDrawList::turnedViewsHaveNoHoles() {
         QVERIFY2(top[i] >= 0, "a pixel shows the background");
         QCOMPARE(TileKey::level(map.keyOf(top[i])), hr);
     }
-    // Exactly the HR tiles the field touches are drawn and counted (not the bounding range's
-    // corners); culling a coarse tile never changes a pixel.
+    // Every HR tile the field touches is drawn and counted, and besides them only tiles the
+    // filter reaches from a pixel centre (half a texel of the coarsest mip read, past a turned
+    // field's edge: next to a touched tile), not the bounding range's corners; culling a coarse
+    // tile never changes a pixel.
     const std::set<std::pair<int64_t, int64_t>> under = tilesUnderTarget(s.levels[size_t(hr)], vp);
     const LevelDraw& d = list.levels[2];
     QCOMPARE(size_t(list.hrTiles), d.instances.size());
@@ -285,8 +287,14 @@ void TestDrawList::turnedViewsHaveNoHoles() {
     for (int64_t ty = d.range.y0; ty <= d.range.y1; ++ty)
         for (int64_t tx = d.range.x0; tx <= d.range.x1; ++tx)
             if (d.isDrawn(tx, ty)) drawn.insert({tx, ty});
-    QVERIFY2(drawn == under, qPrintable(QString("drawn %1 HR tiles, the field touches %2 (bounding range %3)")
-                                            .arg(drawn.size()).arg(under.size()).arg(d.range.count())));
+    for (const auto& t : under) QVERIFY2(drawn.count(t), "a tile the field touches is not drawn");
+    for (const auto& t : drawn) {
+        bool next = false;
+        for (const auto& u : under) next = next || (std::abs(u.first - t.first) <= 1 && std::abs(u.second - t.second) <= 1);
+        QVERIFY2(next, "a tile away from the field is drawn");
+    }
+    qInfo("drawn %zu HR tiles, the field touches %zu, bounding range %lld", drawn.size(), under.size(),
+          (long long)d.range.count());
     if (std::fmod(rotation, 90.0) != 0) QVERIFY(int64_t(drawn.size()) < d.range.count());
     DrawOptions all;
     all.drawCovered = true;

@@ -5,8 +5,10 @@
 //
 //   iris-bench SLIDE [--size WxH] [--moves N] [--magnifications LIST] [--source auto|openslide|iris]
 //              [--baseline SLIDE] [--json FILE] [--plots DIR] [--seed N] [--validation]
+//   iris-bench SLIDE --views N [--size WxH] [--ticks N] [--json FILE]
 //
-// Without --size it runs 2774×1750 (the paper's window) and 1920×1080.
+// Without --size it runs 2774×1750 (the paper's window) and 1920×1080. --views runs linked
+// views instead (linked.h): the window split into N cells, one engine each, gliding together.
 #include <charconv>
 #include <chrono>
 #include <cmath>
@@ -27,6 +29,7 @@
 #include <nlohmann/json.hpp>
 
 #include "baselines.h"
+#include "linked.h"
 #include "iris/engine.h"
 #include "iris/environment.h"
 #include "tool_cli.h"
@@ -48,6 +51,8 @@ struct Options {
     bool validation = false;
     iris::EngineTuning tuning; // from the IRIS_* environment variables
     std::string colorManaged = "on"; // on, off, or both (an A/B of the colour transform's cost)
+    int views = 0;   // > 0: the linked-views benchmark (linked.h) with this many views
+    int ticks = 240; // its glide's display ticks
 };
 
 // --size: "WxH", whole numbers from 64 to 16384.
@@ -404,6 +409,62 @@ bool writePlots(const std::string& dir, const std::vector<SizeResult>& results, 
 
 } // namespace
 
+// The linked-views benchmark: for each window size, one view in one cell (the baseline), then
+// o.views views in a grid of cells filling the window, the same glide.
+int runLinkedViews(const Options& o) {
+    const auto ms = [](double v) { return std::isnan(v) ? std::string("-") : shortNumber(v); };
+    Json all = Json::array();
+    for (auto [W, H] : o.sizes) {
+        const int cols = int(std::ceil(std::sqrt(double(o.views))));
+        const int rows = (o.views + cols - 1) / cols;
+        const uint32_t cw = W / uint32_t(cols), ch = H / uint32_t(rows);
+        iris::EngineConfig cfg;
+        cfg.validation = o.validation;
+        cfg.tuning = o.tuning;
+        cfg.color.managed = o.colorManaged != "off";
+        for (int n : {1, o.views}) {
+            std::fprintf(stderr, "iris-bench: %d linked view%s of %ux%u, %d ticks…\n", n, n > 1 ? "s" : "", cw, ch,
+                         o.ticks);
+            const LinkedResult r = runLinked(o.slide, n, cw, ch, o.ticks, cfg);
+            if (r.device.empty()) {
+                std::fprintf(stderr, "iris-bench: %s\n", r.notes.c_str());
+                return 1;
+            }
+            const double fpsMin = r.fps.empty() ? NAN : *std::min_element(r.fps.begin(), r.fps.end());
+            std::printf("%d view%s of %ux%u on %s: view published -> submitted by every view: median %s ms, p95 %s "
+                        "ms, max %s ms; frame GPU time median %s ms, p95 %s ms; ticks missed %d of %d; slowest view %s "
+                        "frames/s%s%s\n",
+                        n, n > 1 ? "s" : "", cw, ch, r.device.c_str(), ms(percentile(r.latencyMs, 0.5)).c_str(),
+                        ms(percentile(r.latencyMs, 0.95)).c_str(), ms(percentile(r.latencyMs, 1.0)).c_str(),
+                        ms(percentile(r.gpuMs, 0.5)).c_str(), ms(percentile(r.gpuMs, 0.95)).c_str(), r.missed, r.ticks,
+                        ms(fpsMin).c_str(), r.notes.empty() ? "" : "; ", r.notes.c_str());
+            all.push_back({{"views", n},
+                           {"cell", {{"w", cw}, {"h", ch}}},
+                           {"device", r.device},
+                           {"ticks", r.ticks},
+                           {"ticks_missed", r.missed},
+                           {"latency_ms", {{"median", jsonNumber(percentile(r.latencyMs, 0.5))},
+                                           {"p95", jsonNumber(percentile(r.latencyMs, 0.95))},
+                                           {"max", jsonNumber(percentile(r.latencyMs, 1.0))}}},
+                           {"gpu_ms", {{"median", jsonNumber(percentile(r.gpuMs, 0.5))},
+                                       {"p95", jsonNumber(percentile(r.gpuMs, 0.95))}}},
+                           {"frames_per_s_slowest", jsonNumber(fpsMin)},
+                           {"notes", r.notes}});
+            if (o.views == 1) break;
+        }
+    }
+    if (!o.json.empty()) {
+        std::ofstream f(o.json);
+        f << Json{{"linked_views", all}}.dump(2, ' ', false, Json::error_handler_t::replace) << "\n";
+        f.close();
+        if (!f) {
+            std::fprintf(stderr, "iris-bench: cannot write %s\n", o.json.c_str());
+            return 1;
+        }
+    }
+    return 0;
+}
+
 int main(int argc, char** argv) {
     Options o;
     std::vector<std::string> sizes;
@@ -464,6 +525,15 @@ int main(int argc, char** argv) {
         ->option_text("N")
         ->check(iris::tools::wholeNumber<uint64_t>(0, std::numeric_limits<uint64_t>::max()));
     app.add_flag("--validation", o.validation, "Run with the Vulkan validation layer");
+    app.add_option("--views", o.views,
+                   "Linked views instead of the walk: the window split\n"
+                   "into N cells, an engine each, gliding together (a pan\n"
+                   "and a turn every 60 Hz tick); one view is the baseline")
+        ->option_text("N")
+        ->check(iris::tools::wholeNumber(1, 16));
+    app.add_option("--ticks", o.ticks, "Display ticks of the linked views' glide")
+        ->option_text("N")
+        ->check(iris::tools::wholeNumber(10, 100000));
     app.add_option("--color-managed", o.colorManaged,
                    "Colour management (docs/COLOR.md); both: each size\n"
                    "is run off, then on, in this run (its cost)")
@@ -480,6 +550,10 @@ int main(int argc, char** argv) {
     for (const std::string& s : sizes) o.sizes.push_back(*parseSize(s)); // each checked above
     if (o.sizes.empty()) o.sizes = {{2774, 1750}, {1920, 1080}};
     o.mags = parseList(mags);
+    if (o.views > 0) {
+        if (sizes.empty()) o.sizes = {{1920, 1080}};
+        return runLinkedViews(o);
+    }
 
     std::vector<SizeResult> results;
     std::vector<bool> colorModes;

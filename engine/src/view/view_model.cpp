@@ -28,25 +28,35 @@ Footprint footprint(const LevelInfo& level, const Viewport& vp, int64_t margin) 
     f.ux = t.m[0], f.uy = t.m[1], f.vx = t.m[2], f.vy = t.m[3];
     const double bw = std::abs(t.m[0]) * vp.width + std::abs(t.m[2]) * vp.height;
     const double bh = std::abs(t.m[1]) * vp.width + std::abs(t.m[3]) * vp.height;
-    const double ox = (vp.view.centerX - bw * 0.5 * vp.view.downsample) / level.downsample;
-    const double oy = (vp.view.centerY - bh * 0.5 * vp.view.downsample) / level.downsample;
-    const double ex = ox + bw * s, ey = oy + bh * s;
+    double ox = (vp.view.centerX - bw * 0.5 * vp.view.downsample) / level.downsample;
+    double oy = (vp.view.centerY - bh * 0.5 * vp.view.downsample) / level.downsample;
     f.turned = !t.axisAligned();
+    double ex = ox + bw * s, ey = oy + bh * s;
     f.cx = vp.view.centerX / level.downsample;
     f.cy = vp.view.centerY / level.downsample;
     f.hu = vp.width * 0.5 * s + double(margin * kTileSize);
     f.hv = vp.height * 0.5 * s + double(margin * kTileSize);
+    if (f.turned) {
+        // The filter reads texels up to half a texel of the coarsest mip it samples from each
+        // pixel centre, along the level's axes: at a turned field's edge that reaches tiles the
+        // field itself does not overlap (a tile across the corner of a pixel's tap box). They
+        // are part of what the view shows: the footprint is grown by that reach (a box, the
+        // tile's own shape) so they are loaded and waited for like the others.
+        const double lod = std::max(0.0, std::log2(s));
+        f.reach = 0.5 * std::exp2(std::min(std::ceil(lod), 8.0));
+    }
     // A tile is visible when it overlaps [o, e) by any amount.
     const auto lo = [](double v) { return int64_t(std::floor(v / kTileSize)); };
     const auto hi = [](double v) { return int64_t(std::ceil(v / kTileSize)) - 1; };
     TileRange& r = f.range;
+    ox -= f.reach, oy -= f.reach, ex += f.reach, ey += f.reach;
     // A turned footprint grown along its own sides reaches further along the level's axes.
-    const int64_t reach = f.turned ? int64_t(std::ceil(margin * (std::abs(f.ux) + std::abs(f.vx) + 1e-9))) : margin;
-    const int64_t reachY = f.turned ? int64_t(std::ceil(margin * (std::abs(f.uy) + std::abs(f.vy) + 1e-9))) : margin;
-    r.x0 = std::max<int64_t>(0, lo(ox) - reach);
-    r.y0 = std::max<int64_t>(0, lo(oy) - reachY);
-    r.x1 = std::min<int64_t>(level.tilesX - 1, hi(ex) + reach);
-    r.y1 = std::min<int64_t>(level.tilesY - 1, hi(ey) + reachY);
+    const int64_t growX = f.turned ? int64_t(std::ceil(margin * (std::abs(f.ux) + std::abs(f.vx) + 1e-9))) : margin;
+    const int64_t growY = f.turned ? int64_t(std::ceil(margin * (std::abs(f.uy) + std::abs(f.vy) + 1e-9))) : margin;
+    r.x0 = std::max<int64_t>(0, lo(ox) - growX);
+    r.y0 = std::max<int64_t>(0, lo(oy) - growY);
+    r.x1 = std::min<int64_t>(level.tilesX - 1, hi(ex) + growX);
+    r.y1 = std::min<int64_t>(level.tilesY - 1, hi(ey) + growY);
     if (ex <= 0 || ey <= 0 || ox >= double(level.width) || oy >= double(level.height)) {
         if (margin == 0) r = TileRange{};
     }
@@ -56,8 +66,9 @@ Footprint footprint(const LevelInfo& level, const Viewport& vp, int64_t margin) 
 bool Footprint::contains(int64_t tx, int64_t ty) const {
     if (!range.contains(tx, ty)) return false;
     if (!turned) return true;
-    // Separating axes: the level's (the range) and the footprint's own two.
-    const double h = kTileSize * 0.5;
+    // Separating axes: the level's (the range) and the footprint's own two; the tile grown by
+    // the filter's reach (the footprint grown by a box of that size).
+    const double h = kTileSize * 0.5 + reach;
     const double dx = (double(tx) * kTileSize + h) - cx, dy = (double(ty) * kTileSize + h) - cy;
     const double du = std::abs(dx * ux + dy * uy), rU = h * (std::abs(ux) + std::abs(uy));
     const double dv = std::abs(dx * vx + dy * vy), rV = h * (std::abs(vx) + std::abs(vy));

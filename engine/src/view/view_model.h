@@ -69,6 +69,7 @@ struct Footprint {
     double ux = 1, uy = 0;        // the target's x axis in the level (unit); its y axis is (-uy, ux) or mirrored
     double vx = 0, vy = 1;        // the target's y axis in the level (unit)
     double hu = 0, hv = 0;        // half extents along them, level pixels, margin included
+    double reach = 0;             // turned: the filter's reach past pixel centres, level pixels
     // Whether tile (tx, ty) overlaps the footprint (by any area).
     bool contains(int64_t tx, int64_t ty) const;
 };

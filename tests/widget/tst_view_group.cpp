@@ -329,6 +329,27 @@ bool marksMoved(const IrisSlideView *view, const Marks &marks, F expected, doubl
     return true;
 }
 
+// Runs `change` and checks that the follower's image moved on screen exactly as the leader's
+// did: every slide point the follower showed at a widget position q is now where the leader
+// shows the slide point it showed at q (the two views have the same size).
+template <class F>
+bool sameScreenMotion(const IrisSlideView *leader, const IrisSlideView *follower, F change, QString *why)
+{
+    const Marks before = mark(leader);
+    const Marks followerBefore = mark(follower);
+    change();
+    for (qsizetype i = 0; i < before.slidePoints.size(); ++i) {
+        const QPointF want = leader->mapFromSlide(before.slidePoints[i]);
+        const QPointF now = follower->mapFromSlide(followerBefore.slidePoints[i]);
+        if (distance(now, want) > 1e-6) {
+            *why = QStringLiteral("probe %1: the follower shows its point at %2, the leader at %3")
+                       .arg(text(before.widgetPositions[i]), text(now), text(want));
+            return false;
+        }
+    }
+    return true;
+}
+
 } // namespace
 
 class TstViewGroup : public QObject {
@@ -710,6 +731,16 @@ void TstViewGroup::unlinkedViewMovesAloneAndRelinkKeepsTheAlignment()
     QVERIFY(near(b->rotation(), normalizedDegrees(a->rotation() - 25), 1e-9));
     QVERIFY(near(b->downsample() * 1.5, a->downsample(), 1e-9 * a->downsample()));
     QCOMPARE(group.offset(b), offset); // following does not change the offset
+
+    // Flips and turns from either side move both images alike on screen, although b is
+    // turned and magnified against a (a flip reverses the sense of b's extra turn).
+    QVERIFY2(sameScreenMotion(a, b, [a] { a->setFlippedHorizontally(true); }, &why), qPrintable(why));
+    QVERIFY2(sameScreenMotion(b, a, [b] { b->setFlippedVertically(true); }, &why), qPrintable(why));
+    QVERIFY2(sameScreenMotion(b, a, [b] { b->setFlippedHorizontally(false); }, &why), qPrintable(why));
+    QVERIFY2(sameScreenMotion(a, b, [a] { a->rotateBy(-65, QPointF(40, 220)); }, &why), qPrintable(why));
+    QVERIFY2(sameScreenMotion(b, a, [b] { b->rotateBy(12, QPointF(300, 30)); }, &why), qPrintable(why));
+    QVERIFY2(sameScreenMotion(a, b, [a] { a->resetOrientation(); }, &why), qPrintable(why));
+    QCOMPARE(group.offset(b), offset);
 
     // Unlink, realign, relink again: the new alignment replaces the old.
     group.setLinked(b, false);

@@ -7,6 +7,8 @@
 
 #include <iris/IrisSlideInfo.h>
 
+#include "recentfiles.h"
+
 QT_BEGIN_NAMESPACE
 class QAction;
 class QMimeData;
@@ -14,6 +16,7 @@ class QProgressBar;
 QT_END_NAMESPACE
 class AssociatedImagesDock;
 class IrisSlideView;
+class OrientationActions;
 class RecentFiles;
 class SampleSlide;
 class SlidePropertiesDock;
@@ -50,6 +53,8 @@ private:
     // Shows what colour management applies (properties dock) and reloads the associated images,
     // which are shown in the same colours as the slide.
     void onColorManagementChanged();
+    // The open slide's turn and flips into the recent files, when they changed.
+    void rememberOrientation();
     static QString droppedSlide(const QMimeData *mime);
 
     IrisSlideView *m_view;
@@ -61,6 +66,11 @@ private:
     QProgressBar *m_busy;
     bool m_userInitiated = false;
     bool m_openingSample = false;
+    // The slide whose orientation is being remembered (empty while one opens), and how it
+    // was last remembered.
+    QString m_orientedPath;
+    RecentFiles::Orientation m_remembered;
+    OrientationActions *m_orientation = nullptr;
 
     QAction *m_openAction = nullptr;
     QAction *m_sampleAction = nullptr;

@@ -19,6 +19,7 @@
 #include <iris/version.h>
 
 #include "associatedimagesdock.h"
+#include "comparewindow.h"
 #include "exportdialog.h"
 #include "orientationactions.h"
 #include "recentfiles.h"
@@ -136,6 +137,11 @@ void MainWindow::createActions()
     m_orientation = new OrientationActions(this);
     m_orientation->setView(m_view);
 
+    m_compareAction = new QAction(tr("&Compare…"), this);
+    m_compareAction->setObjectName(QStringLiteral("compareAction"));
+    m_compareAction->setStatusTip(tr("Show up to three more slides beside this one, moving together"));
+    connect(m_compareAction, &QAction::triggered, this, &MainWindow::showCompareDialog);
+
     for (int i = 0; i < 4; ++i) {
         auto *action = new QAction(tr("%1×").arg(kPresets[i]), this);
         action->setShortcut(QKeyCombination(Qt::CTRL, Qt::Key(Qt::Key_1 + i)));
@@ -196,6 +202,8 @@ void MainWindow::createMenus()
     presets->addActions(m_presetActions);
     view->addSeparator();
     m_orientation->addTo(view);
+    view->addSeparator();
+    view->addAction(m_compareAction);
     view->addSeparator();
     view->addAction(m_enhanceAction);
     QMenu *color = view->addMenu(tr("Co&lour"));
@@ -318,6 +326,42 @@ void MainWindow::rememberOrientation()
         return;
     m_remembered = now;
     m_recent->setOrientation(m_orientedPath, now);
+}
+
+void MainWindow::showCompareDialog()
+{
+    QSettings settings;
+    const QString dir = settings.value(QStringLiteral("lastFolder"), QDir::homePath()).toString();
+    const int room = CompareWindow::kMaxSlides - (m_view->hasSlide() ? 1 : 0);
+    const QStringList chosen = QFileDialog::getOpenFileNames(
+        this, m_view->hasSlide() ? tr("Compare With (up to %1 slides)").arg(room) : tr("Compare Slides (up to %1)").arg(room),
+        dir, SlideFormats::fileDialogFilters().join(QStringLiteral(";;")));
+    if (chosen.isEmpty())
+        return;
+    settings.setValue(QStringLiteral("lastFolder"), QFileInfo(chosen.first()).absolutePath());
+    if (chosen.size() > room)
+        statusBar()->showMessage(tr("A comparison shows at most %1 slides; %2 left out.")
+                                     .arg(CompareWindow::kMaxSlides)
+                                     .arg(chosen.size() - room),
+                                 kMessageMs);
+    compare(chosen);
+}
+
+CompareWindow *MainWindow::compare(const QStringList &others)
+{
+    auto *window = new CompareWindow(this);
+    window->setAttribute(Qt::WA_DeleteOnClose);
+    if (m_view->hasSlide()) {
+        const CompareWindow::Pose here{m_view->centre(), m_view->downsample(), m_view->rotation(),
+                                       m_view->isFlippedHorizontally(), m_view->isFlippedVertically()};
+        window->addSlide(m_view->slidePath(), &here);
+    }
+    for (const QString &path : others) {
+        if (!window->addSlide(path))
+            break;
+    }
+    window->show();
+    return window;
 }
 
 void MainWindow::openSample()

@@ -15,6 +15,7 @@ class QMimeData;
 class QProgressBar;
 QT_END_NAMESPACE
 class AssociatedImagesDock;
+class CompareWindow;
 class IrisSlideView;
 class OrientationActions;
 class RecentFiles;
@@ -36,6 +37,11 @@ public Q_SLOTS:
     void openSample();
     void showOpenDialog();
     void exportAsIris();
+    // View › Compare…: asks for up to three more slides and shows them beside the open one.
+    void showCompareDialog();
+    // A comparison window of the open slide (where the view is now) and `others` (up to
+    // CompareWindow::kMaxSlides in all); it closes with this window.
+    CompareWindow *compare(const QStringList &others);
 
 protected:
     void dragEnterEvent(QDragEnterEvent *event) override;
@@ -81,6 +87,7 @@ private:
     QAction *m_zoomInAction = nullptr;
     QAction *m_zoomOutAction = nullptr;
     QAction *m_enhanceAction = nullptr;
+    QAction *m_compareAction = nullptr;
     QAction *m_colorAction = nullptr;
     QAction *m_perceptualAction = nullptr;
     QAction *m_relativeAction = nullptr;

@@ -36,16 +36,8 @@ OrientationActions::OrientationActions(QObject *parent)
         if (m_view)
             m_view->rotateBy(-90);
     });
-    connect(m_flipH, &QAction::triggered, this, [this](bool on) {
-        if (m_view)
-            m_view->setFlippedHorizontally(on);
-        sync(); // stays as the view is (no slide: unchecked)
-    });
-    connect(m_flipV, &QAction::triggered, this, [this](bool on) {
-        if (m_view)
-            m_view->setFlippedVertically(on);
-        sync();
-    });
+    connect(m_flipH, &QAction::triggered, this, [this] { flipOnScreen(Qt::Horizontal); });
+    connect(m_flipV, &QAction::triggered, this, [this] { flipOnScreen(Qt::Vertical); });
     connect(m_reset, &QAction::triggered, this, [this] {
         if (m_view)
             m_view->resetOrientation();
@@ -80,6 +72,20 @@ void OrientationActions::addTo(QMenu *menu) const
     menu->addAction(m_flipH);
     menu->addAction(m_flipV);
     menu->addAction(m_reset);
+}
+
+void OrientationActions::flipOnScreen(Qt::Orientation orientation)
+{
+    if (m_view) {
+        // Mirroring the screen after a turn by r is mirroring the slide before a turn by −r
+        // (as the view's F key does): the flag toggles and the turn reverses.
+        const bool h = m_view->isFlippedHorizontally() != (orientation == Qt::Horizontal);
+        const bool v = m_view->isFlippedVertically() != (orientation == Qt::Vertical);
+        const double rotation = -m_view->rotation();
+        m_view->setFlipped(h, v);
+        m_view->setRotation(rotation);
+    }
+    sync(); // the checks as the view is (no slide: unchecked)
 }
 
 void OrientationActions::sync()

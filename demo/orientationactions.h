@@ -1,6 +1,8 @@
 // Iris View demo — View › Rotate 90° Clockwise / Anticlockwise, Flip Horizontally /
 // Vertically, Reset Rotation and Flips: actions on one IrisSlideView (the main window's, or
-// the comparison's current view), their checks following it.
+// the comparison's current view), their checks following it. The flips mirror the image as
+// it is seen (left–right, top–bottom on screen), also when it is turned; the checks show
+// the view's flips of the slide (isFlippedHorizontally/Vertically).
 //
 // The view itself turns on R / Shift+R (animated) and flips on F while it has focus; the menu
 // carries Ctrl chords (Ctrl+R, Ctrl+Shift+R) so both work without clashing.
@@ -33,6 +35,8 @@ public:
     QAction *reset() const { return m_reset; }
 
 private:
+    // Mirrors the image as seen on screen, whatever its turn.
+    void flipOnScreen(Qt::Orientation orientation);
     void sync();
 
     QPointer<IrisSlideView> m_view;

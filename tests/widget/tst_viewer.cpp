@@ -209,9 +209,20 @@ void TstViewer::menuTurnsAndFlipsTheView()
     anticlockwise->trigger();
     anticlockwise->trigger();
     QVERIFY(near(view->rotation(), 270, 1e-9));
+    // Flips mirror what is on screen, whatever the turn: left and right change places.
+    const QPointF middle(view->width() / 2.0, view->height() / 2.0);
+    const QPointF right = view->mapToSlide(middle + QPointF(50, 20));
     flipH->trigger();
     QVERIFY(view->isFlippedHorizontally());
     QVERIFY(flipH->isChecked());
+    QVERIFY(near(view->rotation(), 90, 1e-9)); // the slide's flip before a turn the other way
+    QVERIFY(distance(view->mapFromSlide(right), middle + QPointF(-50, 20)) < 1e-6);
+    const QPointF below = view->mapToSlide(middle + QPointF(-30, 40));
+    flipV->trigger();
+    QVERIFY(view->isFlippedVertically() && flipV->isChecked());
+    QVERIFY(distance(view->mapFromSlide(below), middle + QPointF(-30, -40)) < 1e-6);
+    flipV->trigger();
+    QVERIFY(!view->isFlippedVertically() && !flipV->isChecked());
     // The checks follow the view, also when it is flipped from elsewhere.
     view->setFlippedVertically(true);
     QVERIFY(flipV->isChecked());
@@ -231,7 +242,7 @@ void TstViewer::reopenedSlideComesBackAsItWasLeft()
     IrisSlideView *view = m_main->view();
     action(m_main.get(), "rotateClockwiseAction")->trigger();
     action(m_main.get(), "flipHorizontallyAction")->trigger();
-    const RecentFiles::Orientation left{90, true, false};
+    const RecentFiles::Orientation left{270, true, false}; // a screen flip reverses the turn
     QCOMPARE(orientationOf(view), left);
 
     // Another slide opens as scanned.

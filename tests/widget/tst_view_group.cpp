@@ -372,6 +372,7 @@ private Q_SLOTS:
     void withoutMppTheDownsampleIsMatched();
     void crosshairFollowsThePointer();
     void removedAndDestroyedViewsLeave();
+    void viewOpenedBeforeShownTakesTheGroupsView();
 
 private:
     // Shows a row of views, opens a slide in each and waits until each is bound and showing.
@@ -917,6 +918,38 @@ void TstViewGroup::removedAndDestroyedViewsLeave()
     QTest::mouseMove(a->surfaceWindow(), QPoint(100, 100));
     QCoreApplication::processEvents();
     QVERIFY(!a->hasCrosshair());
+}
+
+// A view that opens its slide before it is on screen fits itself when first shown (the
+// widget's contract); that fit must not move the group: the view takes the group's view.
+void TstViewGroup::viewOpenedBeforeShownTakesTheGroupsView()
+{
+    m_row = std::make_unique<ViewRow>(1);
+    showRow(*m_row, {m_sample});
+    IrisSlideView *a = (*m_row)[0];
+    a->setView(QPointF(1800, 1200), 1.25, 20);
+
+    ViewRow later(1);
+    IrisSlideView *b = later[0];
+    QVERIFY(b->openSlide(m_second)); // not shown yet
+    IrisViewGroup group;
+    group.addView(a);
+    group.addView(b);
+    QSignalSpy aChanges(a, &IrisSlideView::viewChanged);
+    QSignalSpy bChanges(b, &IrisSlideView::viewChanged);
+    later.window->move(kViewSize.width() + 20, 0);
+    later.window->show();
+    QVERIFY(QTest::qWaitForWindowExposed(later.window.get()));
+    FrameWatcher frames(b);
+    QVERIFY(frames.waitForCompleteFrame());
+    QTRY_VERIFY(bChanges.count() > 0); // it fitted itself …
+    QCOMPARE(aChanges.count(), 0);    // … without moving a
+    QVERIFY2(showSame(poseOf(b), poseOf(a), 1e-6, 1e-9), qPrintable(text(poseOf(b)) + QStringLiteral(" vs ") + text(poseOf(a))));
+    // From then on it leads like any other.
+    b->panBy(QPointF(12, 12));
+    QCOMPARE(aChanges.count(), 1);
+    QVERIFY(showSame(poseOf(b), poseOf(a), 1e-6, 1e-9));
+    QVERIFY(b->validationMessageCount() == 0);
 }
 
 // --- main -------------------------------------------------------------------------------------

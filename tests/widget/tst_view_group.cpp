@@ -364,6 +364,7 @@ private Q_SLOTS:
     void followsPansAndDrags();
     void followsZoomsStepByStep();
     void followsGlideStepByStep();
+    void takingHoldOfAnotherViewEndsTheGlide();
     void followsTurnsAndFlips();
     void oneChangeIsOneViewChangedPerView();
     void unlinkedViewMovesAloneAndRelinkKeepsTheAlignment();
@@ -588,6 +589,53 @@ void TstViewGroup::followsGlideStepByStep()
     QVERIFY(showSame(poseOf(a), poseOf(b), 1e-6, 1e-9));
     disconnect(a, &IrisSlideView::viewChanged, this, nullptr);
     disconnect(b, &IrisSlideView::viewChanged, this, nullptr);
+}
+
+// A flick on a, then a drag on b while a still glides: b's drag must not be ended by a's
+// next glide step (the group gives it to b, and a setter ends b's drag); a stops instead.
+void TstViewGroup::takingHoldOfAnotherViewEndsTheGlide()
+{
+    m_row = std::make_unique<ViewRow>(2);
+    showRow(*m_row, {m_sample, m_second});
+    IrisSlideView *a = (*m_row)[0];
+    IrisSlideView *b = (*m_row)[1];
+    IrisViewGroup group;
+    group.addView(a);
+    group.addView(b);
+    a->setView(QPointF(3000, 2000), 2.0, 0);
+    b->setKineticPanning(false); // b's own release stops where it lets go
+
+    QElapsedTimer sinceLastStep;
+    sinceLastStep.start();
+    connect(a, &IrisSlideView::viewChanged, this, [&] { sinceLastStep.restart(); });
+    const QPointF c0 = a->centre();
+    const double scale = a->downsample() * a->devicePixelRatioF();
+    QPoint p(60, 130);
+    QTest::mousePress(a->surfaceWindow(), Qt::LeftButton, {}, p);
+    for (int i = 0; i < 8; ++i) {
+        p += QPoint(20, 0);
+        QTest::mouseMove(a->surfaceWindow(), p, 16);
+    }
+    QTest::mouseRelease(a->surfaceWindow(), Qt::LeftButton, {}, p, 1);
+    const double dragged = (c0.x() - a->centre().x()) / scale;
+    QTRY_VERIFY((c0.x() - a->centre().x()) / scale > dragged + 5); // gliding
+
+    // Hold b and drag it 30 px to the left, slowly enough for glide steps to come between.
+    QPoint q(200, 120);
+    QTest::mousePress(b->surfaceWindow(), Qt::LeftButton, {}, q);
+    const Marks held = mark(b);
+    for (int i = 0; i < 5; ++i) {
+        q += QPoint(-6, 0);
+        QTest::mouseMove(b->surfaceWindow(), q, 40);
+    }
+    QString why;
+    QVERIFY2(marksMoved(b, held, [](QPointF r) { return r + QPointF(-30, 0); }, 1e-6, &why), qPrintable(why));
+    QTest::mouseRelease(b->surfaceWindow(), Qt::LeftButton, {}, q, 10);
+    // a followed the drag and glides no more.
+    QTRY_VERIFY(sinceLastStep.elapsed() > 300);
+    QVERIFY(showSame(poseOf(a), poseOf(b), 1e-6, 1e-9));
+    QVERIFY2(marksMoved(b, held, [](QPointF r) { return r + QPointF(-30, 0); }, 1e-6, &why), qPrintable(why));
+    disconnect(a, &IrisSlideView::viewChanged, this, nullptr);
 }
 
 void TstViewGroup::followsTurnsAndFlips()

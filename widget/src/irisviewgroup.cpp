@@ -207,6 +207,7 @@ public:
     void onSlideOpened(IrisSlideView *view);
     void onCursorMoved(IrisSlideView *view, const QPointF &slidePos);
     void onPointerLeft(const QWindow *surface);
+    void onTakenHold(const QWindow *surface);
     void updateCrosshairs();
     static void clearCrosshair(Member &m);
     void forget(const QObject *view);
@@ -379,6 +380,26 @@ void IrisViewGroupPrivate::onPointerLeft(const QWindow *surface)
             updateCrosshairs();
             return;
         }
+    }
+}
+
+void IrisViewGroupPrivate::onTakenHold(const QWindow *surface)
+{
+    // The user takes hold of one view (press, wheel, gesture, key) while another may still be
+    // gliding or animating a zoom or turn: that one's next step would be given to this view
+    // and end its drag or animation (a setter stops the view's own motion). So the others'
+    // motion ends first. setCentre() to where it is stops a view's motion and changes nothing.
+    const Member *held = nullptr;
+    for (const Member &m : std::as_const(members)) {
+        if (m.surface == surface)
+            held = &m;
+    }
+    if (!held || !held->linked)
+        return;
+    const QScopedValueRollback<bool> guard(propagating, true);
+    for (const Member &m : std::as_const(members)) {
+        if (&m != held && m.linked && showsSlide(m))
+            m.view->setCentre(m.view->centre());
     }
 }
 
@@ -602,7 +623,20 @@ void IrisViewGroup::setCrosshairsEnabled(bool on)
 bool IrisViewGroup::eventFilter(QObject *watched, QEvent *event)
 {
     Q_D(IrisViewGroup);
-    if (event->type() == QEvent::Leave)
+    switch (event->type()) {
+    case QEvent::Leave:
         d->onPointerLeft(qobject_cast<QWindow *>(watched));
+        break;
+    case QEvent::MouseButtonPress:
+    case QEvent::MouseButtonDblClick:
+    case QEvent::Wheel:
+    case QEvent::NativeGesture:
+    case QEvent::TouchBegin:
+    case QEvent::KeyPress:
+        d->onTakenHold(qobject_cast<QWindow *>(watched));
+        break;
+    default:
+        break;
+    }
     return QObject::eventFilter(watched, event);
 }

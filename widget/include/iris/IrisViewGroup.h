@@ -18,7 +18,9 @@
 // (a member with offset rotation 30° is shown turned 30° further clockwise; with scale 2 it is
 // magnified twice as much). A change of any linked member's view (a drag, a glide step, an
 // animated zoom step, a turn, a flip, a setter) is carried to the other linked members once:
-// their own resulting viewChanged() is not carried back.
+// their own resulting viewChanged() is not carried back. Taking hold of a linked member (a
+// press, wheel, gesture or key on it) ends the others' glides and animations first, so that
+// their next step does not end the new drag.
 //
 // Unlinking a member (setLinked(view, false)) lets it be moved alone, to align it by hand;
 // relinking it keeps the alignment: its offset becomes whatever makes its present view the
@@ -104,7 +106,8 @@ Q_SIGNALS:
     void crosshairsEnabledChanged(bool on);
 
 protected:
-    // Watches each member's surface window for the pointer leaving it.
+    // Watches each member's surface window for the pointer leaving it, and for input that
+    // takes hold of it (the others' glides and animations then end).
     bool eventFilter(QObject *watched, QEvent *event) override;
 
 private:

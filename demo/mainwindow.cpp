@@ -19,7 +19,9 @@
 #include <iris/version.h>
 
 #include "associatedimagesdock.h"
+#include "comparewindow.h"
 #include "exportdialog.h"
+#include "orientationactions.h"
 #include "recentfiles.h"
 #include "sampleslide.h"
 #include "slideformats.h"
@@ -60,6 +62,7 @@ MainWindow::MainWindow(QWidget *parent)
     connect(m_view, &IrisSlideView::slideClosed, this, &MainWindow::onSlideClosed);
     connect(m_view, &IrisSlideView::slideError, this, &MainWindow::onSlideError);
     connect(m_view, &IrisSlideView::viewChanged, this, &MainWindow::updateActions);
+    connect(m_view, &IrisSlideView::viewChanged, this, &MainWindow::rememberOrientation);
     connect(m_view, &IrisSlideView::colorManagementChanged, this, &MainWindow::onColorManagementChanged);
 
     connect(m_sample, &SampleSlide::generating, this, [this](const QString &message) {
@@ -131,6 +134,14 @@ void MainWindow::createActions()
     m_zoomOutAction->setShortcut(QKeySequence::ZoomOut);
     connect(m_zoomOutAction, &QAction::triggered, m_view, [this] { m_view->zoomBy(0.5); });
 
+    m_orientation = new OrientationActions(this);
+    m_orientation->setView(m_view);
+
+    m_compareAction = new QAction(tr("&Compare…"), this);
+    m_compareAction->setObjectName(QStringLiteral("compareAction"));
+    m_compareAction->setStatusTip(tr("Show up to three more slides beside this one, moving together"));
+    connect(m_compareAction, &QAction::triggered, this, &MainWindow::showCompareDialog);
+
     for (int i = 0; i < 4; ++i) {
         auto *action = new QAction(tr("%1×").arg(kPresets[i]), this);
         action->setShortcut(QKeyCombination(Qt::CTRL, Qt::Key(Qt::Key_1 + i)));
@@ -189,6 +200,10 @@ void MainWindow::createMenus()
     view->addAction(m_zoomOutAction);
     QMenu *presets = view->addMenu(tr("&Magnification"));
     presets->addActions(m_presetActions);
+    view->addSeparator();
+    m_orientation->addTo(view);
+    view->addSeparator();
+    view->addAction(m_compareAction);
     view->addSeparator();
     view->addAction(m_enhanceAction);
     QMenu *color = view->addMenu(tr("Co&lour"));
@@ -266,7 +281,8 @@ void MainWindow::createMenus()
         QMessageBox::about(this, tr("About Iris View"),
                            tr("<h3>Iris View %1</h3><p>Whole-slide image viewer with a Vulkan engine.</p>"
                               "<p>Renderer: %2</p><p>Drag to pan, wheel or pinch to zoom, double-click to "
-                              "zoom in, arrow keys to move one field, 0 to fit, 1–4 for 5×–40×.</p>")
+                              "zoom in, arrow keys to move one field, 0 to fit, 1–4 for 5×–40×, "
+                              "R / Shift+R to turn a quarter, F to flip.</p>")
                                .arg(QStringLiteral(IRIS_VIEW_VERSION_STRING),
                                     device.isEmpty() ? m_view->rendererError().toHtmlEscaped() : device.toHtmlEscaped()));
     });
@@ -277,17 +293,75 @@ bool MainWindow::openSlide(const QString &path, bool userInitiated)
 {
     statusBar()->showMessage(tr("Opening %1…").arg(QDir::toNativeSeparators(path)));
     m_userInitiated = userInitiated;
+    m_orientedPath.clear(); // the new slide opens unturned: that is not a change to remember
     const bool opened = m_view->openSlide(path);
     m_userInitiated = false;
     m_openingSample = false;
     if (opened) {
         statusBar()->showMessage(tr("Opened %1").arg(QDir::toNativeSeparators(path)), kMessageMs);
-        if (path != SampleSlide::path())
+        if (path != SampleSlide::path()) {
             m_recent->add(path);
+            // As it was turned and flipped when last seen, fitted that way.
+            m_remembered = m_recent->orientation(path);
+            if (!m_remembered.isDefault()) {
+                m_view->setFlipped(m_remembered.flippedHorizontally, m_remembered.flippedVertically);
+                m_view->setRotation(m_remembered.rotation);
+                m_view->fitToWindow();
+            }
+            m_orientedPath = path;
+        }
     } else if (userInitiated) {
         m_recent->remove(path);
     }
     return opened;
+}
+
+void MainWindow::rememberOrientation()
+{
+    if (m_orientedPath.isEmpty() || m_view->slidePath() != m_orientedPath)
+        return;
+    const RecentFiles::Orientation now{m_view->rotation(), m_view->isFlippedHorizontally(),
+                                       m_view->isFlippedVertically()};
+    if (now == m_remembered)
+        return;
+    m_remembered = now;
+    m_recent->setOrientation(m_orientedPath, now);
+}
+
+void MainWindow::showCompareDialog()
+{
+    QSettings settings;
+    const QString dir = settings.value(QStringLiteral("lastFolder"), QDir::homePath()).toString();
+    const int room = CompareWindow::kMaxSlides - (m_view->hasSlide() ? 1 : 0);
+    const QStringList chosen = QFileDialog::getOpenFileNames(
+        this, m_view->hasSlide() ? tr("Compare With (up to %1 slides)").arg(room) : tr("Compare Slides (up to %1)").arg(room),
+        dir, SlideFormats::fileDialogFilters().join(QStringLiteral(";;")));
+    if (chosen.isEmpty())
+        return;
+    settings.setValue(QStringLiteral("lastFolder"), QFileInfo(chosen.first()).absolutePath());
+    if (chosen.size() > room)
+        statusBar()->showMessage(tr("A comparison shows at most %1 slides; %2 left out.")
+                                     .arg(CompareWindow::kMaxSlides)
+                                     .arg(chosen.size() - room),
+                                 kMessageMs);
+    compare(chosen);
+}
+
+CompareWindow *MainWindow::compare(const QStringList &others)
+{
+    auto *window = new CompareWindow(this);
+    window->setAttribute(Qt::WA_DeleteOnClose);
+    if (m_view->hasSlide()) {
+        const CompareWindow::Pose here{m_view->centre(), m_view->downsample(), m_view->rotation(),
+                                       m_view->isFlippedHorizontally(), m_view->isFlippedVertically()};
+        window->addSlide(m_view->slidePath(), &here);
+    }
+    for (const QString &path : others) {
+        if (!window->addSlide(path))
+            break;
+    }
+    window->show();
+    return window;
 }
 
 void MainWindow::openSample()

@@ -7,13 +7,17 @@
 
 #include <iris/IrisSlideInfo.h>
 
+#include "recentfiles.h"
+
 QT_BEGIN_NAMESPACE
 class QAction;
 class QMimeData;
 class QProgressBar;
 QT_END_NAMESPACE
 class AssociatedImagesDock;
+class CompareWindow;
 class IrisSlideView;
+class OrientationActions;
 class RecentFiles;
 class SampleSlide;
 class SlidePropertiesDock;
@@ -33,6 +37,11 @@ public Q_SLOTS:
     void openSample();
     void showOpenDialog();
     void exportAsIris();
+    // View › Compare…: asks for up to three more slides and shows them beside the open one.
+    void showCompareDialog();
+    // A comparison window of the open slide (where the view is now) and `others` (up to
+    // CompareWindow::kMaxSlides in all); it closes with this window.
+    CompareWindow *compare(const QStringList &others);
 
 protected:
     void dragEnterEvent(QDragEnterEvent *event) override;
@@ -50,6 +59,8 @@ private:
     // Shows what colour management applies (properties dock) and reloads the associated images,
     // which are shown in the same colours as the slide.
     void onColorManagementChanged();
+    // The open slide's turn and flips into the recent files, when they changed.
+    void rememberOrientation();
     static QString droppedSlide(const QMimeData *mime);
 
     IrisSlideView *m_view;
@@ -61,6 +72,11 @@ private:
     QProgressBar *m_busy;
     bool m_userInitiated = false;
     bool m_openingSample = false;
+    // The slide whose orientation is being remembered (empty while one opens), and how it
+    // was last remembered.
+    QString m_orientedPath;
+    RecentFiles::Orientation m_remembered;
+    OrientationActions *m_orientation = nullptr;
 
     QAction *m_openAction = nullptr;
     QAction *m_sampleAction = nullptr;
@@ -71,6 +87,7 @@ private:
     QAction *m_zoomInAction = nullptr;
     QAction *m_zoomOutAction = nullptr;
     QAction *m_enhanceAction = nullptr;
+    QAction *m_compareAction = nullptr;
     QAction *m_colorAction = nullptr;
     QAction *m_perceptualAction = nullptr;
     QAction *m_relativeAction = nullptr;

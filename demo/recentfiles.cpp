@@ -1,13 +1,18 @@
 #include "recentfiles.h"
 
+#include <cmath>
+
 #include <QtCore/QDir>
 #include <QtCore/QFileInfo>
 #include <QtCore/QSettings>
+#include <QtCore/QVariantMap>
 #include <QtWidgets/QMenu>
 
 namespace {
 const QString kKey = QStringLiteral("recentFiles");
-}
+// { absolute path: { rotation, flipH, flipV } } for slides of the list that are turned or flipped.
+const QString kOrientationsKey = QStringLiteral("recentOrientations");
+} // namespace
 
 RecentFiles::RecentFiles(QMenu *menu, QObject *parent)
     : QObject(parent)
@@ -49,7 +54,48 @@ void RecentFiles::store(const QStringList &list)
 {
     // The menu is rebuilt when it next shows: not now, since this may run from one of its
     // actions' triggered() signal.
-    QSettings().setValue(kKey, list);
+    QSettings settings;
+    settings.setValue(kKey, list);
+    // Orientations only of slides still in the list.
+    QVariantMap orientations = settings.value(kOrientationsKey).toMap();
+    for (auto it = orientations.begin(); it != orientations.end();) {
+        if (list.contains(it.key()))
+            ++it;
+        else
+            it = orientations.erase(it);
+    }
+    settings.setValue(kOrientationsKey, orientations);
+}
+
+RecentFiles::Orientation RecentFiles::orientation(const QString &path) const
+{
+    const QVariantMap entry
+        = QSettings().value(kOrientationsKey).toMap().value(QFileInfo(path).absoluteFilePath()).toMap();
+    Orientation o;
+    o.rotation = entry.value(QStringLiteral("rotation"), 0.0).toDouble();
+    o.flippedHorizontally = entry.value(QStringLiteral("flipH"), false).toBool();
+    o.flippedVertically = entry.value(QStringLiteral("flipV"), false).toBool();
+    if (!std::isfinite(o.rotation))
+        o.rotation = 0;
+    return o;
+}
+
+void RecentFiles::setOrientation(const QString &path, const Orientation &orientation)
+{
+    const QString absolute = QFileInfo(path).absoluteFilePath();
+    if (!files().contains(absolute))
+        return;
+    QSettings settings;
+    QVariantMap orientations = settings.value(kOrientationsKey).toMap();
+    if (orientation.isDefault()) {
+        if (orientations.remove(absolute) == 0)
+            return;
+    } else {
+        orientations.insert(absolute, QVariantMap{{QStringLiteral("rotation"), orientation.rotation},
+                                                  {QStringLiteral("flipH"), orientation.flippedHorizontally},
+                                                  {QStringLiteral("flipV"), orientation.flippedVertically}});
+    }
+    settings.setValue(kOrientationsKey, orientations);
 }
 
 void RecentFiles::rebuild()

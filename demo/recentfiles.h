@@ -1,4 +1,5 @@
-// Iris View demo — the File › Open Recent menu, kept in QSettings.
+// Iris View demo — the File › Open Recent menu, kept in QSettings, and how each of those
+// slides was last turned and flipped (restored when it is opened again).
 #pragma once
 
 #include <QtCore/QObject>
@@ -13,6 +14,16 @@ class RecentFiles : public QObject {
 public:
     static constexpr int kMaxEntries = 10;
 
+    // A slide's turn (degrees clockwise) and flips, as IrisSlideView states them.
+    struct Orientation {
+        double rotation = 0;
+        bool flippedHorizontally = false;
+        bool flippedVertically = false;
+
+        bool isDefault() const { return rotation == 0 && !flippedHorizontally && !flippedVertically; }
+        friend bool operator==(const Orientation &, const Orientation &) = default;
+    };
+
     // Fills menu (rebuilt each time it is about to show).
     explicit RecentFiles(QMenu *menu, QObject *parent = nullptr);
 
@@ -20,6 +31,11 @@ public:
     void add(const QString &path);
     void remove(const QString &path);
     void clear();
+
+    // The orientation remembered for a slide of the list (the default for any other).
+    Orientation orientation(const QString &path) const;
+    // Remembered while the slide is in the list; the default is not stored.
+    void setOrientation(const QString &path, const Orientation &orientation);
 
 Q_SIGNALS:
     void openRequested(const QString &path);

@@ -68,8 +68,8 @@ bool Footprint::contains(int64_t tx, int64_t ty) const {
     if (!turned) return true;
     // Separating axes: the level's (the range) and the footprint's own two; the tile grown by
     // the filter's reach (the footprint grown by a box of that size).
-    const double h = kTileSize * 0.5 + reach;
-    const double dx = (double(tx) * kTileSize + h) - cx, dy = (double(ty) * kTileSize + h) - cy;
+    const double half = kTileSize * 0.5, h = half + reach;
+    const double dx = (double(tx) * kTileSize + half) - cx, dy = (double(ty) * kTileSize + half) - cy;
     const double du = std::abs(dx * ux + dy * uy), rU = h * (std::abs(ux) + std::abs(uy));
     const double dv = std::abs(dx * vx + dy * vy), rV = h * (std::abs(vx) + std::abs(vy));
     return du < hu + rU && dv < hv + rV;

@@ -721,6 +721,10 @@ void TstViewGroup::oneChangeIsOneViewChangedPerView()
         QCOMPARE(counts(), once);
         view->setFlippedHorizontally(!view->isFlippedHorizontally());
         QCOMPARE(counts(), once);
+        // A turn and a flip at once reach every follower as one change too.
+        view->setView(view->centre(), view->downsample(), view->rotation() + 20, !view->isFlippedHorizontally(),
+                      !view->isFlippedVertically());
+        QCOMPARE(counts(), once);
         // Setting what is already shown changes nothing anywhere.
         view->setCentre(view->centre());
         QCOMPARE(counts(), (QList<int>{0, 0, 0}));

@@ -248,6 +248,12 @@ void IrisSlideView::resetOrientation()
 
 void IrisSlideView::setView(const QPointF &centre, double downsample, double rotation)
 {
+    setView(centre, downsample, rotation, isFlippedHorizontally(), isFlippedVertically());
+}
+
+void IrisSlideView::setView(const QPointF &centre, double downsample, double rotation, bool flippedHorizontally,
+                            bool flippedVertically)
+{
     Q_D(IrisSlideView);
     if (!d->engine() || !d->slide || !std::isfinite(rotation))
         return;
@@ -257,7 +263,15 @@ void IrisSlideView::setView(const QPointF &centre, double downsample, double rot
     view.centerY = centre.y();
     view.downsample = downsample;
     view.rotation = rotation;
+    view.flipH = flippedHorizontally;
+    view.flipV = flippedVertically;
     d->setView(view);
+}
+
+void IrisSlideView::stopMotion()
+{
+    Q_D(IrisSlideView);
+    d->navigator.stopMotion();
 }
 
 QPointF IrisSlideView::mapToSlide(const QPointF &widgetPos) const

@@ -304,9 +304,8 @@ void IrisViewGroupPrivate::give(Member &m, const GroupPose &pose)
     if (showSame(poseOf(view), target))
         return;
     const QScopedValueRollback<bool> guard(propagating, true);
-    if (view->isFlippedHorizontally() != target.flipH || view->isFlippedVertically() != target.flipV)
-        view->setFlipped(target.flipH, target.flipV);
-    view->setView(target.centre, target.downsample / view->devicePixelRatioF(), target.rotation);
+    view->setView(target.centre, target.downsample / view->devicePixelRatioF(), target.rotation, target.flipH,
+                  target.flipV);
 }
 
 void IrisViewGroupPrivate::giveAll(const GroupPose &pose, const Member *except)
@@ -399,7 +398,7 @@ void IrisViewGroupPrivate::onTakenHold(const QWindow *surface)
     const QScopedValueRollback<bool> guard(propagating, true);
     for (const Member &m : std::as_const(members)) {
         if (&m != held && m.linked && showsSlide(m))
-            m.view->setCentre(m.view->centre());
+            m.view->stopMotion();
     }
 }
 

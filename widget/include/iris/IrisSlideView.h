@@ -221,8 +221,14 @@ public Q_SLOTS:
     void setFlippedVertically(bool on);
     // Rotation 0 and no flips, about the view's centre.
     void resetOrientation();
-    // Centre, downsample and rotation at once (one viewChanged; flips as they are).
+    // Centre, downsample and rotation at once (one viewChanged; flips as they are), or with
+    // the flips too.
     void setView(const QPointF &centre, double downsample, double rotation);
+    void setView(const QPointF &centre, double downsample, double rotation, bool flippedHorizontally,
+                 bool flippedVertically);
+    // Ends a kinetic glide and drops a zoom or turn still animating (a linked view taken hold
+    // of elsewhere: IrisViewGroup).
+    void stopMotion();
     // Moves the image by delta logical pixels, as a drag of that length would.
     void panBy(const QPointF &delta);
     // Multiplies the magnification by factor (>1 zooms in) about the view's centre.

@@ -37,7 +37,7 @@ echo "== asan build"
 cmake --preset asan >/dev/null
 # Only what the "asan" suites run (and their fixtures), to keep CI short.
 cmake --build --preset asan -j "$JOBS" --target iris_no_dlclose iris-sample tst_bad_input tst_lifecycle tst_tile_map tst_draw_list tst_config tst_storm \
-  tst_iris_reader tst_irisslideview tst_quit_midzoom tst_overlay tst_pyramid tst_color_lut tst_dicom tst_dicomweb
+  tst_iris_reader tst_irisslideview tst_quit_midzoom tst_overlay tst_pyramid tst_color_lut tst_dicom tst_dicomweb tst_changing_files
 echo "== asan tests"
 # (the sanitizer options and the LeakSanitizer suppressions come from tests/CMakeLists.txt)
 xvfb-run -a -s "-screen 0 1920x1080x24" ctest --preset asan -L asan -j 1

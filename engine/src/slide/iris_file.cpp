@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <optional>
 #include <unordered_set>
 
 #include <fcntl.h>
@@ -580,6 +581,38 @@ TileStream tileStream(const uint8_t* data, const Layout& layout, size_t layer, u
     return TileStream{offset, uint32_t(loadLE(e + 5, 3))};
 }
 
+Expected<const uint8_t*> Bytes::at(uint64_t offset, size_t n, std::vector<uint8_t>& scratch) const {
+    if (data) return data + offset; // parse() checked every offset and size against the file
+    scratch.resize(n);
+    size_t done = 0;
+    while (done < n) {
+        const ssize_t r = ::pread(fd, scratch.data() + done, n - done, off_t(offset + done));
+        if (r < 0 && errno == EINTR) continue;
+        if (r < 0) {
+            return Result(Status::IoError, "Cannot read " + num(uint64_t(n)) + " bytes at byte " + num(offset) +
+                                               " of '" + name + "': " + std::strerror(errno));
+        }
+        if (r == 0) {
+            return Result(Status::IoError, "Cannot read " + num(uint64_t(n)) + " bytes at byte " + num(offset) +
+                                               " of '" + name + "': the file ends there: it was truncated or "
+                                               "rewritten while open");
+        }
+        done += size_t(r);
+    }
+    return scratch.data();
+}
+
+Expected<TileStream> tileStream(const Bytes& bytes, const Layout& layout, size_t layer, uint32_t x, uint32_t y) {
+    const Layer& l = layout.layers[layer];
+    const uint64_t index = l.firstTile + uint64_t(y) * l.xTiles + x;
+    std::vector<uint8_t> scratch;
+    Expected<const uint8_t*> e = bytes.at(layout.tileEntries + index * layout.tileStride, 8, scratch);
+    if (!e) return e.error();
+    const uint64_t offset = loadLE(*e, 5);
+    if (offset == kNullTile) return TileStream{};
+    return TileStream{offset, uint32_t(loadLE(*e + 5, 3))};
+}
+
 } // namespace ife
 
 // ---- the SlideSource ------------------------------------------------------------------
@@ -738,10 +771,12 @@ Expected<Image> decodePng(const uint8_t* data, size_t size, uint64_t maxPixels) 
     return img;
 }
 
-// A read-only mapping of a whole file.
+// A read-only mapping of a whole file, for parse() at open, and the file, kept open for the
+// reads that follow (ife::Bytes).
 struct Mapping {
     const uint8_t* data = nullptr;
     uint64_t size = 0;
+    int fd = -1;
 };
 
 Expected<Mapping> mapFile(const std::string& path, const std::string& name) {
@@ -763,11 +798,11 @@ Expected<Mapping> mapFile(const std::string& path, const std::string& name) {
     }
     void* p = ::mmap(nullptr, size_t(st.st_size), PROT_READ, MAP_PRIVATE, fd, 0);
     const int err = errno;
-    ::close(fd); // the mapping keeps the file
     if (p == MAP_FAILED) {
+        ::close(fd);
         return Result(Status::IoError, "Cannot open '" + name + "': cannot map the file (" + std::strerror(err) + ")");
     }
-    return Mapping{static_cast<const uint8_t*>(p), uint64_t(st.st_size)};
+    return Mapping{static_cast<const uint8_t*>(p), uint64_t(st.st_size), fd};
 }
 
 } // namespace
@@ -786,22 +821,27 @@ Expected<std::unique_ptr<SlideSource>> IrisFileSource::open(const std::string& p
     const std::string name = fs::path(path).filename().string();
     Expected<Mapping> map = mapFile(path, name);
     if (!map) return map.error();
+    // The map lives only while open() parses (the tile table, the metadata, the ICC profile);
+    // tiles and images are read later with pread (ife::Bytes). A file truncated in the
+    // milliseconds of this parse can still fault here; one truncated while it is shown cannot.
     Expected<ife::Layout> layout = ife::parse(map->data, map->size, name);
+    std::optional<SlideInfo> info;
+    if (layout) info = ife::slideInfo(map->data, *layout, path);
+    ::munmap(const_cast<uint8_t*>(map->data), size_t(map->size));
     if (!layout) {
-        ::munmap(const_cast<uint8_t*>(map->data), size_t(map->size));
+        ::close(map->fd);
         return layout.error();
     }
-    SlideInfo info = ife::slideInfo(map->data, *layout, path);
     return std::unique_ptr<SlideSource>(
-        new IrisFileSource(map->data, map->size, name, std::move(layout.value()), std::move(info)));
+        new IrisFileSource(map->fd, name, std::move(layout.value()), std::move(*info)));
 }
 
-IrisFileSource::IrisFileSource(const uint8_t* map, uint64_t size, std::string fileName, ife::Layout layout,
-                               SlideInfo info)
-    : map_(map), size_(size), fileName_(std::move(fileName)), layout_(std::move(layout)), info_(std::move(info)) {}
+IrisFileSource::IrisFileSource(int fd, std::string fileName, ife::Layout layout, SlideInfo info)
+    : fd_(fd), bytes_{nullptr, fd, fileName}, fileName_(std::move(fileName)), layout_(std::move(layout)),
+      info_(std::move(info)) {}
 
 IrisFileSource::~IrisFileSource() {
-    ::munmap(const_cast<uint8_t*>(map_), size_t(size_));
+    ::close(fd_);
 }
 
 namespace ife {
@@ -818,11 +858,18 @@ SlideInfo slideInfo(const uint8_t* data, const Layout& layout, const std::string
 
 Result readTile(const uint8_t* data, const Layout& layout, const std::string& name, int level, int64_t tx, int64_t ty,
                 uint8_t* dst) {
+    return readTile(Bytes{data, -1, name}, layout, level, tx, ty, dst);
+}
+
+Result readTile(const Bytes& bytes, const Layout& layout, int level, int64_t tx, int64_t ty, uint8_t* dst) {
+    const std::string& name = bytes.name;
     if (level < 0 || size_t(level) >= layout.layers.size()) return Result(Status::InvalidArgument, "no such level");
     const size_t layer = layout.layers.size() - 1 - size_t(level);
     const Layer& l = layout.layers[layer]; // its tile grid is the engine level's (makeInfo)
     if (tx < 0 || ty < 0 || tx >= l.xTiles || ty >= l.yTiles) return Result(Status::InvalidArgument, "no such tile");
-    const TileStream s = tileStream(data, layout, layer, uint32_t(tx), uint32_t(ty));
+    const Expected<TileStream> stream = tileStream(bytes, layout, layer, uint32_t(tx), uint32_t(ty));
+    if (!stream) return stream.error();
+    const TileStream s = *stream;
     if (s.size == 0) {
         std::memset(dst, 0, kTileBytes); // no data: transparent (premultiplied zero)
         return {};
@@ -836,7 +883,11 @@ Result readTile(const uint8_t* data, const Layout& layout, const std::string& na
         return Result(Status::UnsupportedFormat,
                       "Cannot decode " + where() + ": AVIF-encoded tiles are not supported in this build");
     }
-    if (Result r = decodeJpegRgba(data + s.offset, s.size, kTileSize, kTileSize, dst, size_t(kTileSize) * 4); !r.ok()) {
+    // One buffer per loader thread for the compressed stream (a JPEG tile: tens of KiB).
+    thread_local std::vector<uint8_t> scratch;
+    const Expected<const uint8_t*> data = bytes.at(s.offset, s.size, scratch);
+    if (!data) return Result(data.error().status(), "Cannot read " + where() + ": " + data.error().message());
+    if (Result r = decodeJpegRgba(*data, s.size, kTileSize, kTileSize, dst, size_t(kTileSize) * 4); !r.ok()) {
         return Result(r.status(), "Cannot decode " + where() + ": " + r.message());
     }
     const int w = int(std::min<int64_t>(kTileSize, l.width - tx * kTileSize));
@@ -847,12 +898,24 @@ Result readTile(const uint8_t* data, const Layout& layout, const std::string& na
 
 Expected<Image> readAssociatedImage(const uint8_t* data, const Layout& layout, const std::string& name,
                                     const std::string& image, uint64_t maxPixels) {
+    return readAssociatedImage(Bytes{data, -1, name}, layout, image, maxPixels);
+}
+
+Expected<Image> readAssociatedImage(const Bytes& file, const Layout& layout, const std::string& image,
+                                    uint64_t maxPixels) {
+    const std::string& name = file.name;
     const auto it = std::find_if(layout.images.begin(), layout.images.end(),
                                  [&](const AssociatedImage& i) { return i.name == image; });
     if (it == layout.images.end()) {
         return Result(Status::InvalidArgument, "The slide has no associated image '" + image + "'");
     }
-    const uint8_t* bytes = data + it->offset;
+    std::vector<uint8_t> scratch;
+    const Expected<const uint8_t*> read = file.at(it->offset, it->size, scratch);
+    if (!read) {
+        return Result(read.error().status(),
+                      "Cannot read associated image '" + image + "' of '" + name + "': " + read.error().message());
+    }
+    const uint8_t* bytes = *read;
     const std::string what = "Cannot decode associated image '" + image + "' of '" + name + "': ";
     switch (it->encoding) {
     case kImageJpeg:
@@ -871,11 +934,11 @@ Expected<Image> readAssociatedImage(const uint8_t* data, const Layout& layout, c
 } // namespace ife
 
 Result IrisFileSource::readTile(int level, int64_t tx, int64_t ty, uint8_t* dst) {
-    return ife::readTile(map_, layout_, fileName_, level, tx, ty, dst);
+    return ife::readTile(bytes_, layout_, level, tx, ty, dst);
 }
 
 Expected<Image> IrisFileSource::readAssociatedImage(const std::string& name) {
-    return ife::readAssociatedImage(map_, layout_, fileName_, name, kMaxImagePixels);
+    return ife::readAssociatedImage(bytes_, layout_, name, kMaxImagePixels);
 }
 
 } // namespace iris

@@ -159,8 +159,23 @@ Expected<Layout> parse(const uint8_t* data, uint64_t size, const std::string& na
 // parse() of the same bytes, and x, y must lie inside the layer.
 TileStream tileStream(const uint8_t* data, const Layout& layout, size_t layer, uint32_t x, uint32_t y);
 
+// Where readTile and readAssociatedImage find the file's bytes: the whole file in memory
+// (`data`: what parse() read; tests and fuzzing), or the open file (`fd`), read with pread —
+// IrisFileSource's way once open() has parsed the file, so that a file truncated while it is
+// open fails the reads past its new end with an IoError instead of raising SIGBUS, as a
+// memory map would, and killing the host.
+struct Bytes {
+    const uint8_t* data = nullptr;
+    int fd = -1;
+    std::string name; // for messages
+    // Bytes [offset, offset + n): a pointer into `data`, or read into `scratch`.
+    Expected<const uint8_t*> at(uint64_t offset, size_t n, std::vector<uint8_t>& scratch) const;
+};
+// The tile stream of tile (x, y) of `layer`, read through `bytes` (as tileStream()).
+Expected<TileStream> tileStream(const Bytes& bytes, const Layout& layout, size_t layer, uint32_t x, uint32_t y);
+
 // What IrisFileSource does with a parsed file, as pure functions of the bytes parse() read
-// and its layout (IrisFileSource calls them on its mapping; tests/fuzz calls them directly).
+// and its layout (IrisFileSource calls them on its open file; tests/fuzz on the bytes).
 // `name` is the file name the messages use, as for parse().
 //
 // The SlideInfo open() returns: the engine's levels (finest first), mpp and magnification,
@@ -170,10 +185,13 @@ SlideInfo slideInfo(const uint8_t* data, const Layout& layout, const std::string
 // SlideSource::readTile: tile (tx, ty) of engine level `level` decoded into dst (kTileBytes).
 Result readTile(const uint8_t* data, const Layout& layout, const std::string& name, int level, int64_t tx, int64_t ty,
                 uint8_t* dst);
+Result readTile(const Bytes& bytes, const Layout& layout, int level, int64_t tx, int64_t ty, uint8_t* dst);
 // SlideSource::readAssociatedImage; an image of more than maxPixels pixels is refused
 // (CorruptData) before any memory is allocated for its pixels.
 Expected<Image> readAssociatedImage(const uint8_t* data, const Layout& layout, const std::string& name,
                                     const std::string& image, uint64_t maxPixels);
+Expected<Image> readAssociatedImage(const Bytes& bytes, const Layout& layout, const std::string& image,
+                                    uint64_t maxPixels);
 
 } // namespace ife
 
@@ -194,10 +212,12 @@ public:
     const ife::Layout& layout() const { return layout_; }
 
 private:
-    IrisFileSource(const uint8_t* map, uint64_t size, std::string fileName, ife::Layout layout, SlideInfo info);
+    IrisFileSource(int fd, std::string fileName, ife::Layout layout, SlideInfo info);
 
-    const uint8_t* map_; // read-only mapping of the whole file, immutable: readers share it freely
-    uint64_t size_;
+    // The open file, read with pread by any thread (ife::Bytes); a file replaced or deleted
+    // while open is still this one, a truncated one fails the reads past its end.
+    int fd_;
+    ife::Bytes bytes_;
     std::string fileName_;
     ife::Layout layout_;
     SlideInfo info_;

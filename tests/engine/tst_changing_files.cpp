@@ -1,0 +1,159 @@
+// Files that change under the viewer (issue 14): a slide truncated, deleted or replaced while it
+// is open, for the .iris reader (which parses through a memory map at open and then reads with
+// pread, so that a truncated file cannot raise SIGBUS) and the direct TIFF reader (libtiff
+// without its memory map: tiff_source.cpp opens with "m").
+//
+//   * truncated mid-walk: the walk goes on to complete frames, the tiles past the new end are
+//     drawn as the failed-tile placeholder, the engine's error names the file, and the engine
+//     opens the next slide as if nothing happened;
+//   * deleted or replaced mid-walk: the open file is still the one shown (POSIX keeps an open
+//     file's data): every frame is as before and no error is reported.
+// The frames are compared with a second engine showing an untouched copy.
+#include <QtTest>
+
+#include <filesystem>
+#include <fstream>
+
+#include "test_support.h"
+
+using namespace iristest;
+using namespace std::chrono_literals;
+namespace fs = std::filesystem;
+
+namespace {
+constexpr uint32_t kW = 512, kH = 384;
+
+// The placeholder's grey (fillFailedTilePlaceholder): 128, 128, 128.
+uint64_t countPlaceholderGrey(const iris::Image& img) {
+    uint64_t n = 0;
+    for (uint32_t y = 0; y < img.height; ++y)
+        for (uint32_t x = 0; x < img.width; ++x) {
+            const uint8_t* p = pixel(img, x, y);
+            n += (p[0] == 128 && p[1] == 128 && p[2] == 128) ? 1 : 0;
+        }
+    return n;
+}
+} // namespace
+
+class TestChangingFiles : public QObject {
+    Q_OBJECT
+    TestEngine e_, reference_;
+
+    // Ten 1:1 fields along the slide's diagonal: level-0 tiles, which the fitted view before
+    // the change did not load (it draws the coarse levels), so they are read after it.
+    static std::vector<iris::View> walk(const iris::SlideInfo& info) {
+        std::vector<iris::View> out;
+        for (int k = 0; k < 10; ++k) {
+            const double f = (k + 0.5) / 10;
+            out.push_back(iris::View{f * double(info.width), f * double(info.height), 1.0});
+        }
+        return out;
+    }
+    static fs::path copyOf(const fs::path& from, const std::string& name) {
+        const fs::path dir = testOutDir() / "changing";
+        fs::create_directories(dir);
+        const fs::path to = dir / name;
+        fs::remove(to);
+        fs::copy_file(from, to);
+        fs::permissions(to, fs::perms::owner_read | fs::perms::owner_write, fs::perm_options::add);
+        return to;
+    }
+
+private slots:
+    void initTestCase() {
+        iris::EngineConfig cfg;
+        cfg.color.managed = false;
+        e_ = createTestEngine(cfg);
+        QVERIFY2(e_, describe(e_.error).c_str());
+        reference_ = createTestEngine(cfg);
+        QVERIFY2(reference_, describe(reference_.error).c_str());
+        QVERIFY(e_->bindOffscreen(kW, kH).ok());
+        QVERIFY(reference_->bindOffscreen(kW, kH).ok());
+    }
+    void cleanupTestCase() {
+        for (TestEngine* e : {&e_, &reference_}) {
+            if (!*e) continue;
+            // Error lines were expected (the truncated reads): only validation counts here.
+            const std::string why = e->endTest(TestEngine::ErrorLines::Show);
+            QVERIFY2(why.empty(), why.c_str());
+            (*e)->close();
+            QCOMPARE((*e)->validationMessageCount(), uint64_t(0));
+        }
+    }
+
+    void changedMidWalk_data() {
+        QTest::addColumn<QString>("slide");
+        QTest::addColumn<QString>("change");
+        // Slides with reduced levels, so that the fitted view does not read level 0.
+        const std::vector<std::pair<const char*, std::optional<fs::path>>> slides{
+            {"iris", slidesDir("iris") ? std::optional(*slidesDir("iris") / "tcga-cr-7395-01a-01-ts1.v1.0.iris")
+                                       : std::nullopt},
+            {"tiff", sampleSlidePath()},
+        };
+        bool any = false;
+        for (const auto& [kind, path] : slides) {
+            if (!path || !fs::exists(*path)) continue;
+            any = true;
+            for (const char* change : {"truncated", "deleted", "replaced"})
+                QTest::addRow("%s %s", kind, change) << QString::fromStdString(path->string()) << QString(change);
+        }
+        if (!any) QTest::newRow("no test data") << QString() << QString();
+    }
+    void changedMidWalk() {
+        QFETCH(QString, slide);
+        QFETCH(QString, change);
+        if (slide.isEmpty()) QSKIP("no test data (set IRIS_TESTDATA or IRIS_TESTDATA_DEFAULT)");
+        e_.beginTest();
+        const fs::path original = slide.toStdString();
+        const fs::path path = copyOf(original, "changing-" + change.toStdString() + original.extension().string());
+        QVERIFY2(e_->open(path.string()).ok(), describe(e_->error()).c_str());
+        QVERIFY(reference_->open(original.string()).ok());
+        const iris::SlideInfo info = *e_->slideInfo();
+        const std::vector<iris::View> fields = walk(info);
+        QVERIFY2(info.levels.size() > 1 && !info.levels[1].synthetic, "the slide needs stored reduced levels");
+        // The fitted view drawn from the file as it was.
+        std::string why;
+        QVERIFY2(renderView(*e_.engine, e_->fitView(), kW, kH, 60s, &why), why.c_str());
+
+        if (change == "truncated") {
+            fs::resize_file(path, fs::file_size(path) * 35 / 100);
+        } else if (change == "deleted") {
+            fs::remove(path);
+        } else {
+            // Another file takes the name (a scanner re-exporting the slide): the open one stays.
+            const fs::path other = copyOf(*slidesDir("generic-tiff") / "boxes.tiff", "changing-other.tmp");
+            fs::rename(other, path);
+        }
+
+        uint64_t placeholder = 0, differing = 0;
+        for (size_t k = 0; k < fields.size(); ++k) {
+            auto f = renderView(*e_.engine, fields[k], kW, kH, 60s, &why);
+            QVERIFY2(f, ("field " + std::to_string(k) + ": " + why).c_str()); // complete, in time, no crash
+            auto r = renderView(*reference_.engine, fields[k], kW, kH, 60s, &why);
+            QVERIFY2(r, why.c_str());
+            const DiffStats d = compareImages(f->image, r->image);
+            differing += d.differing;
+            placeholder += countPlaceholderGrey(f->image);
+        }
+        const iris::Result err = e_->error();
+        qInfo("%s: %llu px differ from the untouched copy, %llu placeholder grey; engine error: %s",
+              qPrintable(change), (unsigned long long)differing, (unsigned long long)placeholder, describe(err).c_str());
+        if (change == "truncated") {
+            QVERIFY2(!err.ok(), "a truncated file's failed reads were not reported");
+            QVERIFY2(err.message().find(path.filename().string()) != std::string::npos, err.message().c_str());
+            QVERIFY2(placeholder > 0, "no tile past the new end shows the placeholder");
+        } else {
+            QVERIFY2(err.ok(), describe(err).c_str());
+            QCOMPARE(differing, uint64_t(0));
+        }
+        // The engine goes on: the untouched slide opens and draws, and the error is gone.
+        QVERIFY(e_->open(original.string()).ok());
+        QVERIFY(e_->error().ok());
+        QVERIFY2(renderView(*e_.engine, fields[4], kW, kH, 60s, &why), why.c_str());
+        const std::string problems = e_.endTest(TestEngine::ErrorLines::Show);
+        QVERIFY2(problems.empty(), problems.c_str());
+    }
+};
+
+QTEST_GUILESS_MAIN(TestChangingFiles)
+#include "tst_changing_files.moc"

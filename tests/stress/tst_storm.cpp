@@ -34,7 +34,7 @@ QString testData() {
 uint64_t stormCalls() {
     bool ok = false;
     const int calls = qEnvironmentVariableIntValue("IRIS_STORM_CALLS", &ok);
-    return ok && calls > 0 ? uint64_t(calls) : 60000;
+    return ok && calls > 0 ? uint64_t(calls) : 50000;
 }
 constexpr uint64_t kStormFrames = 100;
 // A storm that has not drawn its frames by then has found a hang.

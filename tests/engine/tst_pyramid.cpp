@@ -331,7 +331,10 @@ private slots:
         // 1000000² (3907² tiles): synthetic levels down to 2^8 (3907², 16 × 16 tiles).
         QVERIFY(e->open("synthetic:1000000x1000000:1").ok());
         QCOMPARE(e->slideInfo()->levels.back().downsample, 256.0);
-        std::this_thread::sleep_for(500ms); // both loaders are inside a base tile by now
+        // Let a loader get inside a synthetic tile's reads. A guessed wait that stays: the engine
+        // reports no event when a tile read starts (only when its tile is published, which
+        // for these tiles is tens of seconds away), and starting takes milliseconds.
+        std::this_thread::sleep_for(500ms);
         QVERIFY(e->open("synthetic:2000x2000").ok());
         std::string why;
         const auto t0 = std::chrono::steady_clock::now();

@@ -757,8 +757,7 @@ private slots:
                 err += QString::fromUtf8(p.readAllStandardError());
             }
             QVERIFY2(err.contains("tiles ("), qPrintable(err));
-            QTest::qWait(300);
-            QVERIFY(!leftovers(big).empty()); // the partial file is there while it runs
+            QTRY_VERIFY_WITH_TIMEOUT(!leftovers(big).empty(), 10000); // the partial file is there while it runs
             ::kill(pid_t(p.processId()), sig);
             QVERIFY(p.waitForFinished(60000));
             err += QString::fromUtf8(p.readAllStandardError());

@@ -22,8 +22,11 @@
 
 #include <atomic>
 #include <cmath>
+#include <condition_variable>
 #include <cstdlib>
 #include <fstream>
+#include <memory>
+#include <mutex>
 #include <thread>
 
 #include "test_support.h"
@@ -140,15 +143,32 @@ std::string checkDifferencesInside(const iris::Image& without, const iris::Image
     return why;
 }
 
-// Polls readFrame until a frame newer than `after` exists.
+// The first frame newer than serial `after` that readFrame returns. Woken by the engine's frame
+// callback, which runs after the frame it reports was published to readFrame (no suite here
+// sets another callback).
 std::optional<iris::Frame> nextFrame(iris::Engine& e, uint64_t after, std::chrono::milliseconds timeout = 10s) {
-    const auto end = std::chrono::steady_clock::now() + timeout;
-    while (std::chrono::steady_clock::now() < end) {
-        auto f = e.readFrame();
-        if (f.ok() && f->serial > after) return std::move(f.value());
-        std::this_thread::sleep_for(5ms);
+    struct Wake {
+        std::mutex mutex;
+        std::condition_variable cv;
+    };
+    // Shared with the callback: the render thread may still be running it after this returns.
+    const auto wake = std::make_shared<Wake>();
+    e.setFrameCallback([wake](const iris::FrameStats&) {
+        // Taking the lock orders this notification after a waiter's test of readFrame().
+        { std::lock_guard lock(wake->mutex); }
+        wake->cv.notify_all();
+    });
+    std::optional<iris::Frame> found;
+    {
+        std::unique_lock lock(wake->mutex);
+        wake->cv.wait_for(lock, timeout, [&] {
+            auto f = e.readFrame();
+            if (f.ok() && f->serial > after) found = std::move(f.value());
+            return found.has_value();
+        });
     }
-    return std::nullopt;
+    e.setFrameCallback(nullptr);
+    return found;
 }
 
 uint64_t lastSerial(iris::Engine& e) {
@@ -812,7 +832,12 @@ private slots:
     // Churn: overlays toggled, moved and re-fonted from other threads while slides open and
     // close and frames render; engines destroyed in the middle of it. Nothing may crash,
     // hang, leak (asan preset) or upset the validation layers.
+    //
+    // Each round lasts kSlideSteps steps of the slide thread (kSlideSteps / 5 opens and as many
+    // closes); the other two churn until it is done. The sleeps in the loops set each thread's
+    // pace (the slide thread's lets frames render between its changes); none waits for anything.
     void lifecycleChurn() {
+        constexpr int kSlideSteps = 150;
         for (int round = 0; round < 3; ++round) {
             openEngine();
             std::atomic<bool> stop{false};
@@ -838,18 +863,19 @@ private slots:
                     std::this_thread::sleep_for(7ms);
                 }
             });
-            threads.emplace_back([&] {
-                int i = 0;
-                while (!stop.load()) {
+            std::thread slides([&] {
+                for (int i = 0; i < kSlideSteps; ++i) {
                     if (i % 5 == 4) e_->close();
                     else if (i % 5 == 0) (void)e_->open(i % 10 == 0 ? "synthetic:3000x2000" : kSlide);
                     e_->setView(iris::View{1000.0 + 500 * (i % 7), 800.0 + 300 * (i % 5), 0.5 + (i % 9) * 3});
                     e_->translate(13, -7);
-                    ++i;
                     std::this_thread::sleep_for(3ms);
                 }
             });
-            std::this_thread::sleep_for(700ms);
+            const auto t0 = std::chrono::steady_clock::now();
+            slides.join();
+            qInfo("round %d: %d slide steps in %.0f ms", round, kSlideSteps,
+                  std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
             stop = true;
             for (auto& t : threads) t.join();
             if (round == 2) {

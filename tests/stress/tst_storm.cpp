@@ -1,6 +1,7 @@
 // The engine under a storm of concurrent API calls: four threads issue random open, close,
-// translate, zoom, resize, setView, read, overlay, metrics and callback calls for a bounded
-// time while the engine renders. Run in the dev build and under the tsan and asan presets: no
+// translate, zoom, resize, setView, read, overlay, metrics and callback calls while the engine
+// renders, until they have made kStormCalls calls and the engine has drawn kStormFrames frames
+// meanwhile. Run in the dev build and under the tsan and asan presets: no
 // data race report, no crash, no deadlock, and afterwards the engine shows exactly the last
 // view set.
 //
@@ -28,11 +29,16 @@ QString testData() {
     return QString::fromLocal8Bit(d);
 }
 
-std::chrono::milliseconds stormDuration() {
+// The storm's size: calls made by the four threads together ($IRIS_STORM_CALLS, for a longer
+// storm), and frames the engine must draw while they are made.
+uint64_t stormCalls() {
     bool ok = false;
-    const int ms = qEnvironmentVariableIntValue("IRIS_STORM_MS", &ok);
-    return std::chrono::milliseconds(ok && ms > 0 ? ms : 4000);
+    const int calls = qEnvironmentVariableIntValue("IRIS_STORM_CALLS", &ok);
+    return ok && calls > 0 ? uint64_t(calls) : 50000;
 }
+constexpr uint64_t kStormFrames = 100;
+// A storm that has not drawn its frames by then has found a hang.
+constexpr auto kStormLimit = std::chrono::seconds(60);
 
 } // namespace
 
@@ -63,6 +69,10 @@ void TestStorm::storm() {
     std::atomic<bool> stop{false};
     std::atomic<uint64_t> calls{0};
     auto callbackFrames = std::make_shared<std::atomic<uint64_t>>(0);
+    const uint64_t targetCalls = stormCalls();
+    const uint64_t framesBefore = e.metrics().frames;
+    const auto stormStart = std::chrono::steady_clock::now();
+    uint64_t stormFrames = 0; // written by the worker that ends the storm, read after the joins
     auto worker = [&](int id) {
         std::mt19937_64 rng(1234 + id);
         std::uniform_real_distribution<double> u(0, 1);
@@ -124,15 +134,23 @@ void TestStorm::storm() {
                 }
                 break;
             }
-            calls.fetch_add(1, std::memory_order_relaxed);
+            // Every 256th call asks whether the storm is over (metrics() is not free).
+            const uint64_t made = calls.fetch_add(1, std::memory_order_relaxed) + 1;
+            if (made % 256 == 0 && made >= targetCalls) {
+                const uint64_t frames = e.metrics().frames - framesBefore;
+                if (frames >= kStormFrames || std::chrono::steady_clock::now() - stormStart > kStormLimit) {
+                    if (!stop.exchange(true)) stormFrames = frames;
+                }
+            }
         }
     };
     std::vector<std::thread> threads;
     for (int i = 0; i < 4; ++i) threads.emplace_back(worker, i);
-    std::this_thread::sleep_for(stormDuration());
-    stop = true;
     for (auto& t : threads) t.join();
-    QVERIFY2(calls.load() > 100, qPrintable(QString("only %1 calls").arg(calls.load())));
+    qInfo("storm: %llu calls, %llu frames in %.0f ms", static_cast<unsigned long long>(calls.load()),
+          static_cast<unsigned long long>(stormFrames),
+          std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - stormStart).count());
+    QVERIFY2(stormFrames >= kStormFrames, qPrintable(QString("only %1 frames drawn during the storm").arg(stormFrames)));
 
     // Settle: a known slide, size and view; the engine must show exactly that.
     e.setVisible(true);

@@ -93,13 +93,16 @@ void TestTileMap::concurrentPinAndReclaim() {
     // One writer reclaims and refills slots as fast as it can while readers pin, check the
     // slot's identity and unpin. A reader must never hold a pin on a slot that the writer
     // refilled: the writer marks each fill with a "generation" in a shadow array and readers
-    // check it did not change while pinned.
+    // check it did not change while pinned. The readers stop after kPinsEach pins each (a pin
+    // succeeds for about one probe in 128: 32 of 4096 keys are resident), the writer when they
+    // are done.
     constexpr uint32_t kSlots = 32;
+    constexpr uint64_t kPinsEach = 500;
     TileMap m(kSlots);
     std::atomic<uint64_t> shadow[kSlots];
     for (auto& s : shadow) s.store(0);
     std::atomic<bool> stop{false};
-    std::atomic<uint64_t> pins{0}, violations{0};
+    std::atomic<uint64_t> pins{0}, violations{0}, fills{0};
     std::thread writer([&] {
         std::mt19937_64 rng(7);
         uint64_t key = 1;
@@ -108,6 +111,7 @@ void TestTileMap::concurrentPinAndReclaim() {
             if (s >= 0) {
                 shadow[s].store(key, std::memory_order_relaxed); // "overwrite the texels"
                 m.activate(s);
+                fills.fetch_add(1, std::memory_order_relaxed);
             }
             ++key;
         }
@@ -117,10 +121,11 @@ void TestTileMap::concurrentPinAndReclaim() {
         readers.emplace_back([&, r] {
             std::mt19937_64 rng(100 + r);
             uint64_t frame = 0;
-            while (!stop.load(std::memory_order_relaxed)) {
+            for (uint64_t mine = 0; mine < kPinsEach;) {
                 const uint64_t probe = 1 + rng() % 4096;
                 const int s = m.pin(probe, ++frame);
                 if (s < 0) continue;
+                ++mine;
                 pins.fetch_add(1, std::memory_order_relaxed);
                 // While pinned, the slot's content must stay the tile we pinned.
                 for (int i = 0; i < 50; ++i) {
@@ -131,12 +136,17 @@ void TestTileMap::concurrentPinAndReclaim() {
             }
         });
     }
-    std::this_thread::sleep_for(std::chrono::milliseconds(1500));
+    const auto t0 = std::chrono::steady_clock::now();
+    for (auto& t : readers) t.join();
+    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    const uint64_t filled = fills.load(); // by the time the last reader finished
     stop = true;
     writer.join();
-    for (auto& t : readers) t.join();
+    qInfo("%llu pins against %llu fills in %.0f ms", static_cast<unsigned long long>(pins.load()),
+          static_cast<unsigned long long>(filled), ms);
     QCOMPARE(violations.load(), 0u);
-    QVERIFY2(pins.load() > 100, qPrintable(QString("only %1 pins").arg(pins.load())));
+    // The writer kept refilling the slots while the readers pinned them.
+    QVERIFY2(filled > kSlots * 100, qPrintable(QString("only %1 fills").arg(filled)));
 }
 
 void TestTileMap::priorityOrder() {

@@ -4,8 +4,10 @@
 
 #include <fstream>
 #include <cmath>
+#include <condition_variable>
+#include <memory>
+#include <mutex>
 #include <random>
-#include <thread>
 #include <string>
 
 #include <openslide.h>
@@ -101,13 +103,35 @@ void TestWalk::rapidMovesEndExact_synthetic() {
     constexpr uint32_t W = 400, H = 300;
     QVERIFY(e->bindOffscreen(W, H).ok());
     QVERIFY(e->open("synthetic:200000x200000").ok());
+    // The view of the last frame drawn, for the moves below that wait for one of theirs.
+    struct Drawn {
+        std::mutex mutex;
+        std::condition_variable cv;
+        iris::View view;
+    };
+    const auto drawn = std::make_shared<Drawn>(); // the callback may outlive this function
+    e->setFrameCallback([drawn](const iris::FrameStats& s) {
+        {
+            std::lock_guard lock(drawn->mutex);
+            drawn->view = s.view;
+        }
+        drawn->cv.notify_all();
+    });
     std::mt19937_64 rng(11);
-    // Forty moves to unrelated fields and zooms, no waiting in between.
+    // Forty moves to unrelated fields and zooms. Most follow each other at once; every 20th
+    // waits until a frame of its field was drawn (its tiles asked for, some perhaps arriving),
+    // so that tiles of earlier fields are in flight or resident at the end. (A frame takes tens
+    // of milliseconds on lavapipe: waiting after every move would make this case slow.)
     for (int i = 0; i < 40; ++i) {
         e->setView({double(rng() % 190000) + 5000, double(rng() % 190000) + 5000, double(1 + rng() % 64)});
         if (i % 3 == 0) e->translate(double(rng() % 400), double(rng() % 300));
-        std::this_thread::sleep_for(std::chrono::milliseconds(rng() % 5));
+        if (i % 20 != 19) continue;
+        const iris::View now = e->view();
+        std::unique_lock lock(drawn->mutex);
+        QVERIFY2(drawn->cv.wait_for(lock, std::chrono::seconds(10), [&] { return drawn->view == now; }),
+                 qPrintable(QString("no frame of move %1 within 10 s").arg(i)));
     }
+    e->setFrameCallback(nullptr);
     // The last field, integer-aligned at 1:1.
     const int64_t x0 = 123456, y0 = 65432;
     e->setView({x0 + W / 2.0, y0 + H / 2.0, 1});

@@ -250,7 +250,7 @@ void TstIrisSlideView::dragPansWithThePointer()
              qPrintable(pointText(view->centre()) + QStringLiteral(" != ") + pointText(expected)));
     // The grabbed image point is under the pointer again.
     QVERIFY(length(view->mapFromSlide(grabbed) - QPointF(p1)) * dpr < 0.01);
-    QTest::qWait(150);
+    QVERIFY(viewStaysStill(view));
     QVERIFY(length(view->centre() - expected) < 1e-6);
     QVERIFY(m_w->frames->waitForCompleteFrame());
 }
@@ -276,15 +276,11 @@ void TstIrisSlideView::releasedDragGlidesAndStops()
 
     // It glides on in the same direction, slows down and stops.
     QTRY_VERIFY((c0.x() - view->centre().x()) / (dpr * ds) > 170);
-    QPointF previous = view->centre();
+    // The glide moves the view on every tick until it stops: it has stopped once the view
+    // stays still for a few ticks.
     QDeadlineTimer deadline(5000);
-    for (;;) {
-        QTest::qWait(120);
-        if (view->centre() == previous)
-            break;
-        previous = view->centre();
+    while (!viewStaysStill(view))
         QVERIFY2(!deadline.hasExpired(), "the glide did not stop within 5 s");
-    }
     const double glide = (c0.x() - view->centre().x()) / (dpr * ds) - 160;
     const double theoretical = 1250 * IrisWidget::KineticPanner::kTimeConstantS; // ∫ v e^(−t/τ) dt
     QVERIFY2(glide > 0.6 * theoretical && glide < 1.05 * theoretical,
@@ -301,7 +297,7 @@ void TstIrisSlideView::releasedDragGlidesAndStops()
         QTest::mouseMove(m_w->surface(), p, 16);
     }
     QTest::mouseRelease(m_w->surface(), Qt::LeftButton, {}, p, 1);
-    QTest::qWait(150);
+    QVERIFY(viewStaysStill(view));
     QVERIFY(near((c1.x() - view->centre().x()) / (dpr * ds), 160, 1e-6));
 }
 
@@ -622,12 +618,23 @@ void TstIrisSlideView::hiddenViewRendersNothing()
     IrisSlideView *view = m_w->view;
     m_w->window->hide();
     QTRY_VERIFY(!m_w->surface()->isExposed());
-    QTest::qWait(100);
     const int before = m_w->frames->frames();
     view->panBy(QPointF(50, 0));
     view->zoomBy(1.5);
-    QTest::qWait(400);
-    QCOMPARE(m_w->frames->frames(), before);
+    // Frames of the view shown before the hide may still arrive (tiles of its perimeter
+    // landing); none of the view set while hidden may. A negative check: nothing announces
+    // "no frame will come", so it waits several times what a visible view takes to present a
+    // frame of a change (tens of milliseconds here, lavapipe at 480 × 360).
+    const QPointF hiddenCentre = view->centre();
+    const double hiddenDownsample = view->downsample();
+    int hiddenFrames = 0;
+    const auto counter = connect(view, &IrisSlideView::framePresented, this, [&](const IrisFrameMetrics &metrics) {
+        if (metrics.centre == hiddenCentre && metrics.downsample == hiddenDownsample)
+            ++hiddenFrames;
+    });
+    QTest::qWait(200);
+    disconnect(counter);
+    QCOMPARE(hiddenFrames, 0);
 
     m_w->window->show();
     QVERIFY(QTest::qWaitForWindowExposed(m_w->window.get()));
@@ -687,7 +694,10 @@ void TstIrisSlideView::openErrorsLeaveTheViewUsable()
             errors.clear();
             const bool opened = view->openSlide(file.absoluteFilePath());
             QVERIFY2(opened || errors.count() == 1, qPrintable(file.fileName()));
-            QTest::qWait(50); // let any tiles of a half-readable file try to load
+            // Let the tiles of a half-readable file load or fail (a failed tile is drawn as a
+            // placeholder, so the frame is complete either way) before the next file replaces it.
+            if (opened)
+                QVERIFY2(m_w->frames->waitForCompleteFrame(), qPrintable(file.fileName()));
         }
     }
 
@@ -802,8 +812,12 @@ void TstIrisSlideView::twoViewsOnTwoSlides()
 void TstIrisSlideView::closingWhileTilesLoad()
 {
     m_w.reset();
-    // Deleted at various moments after opening, zoomed far in (many tiles to load) and mid-zoom.
-    for (const int delayMs : {0, 1, 5, 20, 60, 150}) {
+    // Deleted at various moments after opening, zoomed far in (many tiles to load) and mid-zoom:
+    // at once, after the zoom's first step, after the first frame presented, and after the
+    // first complete frame of the zoomed view (its perimeter perhaps still loading). How many frames
+    // come in between depends on the machine's speed, so no moment counts them.
+    enum class Moment { AtOnce, ZoomStep, FirstFrame, CompleteFrame };
+    for (const Moment moment : {Moment::AtOnce, Moment::ZoomStep, Moment::FirstFrame, Moment::CompleteFrame}) {
         auto w = std::make_unique<ViewWindow>();
         w->window->show();
         QVERIFY(QTest::qWaitForWindowExposed(w->window.get()));
@@ -811,11 +825,17 @@ void TstIrisSlideView::closingWhileTilesLoad()
         w->view->setDownsample(0.5);
         w->view->panBy(QPointF(-300, -200));
         const QPointF p(240, 180);
+        QSignalSpy zoomed(w->view, &IrisSlideView::viewChanged);
+        QSignalSpy presented(w->view, &IrisSlideView::framePresented);
         QWheelEvent wheel(p, w->surface()->mapToGlobal(p), QPoint(), QPoint(0, 360), Qt::NoButton,
                           Qt::NoModifier, Qt::NoScrollPhase, false);
         QCoreApplication::sendEvent(w->surface(), &wheel);
-        if (delayMs > 0)
-            QTest::qWait(delayMs);
+        if (moment == Moment::ZoomStep)
+            QVERIFY(zoomed.wait());
+        if (moment == Moment::FirstFrame)
+            QVERIFY(presented.wait());
+        if (moment == Moment::CompleteFrame)
+            QVERIFY(w->frames->waitForCompleteFrame());
         QCOMPARE(w->view->validationMessageCount(), quint64(0));
         w.reset();
         QCOMPARE(IrisWidget::EngineHost::liveEngineCount(), m_baselineEngines);
@@ -829,7 +849,10 @@ void TstIrisSlideView::closingWhileTilesLoad()
     w.frames.reset();
     delete w.view;
     QCOMPARE(IrisWidget::EngineHost::liveEngineCount(), m_baselineEngines);
-    QTest::qWait(50); // no queued frame reaches the deleted view
+    // No queued frame reaches the deleted view: the engine is gone, so every frame signal it
+    // posted is in the queue now; deliver them all.
+    QCoreApplication::sendPostedEvents();
+    QCoreApplication::processEvents();
 }
 
 void TstIrisSlideView::turnsAndMirrors()

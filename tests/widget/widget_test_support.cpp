@@ -5,12 +5,14 @@
 
 #include <QtCore/QDeadlineTimer>
 #include <QtCore/QDir>
+#include <QtCore/QEventLoop>
 #include <QtCore/QFile>
 #include <QtCore/QFileInfo>
+#include <QtCore/QTimer>
 #include <QtGui/QGuiApplication>
 #include <QtGui/QScreen>
 #include <QtGui/QWindow>
-#include <QtTest/QTest>
+#include <QtTest/QSignalSpy>
 
 #include <iris/engine.h>
 
@@ -74,13 +76,31 @@ bool FrameWatcher::hasCompleteFrameOfCurrentView() const
 
 bool FrameWatcher::waitForCompleteFrame(int timeoutMs)
 {
+    if (!m_view)
+        return false;
+    // Only a frame presented or a change of the view can make the answer change: test again
+    // after each (this object's own connection, made first, has recorded the frame by then).
     QDeadlineTimer deadline(timeoutMs);
+    QEventLoop loop;
+    QTimer expiry;
+    expiry.setSingleShot(true);
+    connect(&expiry, &QTimer::timeout, &loop, &QEventLoop::quit);
+    connect(m_view, &IrisSlideView::framePresented, &loop, &QEventLoop::quit);
+    connect(m_view, &IrisSlideView::viewChanged, &loop, &QEventLoop::quit);
+    connect(m_view, &QObject::destroyed, &loop, &QEventLoop::quit);
     while (!hasCompleteFrameOfCurrentView()) {
-        if (deadline.hasExpired())
+        if (!m_view || deadline.hasExpired())
             return false;
-        QTest::qWait(10);
+        expiry.start(std::chrono::milliseconds(deadline.remainingTime()));
+        loop.exec();
     }
     return true;
+}
+
+bool viewStaysStill(IrisSlideView *view)
+{
+    QSignalSpy moved(view, &IrisSlideView::viewChanged);
+    return !moved.wait(kStillMs);
 }
 
 // --- images --------------------------------------------------------------------------------

@@ -51,6 +51,14 @@ private:
     int m_frames = 0;
 };
 
+// Whether the view stays where it is (no viewChanged) for kStillMs. A negative check, for "no
+// glide follows this release": nothing announces that a glide will not start, so it waits the
+// shortest time in which one would show. KineticPanner moves the view on every tick of its
+// 16 ms timer, and Qt fires due timers in order, so a glide started before the call moves the
+// view within the first tick, well inside the three ticks waited here.
+inline constexpr int kStillMs = 50;
+bool viewStaysStill(IrisSlideView *view);
+
 // The view's presented pixels in device pixels (RGBA8888), read back from the X server.
 QImage grabPresented(IrisSlideView *view);
 // Whether the presented pixel at `at` (device pixels) is `expected` within ±tolerance per

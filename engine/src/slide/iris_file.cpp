@@ -605,7 +605,7 @@ Expected<const uint8_t*> Bytes::at(uint64_t offset, size_t n, std::vector<uint8_
 Expected<TileStream> tileStream(const Bytes& bytes, const Layout& layout, size_t layer, uint32_t x, uint32_t y) {
     const Layer& l = layout.layers[layer];
     const uint64_t index = l.firstTile + uint64_t(y) * l.xTiles + x;
-    std::vector<uint8_t> scratch;
+    thread_local std::vector<uint8_t> scratch; // an entry per tile read: no allocation each time
     Expected<const uint8_t*> e = bytes.at(layout.tileEntries + index * layout.tileStride, 8, scratch);
     if (!e) return e.error();
     const uint64_t offset = loadLE(*e, 5);

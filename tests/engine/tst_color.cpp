@@ -9,6 +9,10 @@
 //     OpenSlide) passed through LittleCMS: CIEDE2000, as the display shows both colours, at
 //     most 1.0 at the 99th percentile and 2.0 at the maximum; and with the CPU model of the
 //     table's trilinear lookup (tests/support/color_reference.h), within one 8-bit step.
+//   * Shrunk and shifted views (mip levels, filtering between texels): the atlas holds display
+//     colours, converted as the mip pass made each level from the stored bytes, so the frame
+//     filters converted texels; against LittleCMS applied to the same view drawn without the
+//     transform, the same ΔE2000 limits.
 //   * Both intents and a display profile that is not sRGB.
 //   * A slide without a profile, colour management on: frames byte-identical to it off.
 //   * A broken profile: a status error and a warning, the slide drawn untransformed (frames
@@ -55,6 +59,8 @@ private slots:
 
     void profiledSlidesMatchLittleCms_data();
     void profiledSlidesMatchLittleCms();
+    void shrunkAndShiftedViewsMatchLittleCms_data();
+    void shrunkAndShiftedViewsMatchLittleCms();
     void slideWithoutProfileIsUnchanged();
     void brokenProfileFallsBackToNoTransform();
     void switchingAtRuntime();
@@ -62,7 +68,8 @@ private slots:
 
 private:
     // A frame of `path` at level 0, top-left corner (x0, y0), with `settings`.
-    std::optional<iris::Frame> frameOf(const QString& path, double x0, double y0, const iris::ColorSettings& settings);
+    std::optional<iris::Frame> frameOf(const QString& path, double x0, double y0, const iris::ColorSettings& settings,
+                                       double downsample = 1.0);
     // Over the frame's pixels that show the slide (x < w, y < h: the rest is the background,
     // which is not slide colour and is never transformed).
     Stats compare(const iris::Frame& off, const iris::Frame& on, uint32_t w, uint32_t h,
@@ -99,7 +106,7 @@ void TestColor::cleanupTestCase() {
 }
 
 std::optional<iris::Frame> TestColor::frameOf(const QString& path, double x0, double y0,
-                                              const iris::ColorSettings& settings) {
+                                              const iris::ColorSettings& settings, double downsample) {
     iris::Engine& e = *engine_.engine;
     e.setColorSettings(settings);
     if (const iris::Result r = e.open(path.toStdString()); !r.ok()) {
@@ -107,7 +114,7 @@ std::optional<iris::Frame> TestColor::frameOf(const QString& path, double x0, do
         return std::nullopt;
     }
     std::string why;
-    auto f = renderView(e, viewWithOrigin(x0, y0, 1.0, kW, kH), kW, kH, 60s, &why);
+    auto f = renderView(e, viewWithOrigin(x0, y0, downsample, kW, kH), kW, kH, 60s, &why);
     if (!f) qWarning("%s", why.c_str());
     return f;
 }
@@ -220,6 +227,49 @@ void TestColor::profiledSlidesMatchLittleCms() {
     QVERIFY2(s.p99 <= 1.0, "ΔE2000 over 1.0 at the 99th percentile");
     QVERIFY2(s.max <= 2.0, "ΔE2000 over 2.0");
     QVERIFY2(s.maxLutStep <= 1, "the GPU's lookup differs from the CPU model by more than one 8-bit step");
+}
+
+void TestColor::shrunkAndShiftedViewsMatchLittleCms_data() {
+    QTest::addColumn<double>("x0");
+    QTest::addColumn<double>("y0");
+    QTest::addColumn<double>("downsample");
+    QTest::addColumn<bool>("wideDisplay");
+    QTest::newRow("mip 1 texel centres") << 0.0 << 0.0 << 2.0 << false;
+    QTest::newRow("mip 2, wide gamut display") << 0.0 << 0.0 << 4.0 << true;
+    QTest::newRow("1.37, shifted") << 311.3 << 207.6 << 1.37 << false;
+    QTest::newRow("2.9, shifted, wide gamut display") << 17.5 << 40.25 << 2.9 << true;
+    QTest::newRow("0.6 (magnified), shifted") << 700.4 << 500.7 << 0.6 << false;
+}
+
+void TestColor::shrunkAndShiftedViewsMatchLittleCms() {
+    QFETCH(double, x0);
+    QFETCH(double, y0);
+    QFETCH(double, downsample);
+    QFETCH(bool, wideDisplay);
+    const QString slide = QString::fromStdString((dir_ / "strong-curves.tiff").string());
+    iris::ColorSettings settings;
+    if (wideDisplay) settings.displayProfile = ref::wideGamma18Profile();
+    iris::ColorSettings off = settings;
+    off.managed = false;
+    const auto a = frameOf(slide, x0, y0, off, downsample);
+    QVERIFY(a);
+    const auto b = frameOf(slide, x0, y0, settings, downsample);
+    QVERIFY(b);
+    QVERIFY(engine_->colorStatus().applied);
+    QVERIFY(a->image.rgba != b->image.rgba);
+    const iris::SlideInfo info = *engine_->slideInfo();
+    // The target pixels that show the slide; the last one at the slide's edge mixes it with
+    // the background (not slide colour), so it is left out.
+    const auto shown = [&](int64_t extent, double origin) {
+        return uint32_t(std::clamp<int64_t>(int64_t(std::floor((double(extent) - origin) / downsample)) - 1, 0, kW));
+    };
+    const uint32_t w = std::min(shown(info.width, x0), kW), h = std::min(shown(info.height, y0), kH);
+    const Stats s = compare(*a, *b, w, h, info.iccProfile, settings, nullptr);
+    QVERIFY2(s.pixels >= 10000, "the frame shows too little of the slide");
+    qInfo("downsample %.2f at (%.2f, %.2f): %zu pixels, ΔE2000 p99 %.3f, max %.3f", downsample, x0, y0, s.pixels, s.p99,
+          s.max);
+    QVERIFY2(s.p99 <= 1.0, "ΔE2000 over 1.0 at the 99th percentile");
+    QVERIFY2(s.max <= 2.0, "ΔE2000 over 2.0");
 }
 
 void TestColor::slideWithoutProfileIsUnchanged() {

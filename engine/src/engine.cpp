@@ -46,7 +46,8 @@ struct Engine::Impl {
     Result init() {
         if (Result r = device.init(config); !r.ok()) return r;
         if (Result r = atlas.init(config.vramBudgetBytes); !r.ok()) return r;
-        if (Result r = pipeline.init(RenderThread::kFramesInFlight); !r.ok()) return r;
+        if (Result r = pipeline.init(RenderThread::kFramesInFlight, config.tuning.colorLookup); !r.ok()) return r;
+        log.info(std::string("colour lookup: ") + (pipeline.lutSampled() ? "sampler" : "8 nodes in float"));
         if (Result r = mips.init(config.tuning.mipSchedule); !r.ok()) return r;
         log.info(std::string("mip pass: ") + gpu::MipPipeline::scheduleName(mips.schedule()) + " schedule");
         handover = std::make_unique<Handover>(atlas.slotCount());

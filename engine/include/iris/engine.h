@@ -53,6 +53,13 @@ struct EngineTuning {
     // nothing visible), quads on a CPU device (lavapipe resolves 3× slower per pixel).
     enum class TileResolve { Auto, Quads, Compute };
     TileResolve tileResolve = TileResolve::Auto;
+    // How the colour step interpolates its table (docs/COLOR.md, "Cost"). Sampler: one
+    // trilinear fetch, the sampler's filter weights (8 fractional bits on most GPUs). Nodes:
+    // the eight nodes around the colour fetched and weighted in 32-bit float (8 fetches).
+    // Auto: Sampler on CPU devices (llvmpipe's filter equals the CPU model of the table),
+    // Nodes on GPUs.
+    enum class ColorLookup { Auto, Sampler, Nodes };
+    ColorLookup colorLookup = ColorLookup::Auto;
 };
 
 struct EngineConfig {

@@ -28,7 +28,7 @@ inline constexpr const char* kTuningEnvironmentHelp =
     "  IRIS_TILE_RESOLVE=auto|quads|compute  tiles as quads, or resolved per pixel\n"
     "                                 (default: compute offscreen on a GPU)\n"
     "  IRIS_COLOR_LOOKUP=auto|sampler|nodes  the colour table's interpolation\n"
-    "                                 (default: sampler on CPU devices, nodes on GPUs)";
+    "                                 (default: sampler)";
 
 // "  -o, --output FILE       text (default: x)" within 80 columns.
 class HelpFormatter : public CLI::Formatter {

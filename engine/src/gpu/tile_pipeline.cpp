@@ -12,9 +12,7 @@ namespace iris::gpu {
 
 Result TilePipeline::init(uint32_t frameSlots, EngineTuning::ColorLookup lookup) {
     VkDevice dev = device_.device();
-    lutSampled_ = lookup == EngineTuning::ColorLookup::Sampler ||
-                  (lookup == EngineTuning::ColorLookup::Auto &&
-                   device_.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU);
+    lutSampled_ = lookup != EngineTuning::ColorLookup::Nodes;
     const auto module = [&](const uint32_t* code, size_t bytes, vk::ShaderModule& out) {
         return vk::createShaderModule(dev, code, bytes, *out.replace(dev));
     };

@@ -279,13 +279,13 @@ void ServerBrowser::search()
 void ServerBrowser::nextPage()
 {
     if (m_more)
-        searchStudies(m_offset + kPageSize);
+        searchStudies(m_offset + m_pageSize);
 }
 
 void ServerBrowser::previousPage()
 {
     if (m_offset > 0)
-        searchStudies(m_offset >= kPageSize ? m_offset - kPageSize : 0);
+        searchStudies(m_offset >= m_pageSize ? m_offset - m_pageSize : 0);
 }
 
 void ServerBrowser::searchStudies(uint32_t offset)
@@ -304,7 +304,7 @@ void ServerBrowser::searchStudies(uint32_t offset)
     q.studyDateTo = m_dateTo->text().trimmed().remove(QLatin1Char('-')).toStdString();
     q.studyDescription = m_description->text().trimmed().toStdString();
     q.modality = m_slidesOnly->isChecked() ? "SM" : "";
-    q.limit = kPageSize;
+    q.limit = m_pageSize;
     q.offset = offset;
     const uint64_t generation = ++m_studyGeneration;
     ++m_seriesGeneration; // a series answer for a study of the old list is of no use now

@@ -39,7 +39,7 @@ QT_END_NAMESPACE
 class ServerBrowser : public QDialog {
     Q_OBJECT
 public:
-    static constexpr uint32_t kPageSize = 25;
+    static constexpr uint32_t kDefaultPageSize = 25;
 
     explicit ServerBrowser(QWidget *parent = nullptr);
     ~ServerBrowser() override;
@@ -49,6 +49,8 @@ public:
     // The error shown, or empty.
     QString errorText() const;
     bool isBusy() const { return m_busy > 0; }
+    // Studies per page (1…1000; tests use a small one to page over a few studies).
+    void setPageSize(uint32_t studies) { m_pageSize = studies < 1 ? 1 : studies > 1000 ? 1000 : studies; }
 
 public Q_SLOTS:
     // Searches studies from the first page.
@@ -104,6 +106,7 @@ private:
     iris::NetworkOptions m_clientOptions;
     std::vector<iris::dicomweb::Study> m_studyRows;
     std::vector<iris::dicomweb::Series> m_seriesRows;
+    uint32_t m_pageSize = kDefaultPageSize;
     uint32_t m_offset = 0;
     bool m_more = false;
     uint64_t m_studyGeneration = 0;  // of the newest study search; older answers are dropped

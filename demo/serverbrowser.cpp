@@ -268,6 +268,7 @@ std::shared_ptr<dw::QidoClient> ServerBrowser::client(QString *error)
     m_client = std::shared_ptr<dw::QidoClient>(std::move(made).value());
     m_clientUrl = url;
     m_clientOptions = o;
+    m_clientCredentials = credentials();
     return m_client;
 }
 
@@ -459,5 +460,6 @@ void ServerBrowser::openSelected()
         return;
     const dw::Series &s = m_seriesRows[size_t(series)];
     const QString url = fromStd(m_client->seriesUrl(s.studyInstanceUid, s.seriesInstanceUid));
-    Q_EMIT openRequested(url, credentials());
+    // The credentials the series was found with, even if the fields were edited since.
+    Q_EMIT openRequested(url, m_clientCredentials);
 }

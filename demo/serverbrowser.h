@@ -44,7 +44,7 @@ public:
     explicit ServerBrowser(QWidget *parent = nullptr);
     ~ServerBrowser() override;
 
-    // The credentials as typed in (what openRequested carries).
+    // The credentials as typed in (openRequested carries the ones the series was found with).
     IrisSlideView::NetworkCredentials credentials() const;
     // The error shown, or empty.
     QString errorText() const;
@@ -104,6 +104,7 @@ private:
     std::shared_ptr<iris::dicomweb::QidoClient> m_client;
     QString m_clientUrl;             // what m_client was made for
     iris::NetworkOptions m_clientOptions;
+    IrisSlideView::NetworkCredentials m_clientCredentials; // what the results shown were found with
     std::vector<iris::dicomweb::Study> m_studyRows;
     std::vector<iris::dicomweb::Series> m_seriesRows;
     uint32_t m_pageSize = kDefaultPageSize;

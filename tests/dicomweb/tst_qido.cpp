@@ -193,6 +193,13 @@ private slots:
         auto s = iris::net::qido::parseSeries(b.data(), b.size(), "1.2.3", "answer");
         expectError(s.ok() ? iris::Result() : s.error(), S::CorruptData,
                     {"element 1", "series of study '1.2.4', not of the study asked for (1.2.3)"});
+        // A Series Number may be negative (IS); a count may not.
+        const auto negative = bytes("[{\"0020000E\": {\"vr\": \"UI\", \"Value\": [\"1.2.5\"]}, "
+                                    "\"00200011\": {\"vr\": \"IS\", \"Value\": [-2]}}]");
+        auto numbered = iris::net::qido::parseSeries(negative.data(), negative.size(), "1.2.3", "answer");
+        QVERIFY(numbered.ok());
+        QCOMPARE((*numbered)[0].seriesNumber, int64_t(-2));
+        QCOMPARE((*numbered)[0].numberOfInstances, int64_t(-1));
         // A well-formed answer: every field read, absent counts as -1.
         const auto good = bytes(
             "[{\"0020000D\": {\"vr\": \"UI\", \"Value\": [\"1.2.3\"]}, \"00100010\": {\"vr\": \"PN\", \"Value\": "

@@ -10,7 +10,9 @@
 //   engine.open((*qido)->seriesUrl(studies->items[0].studyInstanceUid, series->items[0].seriesInstanceUid));
 //
 // Thread safety: every member may be called from any thread, also concurrently; the searches
-// block the calling thread until the answer (bounded by NetworkOptions' timeouts). Credentials
+// block the calling thread until the answer (bounded by NetworkOptions' timeouts). Destroy the
+// client only once no search is running (a host that searches on worker threads shares it with
+// them, as the demo does with a std::shared_ptr); destroying it ends its connections. Credentials
 // go only to the service URL's origin and never into a message or a log line.
 #pragma once
 
@@ -64,7 +66,7 @@ struct Series {
     std::string seriesInstanceUid; // (0020,000E), always a valid UID
     std::string modality;
     std::string seriesDescription;
-    int64_t seriesNumber = -1;      // -1 when not given
+    int64_t seriesNumber = -1;      // as given (IS may be negative); -1 also when not given
     int64_t numberOfInstances = -1; // NumberOfSeriesRelatedInstances; -1 when not given
 };
 

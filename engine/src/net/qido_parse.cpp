@@ -65,6 +65,13 @@ public:
             return error(fieldName(keyword, t) + " is '" + shown(*s) + "', not an integer");
         return int64_t(-1);
     }
+    // Any integer (a Series Number may be negative); -1 when absent, an error when not an integer.
+    Expected<int64_t> number(const char* keyword, uint32_t t) const {
+        if (const std::optional<int64_t> n = a_.integer(t)) return *n;
+        if (const std::optional<std::string> s = a_.text(t); s && !s->empty())
+            return error(fieldName(keyword, t) + " is '" + shown(*s) + "', not an integer");
+        return int64_t(-1);
+    }
     Expected<std::string> uid(const char* keyword, uint32_t t) const {
         const std::string u = text(t);
         if (dicom::isUid(u)) return u;
@@ -222,7 +229,7 @@ Expected<std::vector<dicomweb::Series>> parseSeries(const uint8_t* json, size_t 
         s.studyInstanceUid = studyUid;
         s.modality = f.text(kModality);
         s.seriesDescription = f.text(kSeriesDescription);
-        auto number = f.count("SeriesNumber", kSeriesNumber);
+        auto number = f.number("SeriesNumber", kSeriesNumber);
         if (!number.ok()) return number.error();
         auto instances = f.count("NumberOfSeriesRelatedInstances", kSeriesInstances);
         if (!instances.ok()) return instances.error();

@@ -47,8 +47,8 @@ bool makeStudy(const fs::path& boxesFolder, const fs::path& out, const StudySpec
             }
         }
         // EWM_updateMeta: the meta header's Media Storage SOP Instance UID follows the new one.
-        if (ff.saveFile(OFFilename((out / name).c_str()), EXS_Unknown, EET_UndefinedLength, EGL_recalcGL,
-                        EPD_noChange, 0, 0, EWM_updateMeta)
+        if (ff.saveFile(OFFilename((out / name).c_str()), EXS_Unknown, EET_UndefinedLength, EGL_recalcGL, EPD_noChange,
+                        0, 0, EWM_updateMeta)
                 .bad()) {
             *why = "cannot write " + (out / name).string();
             return false;

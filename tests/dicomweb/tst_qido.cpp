@@ -124,8 +124,7 @@ private slots:
         const std::vector<StudySpec> specs = standardStudies();
         for (size_t i = 0; i < specs.size(); ++i) {
             MadeStudy m;
-            QVERIFY2(makeStudy(*boxes, outDir() / ("study-" + std::to_string(i + 1)), specs[i], &m, &why),
-                     why.c_str());
+            QVERIFY2(makeStudy(*boxes, outDir() / ("study-" + std::to_string(i + 1)), specs[i], &m, &why), why.c_str());
             studies_.push_back(m);
         }
         server_ = OrthancServer::start(outDir() / "orthanc", {}, &why);
@@ -201,10 +200,10 @@ private slots:
         QCOMPARE((*numbered)[0].seriesNumber, int64_t(-2));
         QCOMPARE((*numbered)[0].numberOfInstances, int64_t(-1));
         // A well-formed answer: every field read, absent counts as -1.
-        const auto good = bytes(
-            "[{\"0020000D\": {\"vr\": \"UI\", \"Value\": [\"1.2.3\"]}, \"00100010\": {\"vr\": \"PN\", \"Value\": "
-            "[{\"Alphabetic\": \"Doe^Jane\"}]}, \"00080061\": {\"vr\": \"CS\", \"Value\": [\"SM\", \"OT\"]}, "
-            "\"00201208\": {\"vr\": \"IS\", \"Value\": [2]}}]");
+        const auto good =
+            bytes("[{\"0020000D\": {\"vr\": \"UI\", \"Value\": [\"1.2.3\"]}, \"00100010\": {\"vr\": \"PN\", \"Value\": "
+                  "[{\"Alphabetic\": \"Doe^Jane\"}]}, \"00080061\": {\"vr\": \"CS\", \"Value\": [\"SM\", \"OT\"]}, "
+                  "\"00201208\": {\"vr\": \"IS\", \"Value\": [2]}}]");
         auto studies = iris::net::qido::parseStudies(good.data(), good.size(), "answer");
         QVERIFY2(studies.ok(), describe(studies.ok() ? iris::Result() : studies.error()).c_str());
         QCOMPARE(studies->size(), size_t(1));
@@ -370,8 +369,7 @@ private slots:
         iris::NetworkOptions o;
         expectError(dw::QidoClient::create("ftp://127.0.0.1/dicom-web", o).error(), iris::Status::InvalidArgument,
                     {"http or https"});
-        expectError(dw::QidoClient::create(std::string("http://iris:") + kPassword + "@127.0.0.1/dicom-web", o)
-                        .error(),
+        expectError(dw::QidoClient::create(std::string("http://iris:") + kPassword + "@127.0.0.1/dicom-web", o).error(),
                     iris::Status::InvalidArgument, {"credentials in the URL"});
         expectError(dw::QidoClient::create("http://pacs.example/dicom-web", o).error(), iris::Status::InvalidArgument,
                     {"plain http://"});
@@ -430,16 +428,27 @@ private slots:
         };
         const std::string json = "application/dicom+json";
         const Case cases[] = {
-            {200, json.c_str(), "<html><body>Bad gateway</body></html>", iris::Status::CorruptData,
+            {200,
+             json.c_str(),
+             "<html><body>Bad gateway</body></html>",
+             iris::Status::CorruptData,
              {"The QIDO-RS answer of GET http://127.0.0.1:", "/dicom-web/studies?", "is not valid JSON"}},
             {200, json.c_str(), "{\"Studies\": []}", iris::Status::CorruptData, {"is not a JSON array"}},
-            {200, json.c_str(), "[{\"00100020\": {\"vr\": \"LO\", \"Value\": [\"PID1\"]}}]", iris::Status::CorruptData,
+            {200,
+             json.c_str(),
+             "[{\"00100020\": {\"vr\": \"LO\", \"Value\": [\"PID1\"]}}]",
+             iris::Status::CorruptData,
              {"element 1 has no StudyInstanceUID (0020,000D)"}},
-            {200, "application/json",
+            {200,
+             "application/json",
              "[{\"0020000D\": {\"vr\": \"UI\", \"Value\": [\"1.2.3\"]}, \"00201208\": {\"vr\": \"IS\", \"Value\": "
              "[-4]}}]",
-             iris::Status::CorruptData, {"NumberOfStudyRelatedInstances (0020,1208) is -4, not a count"}},
-            {200, "text/html; charset=utf-8", "<html></html>", iris::Status::CorruptData,
+             iris::Status::CorruptData,
+             {"NumberOfStudyRelatedInstances (0020,1208) is -4, not a count"}},
+            {200,
+             "text/html; charset=utf-8",
+             "<html></html>",
+             iris::Status::CorruptData,
              {"Content-Type 'text/html; charset=utf-8'", "not application/dicom+json"}},
             {500, json.c_str(), "", iris::Status::IoError, {"the server failed (HTTP 500 Internal Server Error)"}},
             {404, "text/plain", "", iris::Status::NotFound, {"the QIDO-RS service is not on the server (HTTP 404"}},
@@ -457,7 +466,8 @@ private slots:
             expectError(err, k.expected, {});
             if (QTest::currentTestFailed()) return;
             for (const std::string& w : k.words)
-                QVERIFY2(contains(err.message(), w), ("the message does not say '" + w + "': " + err.message()).c_str());
+                QVERIFY2(contains(err.message(), w),
+                         ("the message does not say '" + w + "': " + err.message()).c_str());
         }
         // A series answer that lists a series of another study.
         FaultProxy::Rule rule;

@@ -30,10 +30,10 @@ namespace iris::dicomweb {
 // to case, PatientID and AccessionNumber exactly (wildcards allowed). Components of a person
 // name are separated by '^' ("Doe^Jane").
 struct StudyQuery {
-    std::string patientName;      // PatientName (0010,0010)
-    std::string patientId;        // PatientID (0010,0020)
-    std::string accessionNumber;  // AccessionNumber (0008,0050)
-    std::string studyDateFrom;    // StudyDate (0008,0020) range, YYYYMMDD each; either may be empty
+    std::string patientName;     // PatientName (0010,0010)
+    std::string patientId;       // PatientID (0010,0020)
+    std::string accessionNumber; // AccessionNumber (0008,0050)
+    std::string studyDateFrom;   // StudyDate (0008,0020) range, YYYYMMDD each; either may be empty
     std::string studyDateTo;
     std::string studyDescription; // StudyDescription (0008,1030)
     std::string modality = "SM";  // ModalitiesInStudy (0008,0061); "SM": slide microscopy; empty: any
@@ -46,7 +46,7 @@ struct Study {
     std::string patientName;      // as DICOM JSON's Alphabetic (=Ideographic=Phonetic) groups
     std::string patientId;
     std::string accessionNumber;
-    std::string studyDate;        // YYYYMMDD as the server wrote it ("" when absent)
+    std::string studyDate; // YYYYMMDD as the server wrote it ("" when absent)
     std::string studyTime;
     std::string studyDescription;
     std::vector<std::string> modalities; // ModalitiesInStudy
@@ -56,8 +56,8 @@ struct Study {
 
 // Series-level search within one study.
 struct SeriesQuery {
-    std::string modality;   // Modality (0008,0060); empty: any ("SM" for slides only)
-    uint32_t limit = 100;   // 1…1000
+    std::string modality; // Modality (0008,0060); empty: any ("SM" for slides only)
+    uint32_t limit = 100; // 1…1000
     uint32_t offset = 0;
 };
 

@@ -52,9 +52,9 @@ Result httpError(long status, const std::string& context, const std::string& wha
     const std::string code = "HTTP " + std::to_string(status) + (reason(status).empty() ? "" : " " + reason(status));
     if (status == 401) {
         return Result(Status::IoError,
-                      context + (credentialsGiven ? "the server refused the credentials given (" + code + ")"
-                                                  : "the server asks for credentials (" + code +
-                                                        "); give them in NetworkOptions"));
+                      context + (credentialsGiven
+                                     ? "the server refused the credentials given (" + code + ")"
+                                     : "the server asks for credentials (" + code + "); give them in NetworkOptions"));
     }
     if (status == 403)
         return Result(Status::IoError, context + "the server refuses access to " + what + " (" + code + ")");

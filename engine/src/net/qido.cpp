@@ -41,16 +41,14 @@ struct QidoClient::Impl {
             std::string body(r.body.begin(), r.body.begin() + long(std::min<size_t>(r.body.size(), 300)));
             for (char& c : body)
                 if (static_cast<unsigned char>(c) < 0x20) c = ' ';
-            return Result(Status::InvalidArgument,
-                          context + "the server refused the query (HTTP 400 Bad Request)" +
-                              (body.empty() ? std::string() : ": " + body));
+            return Result(Status::InvalidArgument, context + "the server refused the query (HTTP 400 Bad Request)" +
+                                                       (body.empty() ? std::string() : ": " + body));
         }
         if (r.status != 200) return net::httpError(r.status, context, "the QIDO-RS service", credentials());
         const auto type = net::parseMediaType(r.contentType);
         if (!type.ok() || (type->type != "application/dicom+json" && type->type != "application/json")) {
             return Result(Status::CorruptData, context + "the server answered with Content-Type '" +
-                                                   r.contentType.substr(0, 100) +
-                                                   "', not application/dicom+json");
+                                                   r.contentType.substr(0, 100) + "', not application/dicom+json");
         }
         return std::move(r.body);
     }
@@ -59,8 +57,7 @@ struct QidoClient::Impl {
 QidoClient::QidoClient(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 QidoClient::~QidoClient() = default;
 
-Expected<std::unique_ptr<QidoClient>> QidoClient::create(const std::string& serviceUrl,
-                                                         const NetworkOptions& options) {
+Expected<std::unique_ptr<QidoClient>> QidoClient::create(const std::string& serviceUrl, const NetworkOptions& options) {
     auto url = net::parseUrl(serviceUrl);
     if (!url.ok()) return url.error();
     if (url->scheme == "http" && !url->loopback() && !options.allowPlainHttp) {

@@ -121,9 +121,9 @@ Expected<std::string> encodeValue(const std::string& field, const std::string& v
     for (const char ch : value) {
         const auto c = static_cast<unsigned char>(ch);
         if (c < 0x20 || c == 0x7f) {
-            return Result(Status::InvalidArgument,
-                          "The QIDO-RS search field " + field + " holds a control character (byte " +
-                              std::to_string(unsigned(c)) + ")");
+            return Result(Status::InvalidArgument, "The QIDO-RS search field " + field +
+                                                       " holds a control character (byte " +
+                                                       std::to_string(unsigned(c)) + ")");
         }
         const bool plain = (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '-' ||
                            c == '.' || c == '_' || c == '~' || c == '*' || c == '?' || c == '^';
@@ -150,12 +150,11 @@ Expected<std::string> studyQueryString(const dicomweb::StudyQuery& q) {
                                       {"ModalitiesInStudy", q.modality}}) {
         if (Result r = appendParam(s, name, value); !r.ok()) return r;
     }
-    for (const auto& [name, date] : {std::pair<const char*, const std::string&>{"from", q.studyDateFrom},
-                                     {"to", q.studyDateTo}}) {
+    for (const auto& [name, date] :
+         {std::pair<const char*, const std::string&>{"from", q.studyDateFrom}, {"to", q.studyDateTo}}) {
         if (!date.empty() && !isDate(date)) {
-            return Result(Status::InvalidArgument,
-                          std::string("The QIDO-RS search's StudyDate ") + name + " '" + shown(date) +
-                              "' is not a date as DICOM writes it (YYYYMMDD)");
+            return Result(Status::InvalidArgument, std::string("The QIDO-RS search's StudyDate ") + name + " '" +
+                                                       shown(date) + "' is not a date as DICOM writes it (YYYYMMDD)");
         }
     }
     if (!q.studyDateFrom.empty() && !q.studyDateTo.empty() && q.studyDateFrom > q.studyDateTo) {

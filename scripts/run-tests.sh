@@ -114,6 +114,7 @@ icc_profile tests/fuzz/icc.dict 1/1
 dicom_file tests/fuzz/dicom.dict 1/1
 multipart - 1/2
 dicom_json - 1/2
+qido - 1/4
 EOF
 while [ "${#fuzz_pids[@]}" -gt 0 ]; do
   wait -n || true

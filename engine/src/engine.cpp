@@ -589,7 +589,11 @@ MemoryStats Engine::memoryStats() const {
     return m;
 }
 
-EngineMetrics Engine::metrics() const { return impl_->render->metrics(); }
+EngineMetrics Engine::metrics() const {
+    EngineMetrics m = impl_->render->metrics();
+    m.tileReadsInProgress = impl_->loaders ? impl_->loaders->readsInProgress() : 0;
+    return m;
+}
 void Engine::resetMetrics() { impl_->render->resetMetrics(); }
 
 uint64_t Engine::validationMessageCount() const { return impl_->device.validationMessages(); }

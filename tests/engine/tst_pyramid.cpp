@@ -74,6 +74,18 @@ std::array<double, 3> areaAverage(double x0, double y0, double x1, double y1, in
     return sum;
 }
 
+
+// Whether a loader got inside a tile read within `limit` (Engine::metrics' count of reads in
+// progress; polled, since a read's start has no event of its own).
+bool readStarted(iris::Engine& e, std::chrono::milliseconds limit = std::chrono::seconds(10)) {
+    const auto end = std::chrono::steady_clock::now() + limit;
+    while (e.metrics().tileReadsInProgress == 0) {
+        if (std::chrono::steady_clock::now() > end) return false;
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    return true;
+}
+
 } // namespace
 
 class TstPyramid : public QObject {
@@ -331,10 +343,8 @@ private slots:
         // 1000000² (3907² tiles): synthetic levels down to 2^8 (3907², 16 × 16 tiles).
         QVERIFY(e->open("synthetic:1000000x1000000:1").ok());
         QCOMPARE(e->slideInfo()->levels.back().downsample, 256.0);
-        // Let a loader get inside a synthetic tile's reads. A guessed wait that stays: the engine
-        // reports no event when a tile read starts (only when its tile is published, which
-        // for these tiles is tens of seconds away), and starting takes milliseconds.
-        std::this_thread::sleep_for(500ms);
+        // A loader inside a synthetic tile's reads (every tile of this view is synthetic).
+        QVERIFY2(readStarted(*e.engine), "no tile read started within 10 s");
         QVERIFY(e->open("synthetic:2000x2000").ok());
         std::string why;
         const auto t0 = std::chrono::steady_clock::now();
@@ -343,7 +353,7 @@ private slots:
         const double switchS = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 
         QVERIFY(e->open("synthetic:1000000x1000000:1").ok());
-        std::this_thread::sleep_for(500ms);
+        QVERIFY2(readStarted(*e.engine), "no tile read started within 10 s");
         const auto t1 = std::chrono::steady_clock::now();
         e.engine.reset();
         const double destroyS = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
@@ -362,7 +372,7 @@ private slots:
         QVERIFY2(e, describe(e.error).c_str());
         QVERIFY(e->bindOffscreen(256, 256).ok());
         QVERIFY(e->open("synthetic:1000000x1000000:1").ok()); // fitted: drawn from the 2^8 level
-        std::this_thread::sleep_for(500ms);
+        QVERIFY2(readStarted(*e.engine), "no tile read started within 10 s");
         std::string why;
         const auto t0 = std::chrono::steady_clock::now();
         auto f = renderView(*e.engine, iris::View{500000.5, 500000.5, 1.0}, 256, 256, 10s, &why);

@@ -374,6 +374,7 @@ struct EngineMetrics {
     uint64_t mipTiles = 0;         // tiles those dispatches covered (0: no timestamps on the compute queue)
     FrameStats lastFrame;
     std::vector<FieldStats> fields; // completed or superseded field moves, oldest first (last 4096)
+    uint32_t tileReadsInProgress = 0; // tiles the loader threads are reading and decoding now
 };
 
 struct DeviceInfo {

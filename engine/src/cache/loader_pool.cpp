@@ -97,7 +97,9 @@ void LoaderPool::hold(Plan& plan, const TileRef& t, std::vector<TileRef> Plan::*
 void LoaderPool::decode(const Snapshot& snap, Plan& plan, const TileRef& t) {
     SlideSource& source = *snap.slide->source;
     std::unique_ptr<uint8_t[]> buf = cache_.acquireBuffer();
+    reads_.fetch_add(1, std::memory_order_relaxed);
     const Result r = source.readTile(t.level, t.tx, t.ty, buf.get());
+    reads_.fetch_sub(1, std::memory_order_relaxed);
     const bool failed = !r.ok();
     if (r.status() == Status::Cancelled) {
         // The slide was let go of (SlideSource::abandon) while this tile was being read: no

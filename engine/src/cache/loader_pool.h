@@ -35,6 +35,9 @@ public:
     LoaderPool(SharedState& shared, TileCache& cache, const Log& log, unsigned threads, int perimeter);
     ~LoaderPool(); // joins (shared.stopping must be set and bumped first, or the pool does it)
     void stop();
+    // Tile reads (SlideSource::readTile) running now, on all loaders. Relaxed: a count for
+    // metrics and tests, which order nothing by it.
+    unsigned readsInProgress() const { return reads_.load(std::memory_order_relaxed); }
 
 private:
     struct Plan {
@@ -83,6 +86,7 @@ private:
     // tiles at once, so one is always free to take a new view's tiles at once.
     unsigned syntheticCap_ = 1;
     std::atomic<unsigned> syntheticBusy_{0};
+    std::atomic<unsigned> reads_{0}; // readsInProgress()
     std::mutex planMutex_; // guards plan_ (held to copy or replace a pointer)
     std::shared_ptr<Plan> plan_;
     // Counts the network source's arrival callbacks: fetch_add(release) there, then `wake` is

@@ -462,10 +462,12 @@ void TstIrisSlideView::fitShowsWholeSlide()
     QVERIFY(shown.width() >= size.width() - 1 || shown.height() >= size.height() - 1);
 
     // 6000 × 4000 in 480 × 360: bands above and below the slide show the background. The
-    // complete frame was submitted; its presentation reaches the X server later. Usually within
-    // milliseconds, but in three CI runs (lavapipe, Xvfb, two busy cores) the window still showed
-    // the zoomed view 5-10 s after a complete frame of the fit view (not understood yet; seen once
-    // here in about 40 runs): wait up to 20 s, and say how long it took when it was not at once.
+    // complete frame was submitted; its presentation reaches the X server later, and must within
+    // 1 s (issue 13: what a user accepts, on lavapipe under load). Three CI runs once saw the
+    // window still show the zoomed view 5-10 s after the fit view's complete frame; an X server
+    // without a compositor leaves stale pixels where an expose is not answered with a present,
+    // which the view now does (uncoveredPixelsArePresentedAgain). Since then none in 20 runs
+    // here with the two cores loaded 4-5 times over (load average 8-10), nor in CI.
     //
     // The presented pixel is sampled every 20 ms until it has shown the band for 1 s without a
     // break (a window that shows the band and then something else again starts over). The
@@ -481,7 +483,8 @@ void TstIrisSlideView::fitShowsWholeSlide()
     bool flippedBack = false;
     int framesBefore = m_w->frames->frames();
     QString lastSeen;
-    while (presentWait.elapsed() < 20000) {
+    constexpr qint64 kPresentWithinMs = 1000;
+    while (presentWait.elapsed() < kPresentWithinMs + 1000) {
         QColor seen;
         const bool isBand = presentedPixelIs(view, topCentre, wanted, 2, &seen);
         const qint64 now = presentWait.elapsed();
@@ -509,14 +512,16 @@ void TstIrisSlideView::fitShowsWholeSlide()
         QTest::qWait(20);
     }
     const QString story = timeline.join(QStringLiteral("; "));
-    QVERIFY2(bandSince >= 0 && presentWait.elapsed() - bandSince >= 1000, qPrintable(QStringLiteral("the fit view's band at (%1, %2): %3")
-                                                            .arg(topCentre.x())
-                                                            .arg(topCentre.y())
-                                                            .arg(story)));
-    if (bandSince > 1000 || flippedBack)
-        qWarning("fitShowsWholeSlide: the fit view was presented for good %lld ms after its complete frame%s: %s",
-                 static_cast<long long>(bandSince), flippedBack ? " (it showed and then lost the band)" : "",
-                 qPrintable(story));
+    qInfo("fitShowsWholeSlide: the fit view was presented for good %lld ms after its complete frame%s",
+          static_cast<long long>(bandSince), flippedBack ? " (it showed and then lost the band)" : "");
+    QVERIFY2(bandSince >= 0 && bandSince <= kPresentWithinMs && presentWait.elapsed() - bandSince >= 1000,
+             qPrintable(QStringLiteral("the fit view's band at (%1, %2), within %3 ms and then for 1 s: %4")
+                            .arg(topCentre.x())
+                            .arg(topCentre.y())
+                            .arg(kPresentWithinMs)
+                            .arg(story)));
+    if (flippedBack)
+        qWarning("fitShowsWholeSlide: %s", qPrintable(story));
     checkPresentedMatchesHeadless(view, m_sample, QStringLiteral("fitShowsWholeSlide"));
 }
 

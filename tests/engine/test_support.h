@@ -17,6 +17,7 @@
 #include <chrono>
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -205,6 +206,24 @@ private:
     OpenSlideRef() = default;
     _openslide* osr_ = nullptr;
     fs::path path_;
+};
+
+// OpenSlide handles kept open by path for a suite's rows (opening a slide costs more than a
+// row's reads): the first get() opens, later ones return the same handle.
+class OpenSlideRefs {
+public:
+    // Null with *error set when OpenSlide cannot open `path`.
+    OpenSlideRef* get(const fs::path& path, std::string* error) {
+        if (auto it = refs_.find(path.string()); it != refs_.end()) return it->second.get();
+        std::unique_ptr<OpenSlideRef> r = OpenSlideRef::open(path, error);
+        OpenSlideRef* raw = r.get();
+        if (r) refs_.emplace(path.string(), std::move(r));
+        return raw;
+    }
+    void clear() { refs_.clear(); } // closes them
+
+private:
+    std::map<std::string, std::unique_ptr<OpenSlideRef>> refs_;
 };
 
 // The ICC profile (TIFF tag 34675) of a TIFF's first directory; empty when it has none.

@@ -77,16 +77,9 @@ class TestPixelExact : public QObject {
     TestEngine e_;
     uint32_t boundW_ = 0, boundH_ = 0;
     std::string openPath_;
-    std::map<std::string, std::unique_ptr<OpenSlideRef>> refs_;
+    OpenSlideRefs refs_;
 
-    OpenSlideRef* ref(const std::filesystem::path& p, std::string* err) {
-        auto it = refs_.find(p.string());
-        if (it != refs_.end()) return it->second.get();
-        auto r = OpenSlideRef::open(p, err);
-        OpenSlideRef* raw = r.get();
-        if (r) refs_.emplace(p.string(), std::move(r));
-        return raw;
-    }
+    OpenSlideRef* ref(const std::filesystem::path& p, std::string* err) { return refs_.get(p, err); }
 
     // Binds W×H and opens `path` unless that is already so.
     bool prepare(const std::filesystem::path& path, uint32_t w, uint32_t h, std::string* err) {

@@ -42,16 +42,9 @@ class TestRotation : public QObject {
     Q_OBJECT
     TestEngine e_;
     std::string openPath_;
-    std::map<std::string, std::unique_ptr<OpenSlideRef>> refs_;
+    OpenSlideRefs refs_;
 
-    OpenSlideRef* ref(const std::filesystem::path& p, std::string* err) {
-        auto it = refs_.find(p.string());
-        if (it != refs_.end()) return it->second.get();
-        auto r = OpenSlideRef::open(p, err);
-        OpenSlideRef* raw = r.get();
-        if (r) refs_.emplace(p.string(), std::move(r));
-        return raw;
-    }
+    OpenSlideRef* ref(const std::filesystem::path& p, std::string* err) { return refs_.get(p, err); }
     bool openSlide(const std::string& path, std::string* err) {
         if (openPath_ == path) return true;
         openPath_.clear();

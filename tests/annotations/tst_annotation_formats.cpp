@@ -184,6 +184,16 @@ void TestAnnotationFormats::geoJsonRoundTrip() {
     const QString diff = difference(d, *back);
     QVERIFY2(diff.isEmpty(), qPrintable(diff));
     QCOMPARE(writeGeoJson(*back), text); // and it is stable
+    // A free-form property named like one of the format's own fields is not written: it would
+    // replace the field on the way back in.
+    AnnotationDocument r;
+    r.objects.push_back(d.objects[2]);
+    r.objects[0].name = "real";
+    r.objects[0].properties = {{"name", "impostor"}, {"iris", "x"}, {"kept", "1"}};
+    auto rb = readGeoJson(writeGeoJson(r));
+    QVERIFY(rb.ok());
+    QCOMPARE(rb->objects[0].name, std::string("real"));
+    QCOMPARE(rb->objects[0].properties, (std::vector<std::pair<std::string, std::string>>{{"kept", "1"}}));
     // NaN measurements travel as null (JSON has no NaN).
     AnnotationDocument n;
     n.objects.push_back(d.objects[2]);
@@ -390,6 +400,10 @@ void TestAnnotationFormats::malformedGeoJson_data() {
     QTest::newRow("geometry type") << "{\"type\":\"FeatureCollection\",\"features\":[" + pt + ",\n" +
                                           R"({"type":"Feature","geometry":{"type":"Circle","coordinates":[1,2]}}]})"
                                    << "GeoJSON feature 1 (line 2): geometry type \"Circle\" is not supported (Point, MultiPoint, LineString, Polygon, MultiPolygon are)";
+    QTest::newRow("huge coordinate") << R"([{"type":"Feature","geometry":{"type":"Point","coordinates":[1e300,2]}}])"
+                                     << "GeoJSON feature 0 (line 1): a coordinate is outside ±1e12";
+    QTest::newRow("reversed box") << R"([{"type":"Feature","geometry":{"type":"Polygon","coordinates":[[[0,0],[1,0],[1,1],[0,0]]]},"properties":{"iris":{"shape":"ellipse","box":[5,5,1,1]}}}])"
+                                  << "GeoJSON feature 0 (line 1): the box's minimum exceeds its maximum";
     QTest::newRow("not a feature") << R"({"type":"FeatureCollection","features":[{"type":"Polygon","coordinates":[]}]})"
                                    << "GeoJSON feature 0 (line 1): has type \"Polygon\", expected \"Feature\"";
     QTest::newRow("two positions") << R"({"type":"FeatureCollection","features":[{"type":"Feature","properties":{"name":"bad one"},"geometry":{"type":"Polygon","coordinates":[[[0,0],[1,1],[0,0]]]}}]})"

@@ -127,7 +127,8 @@ private:
         if (auto v = a.attribute("IrisFillOpacity")) o.fillOpacity = float(parseDouble(v.value()).value_or(o.fillOpacity));
         if (auto v = a.attribute("IrisLineWidth")) o.lineWidth = float(parseDouble(v.value()).value_or(o.lineWidth));
         for (pugi::xml_node p : a.child("IrisProperties").children("Property"))
-            o.properties.emplace_back(p.attribute("Name").value(), p.attribute("Value").value());
+            if (std::string_view(p.attribute("Name").value()) != "asap:Type") // the Type attribute's, below
+                o.properties.emplace_back(p.attribute("Name").value(), p.attribute("Value").value());
         for (pugi::xml_node m : a.child("IrisMeasurements").children("Measurement")) {
             const std::string_view v = m.attribute("Value").value();
             const auto n = v == "NaN" ? std::optional<double>(NAN) : parseDouble(v);
@@ -142,9 +143,27 @@ private:
         if (Result r = coordinates(first, outline); !r.ok()) return r;
         const std::string_view shape = a.attribute("IrisShape").value();
         const std::string where = "annotation \"" + o.name + "\" (" + type + ")";
-        if (type == "Polygon" || type == "Spline" || (type == "Rectangle" && outline.size() != 4)) {
-            if (shape == "ellipse" || shape == "rectangle") {
-                o.kind = shape == "ellipse" ? AnnotationKind::Ellipse : AnnotationKind::Rectangle;
+        // A Rectangle is ours when it is one ring of 4 corners of its bounds (a closing repeat
+        // dropped); otherwise (rotated, more corners) it is read as a polygon that remembers its Type.
+        bool rectangle = false;
+        if (type == "Rectangle") {
+            if (outline.size() >= 2 && outline.front() == outline.back()) outline.pop_back();
+            Box2 b;
+            for (Point2 p : outline) b.expand(p);
+            rectangle = outline.size() == 4 && !first.next_sibling("Coordinates") &&
+                        std::all_of(outline.begin(), outline.end(), [&](Point2 p) {
+                            return (p.x == b.minX || p.x == b.maxX) && (p.y == b.minY || p.y == b.maxY);
+                        });
+            if (rectangle) {
+                o.kind = AnnotationKind::Rectangle;
+                o.box = b;
+            }
+        }
+        if (rectangle) {
+            // kind and box set above
+        } else if (type == "Polygon" || type == "Spline" || type == "Rectangle") {
+            if (shape == "ellipse" && type == "Polygon") {
+                o.kind = AnnotationKind::Ellipse;
                 Box2 b;
                 for (Point2 p : outline) b.expand(p);
                 std::istringstream in(a.attribute("IrisBox").value());
@@ -170,21 +189,6 @@ private:
                 }
                 if (type == "Spline") o.properties.emplace_back("asap:Type", "Spline");
                 if (type == "Rectangle") o.properties.emplace_back("asap:Type", "Rectangle");
-            }
-        } else if (type == "Rectangle") {
-            // Four corners: kept as a rectangle when they are the corners of their bounds.
-            Box2 b;
-            for (Point2 p : outline) b.expand(p);
-            const bool axisAligned = std::all_of(outline.begin(), outline.end(), [&](Point2 p) {
-                return (p.x == b.minX || p.x == b.maxX) && (p.y == b.minY || p.y == b.maxY);
-            });
-            if (axisAligned) {
-                o.kind = AnnotationKind::Rectangle;
-                o.box = b;
-            } else {
-                o.kind = AnnotationKind::Polygon;
-                o.polygons.push_back({std::move(outline), {}});
-                o.properties.emplace_back("asap:Type", "Rectangle");
             }
         } else if (type == "Dot" || type == "PointSet") {
             o.kind = AnnotationKind::Point;
@@ -234,9 +238,16 @@ std::string writeAsapXml(const AnnotationDocument& doc) {
     pugi::xml_node list = root.append_child("Annotations");
     for (const AnnotationObject& o : doc.objects) {
         pugi::xml_node a = list.append_child("Annotation");
+        // The Type the reader kept ("asap:Type"), where it fits the kind: a Spline or a rotated
+        // Rectangle is a polygon, a one-point PointSet a point, and so on.
         std::string asapType;
-        for (const auto& [k, v] : o.properties)
-            if (k == "asap:Type") asapType = v;
+        for (const auto& [k, v] : o.properties) {
+            if (k != "asap:Type") continue;
+            if ((o.kind == AnnotationKind::Polygon && (v == "Spline" || v == "Rectangle")) ||
+                (o.kind == AnnotationKind::Point && (v == "Dot" || v == "PointSet")) ||
+                (o.kind == AnnotationKind::Polyline && (v == "Measurement" || v == "Polyline" || v == "PolyLine")))
+                asapType = v;
+        }
         std::string type;
         switch (o.kind) {
         case AnnotationKind::Point: type = o.points.size() == 1 ? "Dot" : "PointSet"; break;

@@ -489,6 +489,11 @@ public:
     FeatureReader& reader() { return reader_; }
 };
 
+bool isReserved(const std::string& k) {
+    return k == "objectType" || k == "name" || k == "classification" || k == "color" || k == "isLocked" ||
+           k == "measurements" || k == "iris";
+}
+
 ojson colorJson(Rgba8 c) {
     ojson a = ojson::array({c.r, c.g, c.b});
     if (c.a != 255) a.push_back(c.a);
@@ -558,6 +563,8 @@ Expected<AnnotationDocument> readGeoJson(std::string_view text, const ReadContro
             }
         }
     }
+    // Classes by name: the order features happened to name them in is no property of the file.
+    std::sort(doc.classes.begin(), doc.classes.end(), [](const auto& a, const auto& b) { return a.name < b.name; });
     if (control.progress) control.progress(text.size(), text.size());
     return doc;
 }
@@ -568,19 +575,25 @@ std::string writeGeoJson(const AnnotationDocument& doc) {
     std::string out = "{\"type\":\"FeatureCollection\",";
     if (!doc.classes.empty()) {
         ojson cl = ojson::array();
-        for (const auto& c : doc.classes) cl.push_back({{"name", c.name}, {"color", colorJson(c.color)}, {"visible", c.visible}});
-        out += "\"iris:classes\":" + cl.dump() + ",";
+        for (const auto& [name, c] : classes) cl.push_back({{"name", c.name}, {"color", colorJson(c.color)}, {"visible", c.visible}});
+        out += "\"iris:classes\":" + cl.dump(-1, ' ', false, ojson::error_handler_t::replace) + ",";
     }
     out += "\"features\":[";
     bool first = true;
     for (const AnnotationObject& o : doc.objects) {
         ojson f;
         f["type"] = "Feature";
-        std::string stringId;
-        for (const auto& [k, v] : o.properties)
-            if (k == "geojson:id") stringId = v;
-        if (!stringId.empty()) f["id"] = stringId;
-        else if (o.id) f["id"] = o.id;
+        // Our id when the object has one; else the file's own (QuPath's UUID), which the reader
+        // kept as the property "geojson:id" (the first such property: it is not written again).
+        const std::pair<std::string, std::string>* fileId = nullptr;
+        if (o.id) f["id"] = o.id;
+        else
+            for (const auto& kv : o.properties)
+                if (kv.first == "geojson:id") {
+                    f["id"] = kv.second;
+                    fileId = &kv;
+                    break;
+                }
         ojson g;
         switch (o.kind) {
         case AnnotationKind::Point:
@@ -637,8 +650,10 @@ std::string writeGeoJson(const AnnotationDocument& doc) {
             for (const auto& [k, v] : o.measurements) m[k] = std::isfinite(v) ? ojson(v) : ojson(nullptr);
             p["measurements"] = std::move(m);
         }
-        for (const auto& [k, v] : o.properties)
-            if (k != "objectType" && k != "geojson:id") p[k] = v;
+        // Free-form properties, except those whose names the format itself uses (a host's
+        // property called "name" would replace the object's name on the way back in).
+        for (const auto& kv : o.properties)
+            if (&kv != fileId && !isReserved(kv.first)) p[kv.first] = kv.second;
         ojson iris = {{"lineWidth", o.lineWidth}, {"fill", o.fill}, {"fillOpacity", o.fillOpacity}, {"visible", o.visible}};
         if (o.kind == AnnotationKind::Rectangle || o.kind == AnnotationKind::Ellipse) {
             iris["shape"] = o.kind == AnnotationKind::Rectangle ? "rectangle" : "ellipse";
@@ -649,7 +664,7 @@ std::string writeGeoJson(const AnnotationDocument& doc) {
         if (!first) out += ',';
         first = false;
         out += '\n';
-        out += f.dump();
+        out += f.dump(-1, ' ', false, ojson::error_handler_t::replace); // invalid UTF-8 → U+FFFD
     }
     out += "\n]}\n";
     return out;

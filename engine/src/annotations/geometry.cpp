@@ -39,6 +39,12 @@ Box2 annotationBounds(const AnnotationObject& o) noexcept {
 namespace {
 bool finite(Point2 p) { return std::isfinite(p.x) && std::isfinite(p.y); }
 bool allFinite(const std::vector<Point2>& v) { return std::all_of(v.begin(), v.end(), finite); }
+// Slides are under 10^7 pixels a side; past 10^12 sums, areas and ellipse centres would lose
+// all precision or overflow, so such coordinates are refused as out of range.
+constexpr double kMaxCoordinate = 1e12;
+bool inRange(Point2 p) { return std::fabs(p.x) <= kMaxCoordinate && std::fabs(p.y) <= kMaxCoordinate; }
+bool allInRange(const std::vector<Point2>& v) { return std::all_of(v.begin(), v.end(), inRange); }
+const char* const kOutOfRange = "a coordinate is outside ±1e12";
 } // namespace
 
 std::string annotationProblem(const AnnotationObject& o) {
@@ -48,10 +54,12 @@ std::string annotationProblem(const AnnotationObject& o) {
     case AnnotationKind::Point:
         if (o.points.empty()) return "a point annotation without points";
         if (!allFinite(o.points)) return "a coordinate is not finite";
+        if (!allInRange(o.points)) return kOutOfRange;
         break;
     case AnnotationKind::Polyline:
         if (o.points.size() < 2) return "a polyline needs at least 2 points";
         if (!allFinite(o.points)) return "a coordinate is not finite";
+        if (!allInRange(o.points)) return kOutOfRange;
         break;
     case AnnotationKind::Polygon:
         if (o.polygons.empty()) return "a polygon annotation without polygons";
@@ -59,16 +67,19 @@ std::string annotationProblem(const AnnotationObject& o) {
             const auto& part = o.polygons[i];
             if (part.outer.size() < 3) return "polygon " + std::to_string(i) + ": the outer ring has fewer than 3 vertices";
             if (!allFinite(part.outer)) return "polygon " + std::to_string(i) + ": a coordinate is not finite";
+            if (!allInRange(part.outer)) return "polygon " + std::to_string(i) + ": " + kOutOfRange;
             for (size_t h = 0; h < part.holes.size(); ++h) {
                 if (part.holes[h].size() < 3)
                     return "polygon " + std::to_string(i) + ": hole " + std::to_string(h) + " has fewer than 3 vertices";
                 if (!allFinite(part.holes[h])) return "polygon " + std::to_string(i) + ": a coordinate is not finite";
+                if (!allInRange(part.holes[h])) return "polygon " + std::to_string(i) + ": " + kOutOfRange;
             }
         }
         break;
     case AnnotationKind::Rectangle:
     case AnnotationKind::Ellipse:
         if (!finite({o.box.minX, o.box.minY}) || !finite({o.box.maxX, o.box.maxY})) return "a coordinate is not finite";
+        if (!inRange({o.box.minX, o.box.minY}) || !inRange({o.box.maxX, o.box.maxY})) return kOutOfRange;
         if (o.box.empty()) return "the box's minimum exceeds its maximum";
         break;
     }

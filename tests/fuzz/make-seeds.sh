@@ -200,6 +200,12 @@ JSON
 } > "$out/dicom_json/series.json"
 echo '[]' > "$out/dicom_json/empty-array.json"
 
+# --- annotations (geojson, asap_xml): the small files committed in annotation-seeds/ -------
+for t in geojson asap_xml; do
+  rm -rf "${out:?}/$t" && mkdir -p "$out/$t" && cp "$here/annotation-seeds/$t"/* "$out/$t/"
+  echo "make-seeds: $(find "$out/$t" -maxdepth 1 -type f | wc -l) seed(s) in $out/$t"
+done
+
 status=0
 for t in $targets; do
   count=$(find "$out/$t" -maxdepth 1 -type f | wc -l)

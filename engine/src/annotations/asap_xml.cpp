@@ -92,9 +92,10 @@ private:
             if (!std::isfinite(*x) || !std::isfinite(*y)) return fail(c, "a coordinate is not finite");
             long long order = (long long)ordered.size();
             if (auto o = c.attribute("Order")) {
-                const auto v = parseDouble(o.value());
-                if (!v || *v != std::floor(*v)) return fail(c, std::string("Coordinate Order \"") + o.value() + "\" is not an integer");
-                order = (long long)*v;
+                const std::string_view v = o.value();
+                auto r = std::from_chars(v.data(), v.data() + v.size(), order);
+                if (v.empty() || r.ec != std::errc() || r.ptr != v.data() + v.size())
+                    return fail(c, std::string("Coordinate Order \"") + o.value() + "\" is not an integer");
             }
             ordered.push_back({order, {*x, *y}});
             if (ordered.size() > kMaxVerticesPerObject)
@@ -124,8 +125,8 @@ private:
         if (auto v = a.attribute("IrisLocked")) o.locked = v.as_bool();
         if (auto v = a.attribute("IrisVisible")) o.visible = v.as_bool();
         if (auto v = a.attribute("IrisFill")) o.fill = v.as_bool();
-        if (auto v = a.attribute("IrisFillOpacity")) o.fillOpacity = float(parseDouble(v.value()).value_or(o.fillOpacity));
-        if (auto v = a.attribute("IrisLineWidth")) o.lineWidth = float(parseDouble(v.value()).value_or(o.lineWidth));
+        if (auto v = a.attribute("IrisFillOpacity")) o.fillOpacity = toFloat(parseDouble(v.value()).value_or(o.fillOpacity));
+        if (auto v = a.attribute("IrisLineWidth")) o.lineWidth = toFloat(parseDouble(v.value()).value_or(o.lineWidth));
         for (pugi::xml_node p : a.child("IrisProperties").children("Property"))
             if (std::string_view(p.attribute("Name").value()) != "asap:Type") // the Type attribute's, below
                 o.properties.emplace_back(p.attribute("Name").value(), p.attribute("Value").value());

@@ -59,6 +59,15 @@ inline std::optional<double> parseDouble(std::string_view s) {
     return v;
 }
 
+// A double narrowed to float without undefined behaviour: out of float's range gives ±inf (which
+// annotationProblem then refuses for widths and opacities).
+inline float toFloat(double v) {
+    if (std::isnan(v)) return NAN;
+    if (v > 3.4e38) return INFINITY;
+    if (v < -3.4e38) return -INFINITY;
+    return float(v);
+}
+
 inline std::string hexColor(Rgba8 c) {
     char buf[16];
     if (c.a == 255) std::snprintf(buf, sizeof buf, "#%02X%02X%02X", c.r, c.g, c.b);

@@ -250,11 +250,14 @@ private:
                 o.className = name->get<std::string>();
                 const ojson* c = find(v, "color");
                 if (!c) c = find(v, "colorRGB");
+                // Every class named joins the table, with its colour or the default one.
+                Rgba8 col = defaultClassColor(o.className);
                 if (c) {
-                    auto col = color(*c);
-                    if (!col) return fail("classification color " + c->dump().substr(0, 40) + " is neither [r,g,b] nor a packed integer");
-                    classColor(o.className, *col);
+                    auto given = color(*c);
+                    if (!given) return fail("classification color " + c->dump().substr(0, 40) + " is neither [r,g,b] nor a packed integer");
+                    col = *given;
                 }
+                classColor(o.className, col);
             } else if (k == "color") {
                 auto col = color(v);
                 if (!col) return fail("color " + v.dump().substr(0, 40) + " is neither [r,g,b] nor a packed integer");
@@ -314,13 +317,13 @@ private:
             auto need = [&](bool ok, const char* what) { return ok ? Result() : fail("iris." + k + " is not " + what); };
             if (k == "lineWidth") {
                 if (Result r = need(x.is_number(), "a number"); !r.ok()) return r;
-                o.lineWidth = x.get<float>();
+                o.lineWidth = toFloat(x.get<double>());
             } else if (k == "fill") {
                 if (Result r = need(x.is_boolean(), "a boolean"); !r.ok()) return r;
                 o.fill = x.get<bool>();
             } else if (k == "fillOpacity") {
                 if (Result r = need(x.is_number(), "a number"); !r.ok()) return r;
-                o.fillOpacity = x.get<float>();
+                o.fillOpacity = toFloat(x.get<double>());
             } else if (k == "visible") {
                 if (Result r = need(x.is_boolean(), "a boolean"); !r.ok()) return r;
                 o.visible = x.get<bool>();

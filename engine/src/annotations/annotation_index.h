@@ -9,6 +9,11 @@
 // them by their bounds alone.
 #pragma once
 
+// Boost 1.74's R-tree includes <boost/detail/no_exceptions_support.hpp>, which prints a
+// deprecation #pragma message in every file that includes it; nothing here can change that.
+#ifndef BOOST_ALLOW_DEPRECATED_HEADERS
+#define BOOST_ALLOW_DEPRECATED_HEADERS
+#endif
 #include <boost/geometry.hpp>
 #include <boost/geometry/index/rtree.hpp>
 
@@ -32,7 +37,9 @@ struct AnnotationFillCache {
 namespace ann {
 
 constexpr size_t kChunk = 512;    // objects a chunk: the copy and the tree rebuilt per edit
-constexpr size_t kBuckets = 4096; // id buckets: an edit copies one (≈ n / 4096 ids)
+// Id buckets: an edit copies the directory (kBuckets pointers) and one bucket (≈ n / kBuckets
+// 16-byte entries); 1024 balances the two at 10^6 objects.
+constexpr size_t kBuckets = 1024;
 
 namespace bg = boost::geometry;
 namespace bgi = boost::geometry::index;
@@ -56,7 +63,7 @@ std::shared_ptr<const Chunk> makeChunk(std::vector<Entry> entries);
 struct IdBucket {
     std::vector<std::pair<uint64_t, uint32_t>> ids; // id → chunk index, sorted by id
 };
-inline size_t bucketOf(uint64_t id) { return size_t((id * 0x9E3779B97F4A7C15ull) >> 52) % kBuckets; }
+inline size_t bucketOf(uint64_t id) { return size_t((id * 0x9E3779B97F4A7C15ull) >> 54) % kBuckets; } // Fibonacci hashing
 
 using ClassTable = std::map<std::string, AnnotationClass, std::less<>>;
 

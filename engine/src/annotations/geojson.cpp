@@ -657,12 +657,19 @@ std::string writeGeoJson(const AnnotationDocument& doc) {
         // property called "name" would replace the object's name on the way back in).
         for (const auto& kv : o.properties)
             if (&kv != fileId && !isReserved(kv.first)) p[kv.first] = kv.second;
-        ojson iris = {{"lineWidth", o.lineWidth}, {"fill", o.fill}, {"fillOpacity", o.fillOpacity}, {"visible", o.visible}};
+        // Our drawing fields, only where they differ from the defaults (a million detections
+        // should not carry them a million times).
+        const AnnotationObject defaults;
+        ojson iris = ojson::object();
+        if (o.lineWidth != defaults.lineWidth) iris["lineWidth"] = o.lineWidth;
+        if (o.fill != defaults.fill) iris["fill"] = o.fill;
+        if (o.fillOpacity != defaults.fillOpacity) iris["fillOpacity"] = o.fillOpacity;
+        if (o.visible != defaults.visible) iris["visible"] = o.visible;
         if (o.kind == AnnotationKind::Rectangle || o.kind == AnnotationKind::Ellipse) {
             iris["shape"] = o.kind == AnnotationKind::Rectangle ? "rectangle" : "ellipse";
             iris["box"] = {o.box.minX, o.box.minY, o.box.maxX, o.box.maxY};
         }
-        p["iris"] = std::move(iris);
+        if (!iris.empty()) p["iris"] = std::move(iris);
         f["properties"] = std::move(p);
         if (!first) out += ',';
         first = false;

@@ -24,6 +24,7 @@
 // every measured figure). A batch (addBatch, apply, replaceAll) publishes once.
 #pragma once
 
+#include <algorithm>
 #include <atomic>
 #include <cstdint>
 #include <functional>
@@ -249,9 +250,9 @@ public:
     // The fit-view aggregate of the drawn objects, built on first use and kept in the snapshot.
     const AnnotationOverview& overview() const;
 
-    const Impl& impl() const { return *impl_; }
-
 private:
+    friend class AnnotationStore; // builds the next snapshot from this one's pieces
+    const Impl& impl() const { return *impl_; }
     std::unique_ptr<Impl> impl_;
 };
 

@@ -192,6 +192,11 @@ void TestAnnotationStore::failedEditsChangeNothing() {
     cases.push_back({{{square(1, 1, 1)}, {ghost}, {}, {}}, "no annotation with id 999 to update"});
     cases.push_back({{{square(1, 1, 1)}, {}, {id, 4242}, {}}, "no annotation with id 4242 to remove"});
     cases.push_back({{{badBox}, {}, {}, {}}, "annotation 0 to add: the box's minimum exceeds its maximum"});
+    AnnotationObject same = square(0, 0, 2);
+    same.id = id;
+    cases.push_back({{{}, {same}, {id}, {}}, "annotation 1 is changed twice in one edit"});
+    cases.push_back({{{}, {}, {id, id}, {}}, "annotation 1 is changed twice in one edit"});
+    cases.push_back({{{}, {same, same}, {}, {}}, "annotation 1 is changed twice in one edit"});
     cases.push_back({{{points(AnnotationKind::Point, {{1, -1e13}})}, {}, {}, {}}, "annotation 0 to add: a coordinate is outside ±1e12"});
     cases.push_back({{{boxed(AnnotationKind::Ellipse, {-1e308, 0, 1e308, 1})}, {}, {}, {}},
                      "annotation 0 to add: a coordinate is outside ±1e12"});

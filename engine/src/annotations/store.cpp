@@ -153,6 +153,16 @@ struct AnnotationStore::Impl {
         for (uint64_t id : e.remove)
             if (!d.chunkOf(id)) return Result(Status::NotFound, "no annotation with id " + std::to_string(id) + " to remove");
         {
+            // Each existing object is updated or removed at most once per edit.
+            std::unordered_set<uint64_t> touched;
+            for (const auto& o : e.update)
+                if (!touched.insert(o.id).second)
+                    return Result(Status::InvalidArgument, "annotation " + std::to_string(o.id) + " is changed twice in one edit");
+            for (uint64_t id : e.remove)
+                if (!touched.insert(id).second)
+                    return Result(Status::InvalidArgument, "annotation " + std::to_string(id) + " is changed twice in one edit");
+        }
+        {
             std::unordered_set<uint64_t> fresh;
             for (const auto& o : e.add) {
                 if (o.id == 0) continue;

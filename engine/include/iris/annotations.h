@@ -327,9 +327,11 @@ IRIS_API AnnotationDocument documentOf(const AnnotationSnapshot& s);
 // store's contents in one publication; on any failure or cancel the store is untouched.
 class IRIS_API AnnotationLoader {
 public:
+    // Both run on the worker thread and must not call wait() or destroy the loader (it joins
+    // that very thread); cancel() is fine.
     struct Callbacks {
-        std::function<void(uint64_t done, uint64_t total)> progress; // bytes; worker thread
-        std::function<void(const Result&, size_t objects)> finished; // worker thread, once
+        std::function<void(uint64_t done, uint64_t total)> progress; // bytes, 2 passes (docs/ANNOTATIONS.md)
+        std::function<void(const Result&, size_t objects)> finished; // once, before wait() returns
     };
     enum class Mode { Replace, Append };
     // Starts at once. The store must outlive the loader.

@@ -24,6 +24,7 @@
 #include "orientationactions.h"
 #include "recentfiles.h"
 #include "sampleslide.h"
+#include "serverbrowser.h"
 #include "slideformats.h"
 #include "slidepropertiesdock.h"
 #include "viewstatus.h"
@@ -101,6 +102,11 @@ void MainWindow::createActions()
     m_openAction = new QAction(tr("&Open…"), this);
     m_openAction->setShortcut(QKeySequence::Open);
     connect(m_openAction, &QAction::triggered, this, &MainWindow::showOpenDialog);
+
+    // DICOMweb: studies and series found through QIDO-RS (serverbrowser.h).
+    m_serverAction = new QAction(tr("Open from Ser&ver…"), this);
+    m_serverAction->setObjectName(QStringLiteral("openFromServerAction"));
+    connect(m_serverAction, &QAction::triggered, this, &MainWindow::showServerBrowser);
 
     m_sampleAction = new QAction(tr("Open &Sample Slide"), this);
     connect(m_sampleAction, &QAction::triggered, this, [this] {
@@ -187,6 +193,7 @@ void MainWindow::createMenus()
     QMenu *recent = file->addMenu(tr("Open &Recent"));
     m_recent = new RecentFiles(recent, this);
     connect(m_recent, &RecentFiles::openRequested, this, [this](const QString &path) { openSlide(path, true); });
+    file->addAction(m_serverAction);
     file->addAction(m_sampleAction);
     file->addSeparator();
     file->addAction(m_closeAction);
@@ -289,6 +296,25 @@ void MainWindow::createMenus()
     help->addAction(tr("About &Qt"), qApp, &QApplication::aboutQt);
 }
 
+ServerBrowser *MainWindow::showServerBrowser()
+{
+    // Made once and kept (hidden when closed): the credentials typed in stay for the session,
+    // in memory only.
+    if (!m_serverBrowser) {
+        m_serverBrowser = new ServerBrowser(this);
+        connect(m_serverBrowser, &ServerBrowser::openRequested, this,
+                [this](const QString &url, const IrisSlideView::NetworkCredentials &credentials) {
+                    m_view->setNetworkCredentials(credentials);
+                    if (openSlide(url, true))
+                        m_serverBrowser->hide();
+                });
+    }
+    m_serverBrowser->show();
+    m_serverBrowser->raise();
+    m_serverBrowser->activateWindow();
+    return m_serverBrowser;
+}
+
 bool MainWindow::openSlide(const QString &path, bool userInitiated)
 {
     statusBar()->showMessage(tr("Opening %1…").arg(QDir::toNativeSeparators(path)));
@@ -310,7 +336,9 @@ bool MainWindow::openSlide(const QString &path, bool userInitiated)
             }
             m_orientedPath = path;
         }
-    } else if (userInitiated) {
+    } else if (userInitiated && !RecentFiles::isUrl(path)) {
+        // A file that is gone leaves the list; a server URL stays (the server may be down, or
+        // want credentials this session has not been given yet).
         m_recent->remove(path);
     }
     return opened;

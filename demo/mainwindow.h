@@ -20,6 +20,7 @@ class IrisSlideView;
 class OrientationActions;
 class RecentFiles;
 class SampleSlide;
+class ServerBrowser;
 class SlidePropertiesDock;
 class ViewStatus;
 
@@ -36,6 +37,8 @@ public Q_SLOTS:
     bool openSlide(const QString &path, bool userInitiated = true);
     void openSample();
     void showOpenDialog();
+    // File › Open from Server…: the QIDO-RS browser (made on first use, kept for the session).
+    ServerBrowser *showServerBrowser();
     void exportAsIris();
     // View › Compare…: asks for up to three more slides and shows them beside the open one.
     void showCompareDialog();
@@ -80,6 +83,8 @@ private:
 
     QAction *m_openAction = nullptr;
     QAction *m_sampleAction = nullptr;
+    QAction *m_serverAction = nullptr;
+    ServerBrowser *m_serverBrowser = nullptr;
     QAction *m_closeAction = nullptr;
     QAction *m_exportAction = nullptr;
     QAction *m_quitAction = nullptr;

@@ -5,6 +5,7 @@
 #include <QtCore/QDir>
 #include <QtCore/QFileInfo>
 #include <QtCore/QSettings>
+#include <QtCore/QUrl>
 #include <QtCore/QVariantMap>
 #include <QtWidgets/QMenu>
 
@@ -22,6 +23,20 @@ RecentFiles::RecentFiles(QMenu *menu, QObject *parent)
     rebuild();
 }
 
+bool RecentFiles::isUrl(const QString &path)
+{
+    return path.startsWith(QLatin1String("http://"), Qt::CaseInsensitive)
+        || path.startsWith(QLatin1String("https://"), Qt::CaseInsensitive);
+}
+
+QString RecentFiles::entryFor(const QString &path)
+{
+    // A URL is not a file name: QFileInfo would make "http://h/x" into "<cwd>/http:/h/x".
+    if (isUrl(path))
+        return QUrl(path).adjusted(QUrl::RemoveUserInfo).toString();
+    return QFileInfo(path).absoluteFilePath();
+}
+
 QStringList RecentFiles::files() const
 {
     return QSettings().value(kKey).toStringList();
@@ -29,7 +44,7 @@ QStringList RecentFiles::files() const
 
 void RecentFiles::add(const QString &path)
 {
-    const QString absolute = QFileInfo(path).absoluteFilePath();
+    const QString absolute = entryFor(path);
     QStringList list = files();
     list.removeAll(absolute);
     list.prepend(absolute);
@@ -41,7 +56,7 @@ void RecentFiles::add(const QString &path)
 void RecentFiles::remove(const QString &path)
 {
     QStringList list = files();
-    list.removeAll(QFileInfo(path).absoluteFilePath());
+    list.removeAll(entryFor(path));
     store(list);
 }
 
@@ -70,7 +85,7 @@ void RecentFiles::store(const QStringList &list)
 RecentFiles::Orientation RecentFiles::orientation(const QString &path) const
 {
     const QVariantMap entry
-        = QSettings().value(kOrientationsKey).toMap().value(QFileInfo(path).absoluteFilePath()).toMap();
+        = QSettings().value(kOrientationsKey).toMap().value(entryFor(path)).toMap();
     Orientation o;
     o.rotation = entry.value(QStringLiteral("rotation"), 0.0).toDouble();
     o.flippedHorizontally = entry.value(QStringLiteral("flipH"), false).toBool();
@@ -82,7 +97,7 @@ RecentFiles::Orientation RecentFiles::orientation(const QString &path) const
 
 void RecentFiles::setOrientation(const QString &path, const Orientation &orientation)
 {
-    const QString absolute = QFileInfo(path).absoluteFilePath();
+    const QString absolute = entryFor(path);
     if (!files().contains(absolute))
         return;
     QSettings settings;
@@ -104,12 +119,19 @@ void RecentFiles::rebuild()
     const QStringList list = files();
     int number = 1;
     for (const QString &path : list) {
-        const QString label = number < 10
-            ? QStringLiteral("&%1 %2").arg(number).arg(QFileInfo(path).fileName())
-            : QFileInfo(path).fileName();
+        // A series URL shows as "series …<end of its UID> on host"; a file by its name.
+        QString name = QFileInfo(path).fileName();
+        QString shown = QDir::toNativeSeparators(path);
+        if (isUrl(path)) {
+            const QUrl url(path);
+            const QString series = url.path().section(QLatin1Char('/'), -1, -1, QString::SectionSkipEmpty);
+            name = tr("series …%1 on %2").arg(series.right(12), url.host());
+            shown = path;
+        }
+        const QString label = number < 10 ? QStringLiteral("&%1 %2").arg(number).arg(name) : name;
         QAction *action = m_menu->addAction(label);
-        action->setToolTip(QDir::toNativeSeparators(path));
-        action->setStatusTip(QDir::toNativeSeparators(path));
+        action->setToolTip(shown);
+        action->setStatusTip(shown);
         connect(action, &QAction::triggered, this, [this, path] { Q_EMIT openRequested(path); });
         ++number;
     }

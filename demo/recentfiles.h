@@ -27,6 +27,12 @@ public:
     // Fills menu (rebuilt each time it is about to show).
     explicit RecentFiles(QMenu *menu, QObject *parent = nullptr);
 
+    // Entries are absolute paths of local slides, or DICOMweb series URLs kept exactly as
+    // opened (http(s)://…; never with user:password@, which the entry drops: credentials are
+    // never written to the list).
+    static bool isUrl(const QString &path);
+    static QString entryFor(const QString &path);
+
     QStringList files() const;
     void add(const QString &path);
     void remove(const QString &path);

@@ -116,6 +116,7 @@ multipart - 1/2
 dicom_json - 1/2
 geojson tests/fuzz/geojson.dict 1/2
 asap_xml tests/fuzz/asap_xml.dict 1/2
+qido - 1/4
 EOF
 while [ "${#fuzz_pids[@]}" -gt 0 ]; do
   wait -n || true

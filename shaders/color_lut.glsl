@@ -3,11 +3,13 @@
 // interpolated. COLOR_MANAGED is a specialization constant: frames without a transform use
 // pipelines where the step is compiled out, so their bytes are unchanged.
 //
-// On a GPU the interpolation is done here, in 32-bit float, from the eight nodes around the
-// colour (texelFetch): a sampler's filter weights have 8 fractional bits
-// (subTexelPrecisionBits), and a GPU's fixed-function path need not match the CPU model of the
-// table. On a CPU device (LUT_SAMPLED, constant 1) the sampler does it: llvmpipe's filter
-// matches the model, and costs a third of the eight fetches (docs/COLOR.md, "Cost").
+// The sampler interpolates (LUT_SAMPLED, constant 1, the default on every device: one fetch):
+// its filter weights have at least 8 fractional bits (subTexelPrecisionBits), which puts a
+// result at most 1/512 of one node step (about 4 codes with 65 nodes) from the exact
+// interpolation, and the accuracy tests measured it equal to the float path on the H200 and
+// lavapipe. EngineTuning::ColorLookup::Nodes interpolates here instead, in 32-bit float from
+// the eight nodes around the colour (texelFetch), the CPU model's exact weights, at 2-3× the
+// per-frame cost (docs/COLOR.md, "Cost").
 //
 // Tiles are premultiplied: the table applies to the unpremultiplied colour.
 

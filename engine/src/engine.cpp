@@ -46,7 +46,8 @@ struct Engine::Impl {
     Result init() {
         if (Result r = device.init(config); !r.ok()) return r;
         if (Result r = atlas.init(config.vramBudgetBytes); !r.ok()) return r;
-        if (Result r = pipeline.init(RenderThread::kFramesInFlight); !r.ok()) return r;
+        if (Result r = pipeline.init(RenderThread::kFramesInFlight, config.tuning.colorLookup); !r.ok()) return r;
+        log.info(std::string("colour lookup: ") + (pipeline.lutSampled() ? "sampler" : "8 nodes in float"));
         if (Result r = mips.init(config.tuning.mipSchedule); !r.ok()) return r;
         log.info(std::string("mip pass: ") + gpu::MipPipeline::scheduleName(mips.schedule()) + " schedule");
         handover = std::make_unique<Handover>(atlas.slotCount());
@@ -138,6 +139,11 @@ struct Engine::Impl {
     std::mutex openMutex; // serialises open/close (the disk work of open happens outside it)
     std::mutex fontMutex; // serialises font choices (file and fontconfig work happen under it)
     bool fontChosen = false; // guarded by fontMutex: a font was set, or the default was looked up
+    // What open() gives a DICOMweb source: EngineConfig::network until setNetworkOptions().
+    // Its own lock, not openMutex, so that setting credentials never waits for an open() that
+    // is talking to a slow server (open() copies the options before its network work).
+    mutable std::mutex networkMutex;
+    NetworkOptions network = config.network; // guarded by networkMutex
     uint32_t generation = 0;
     bool surfaceBound = false;
     bool offscreenBound = false;
@@ -226,9 +232,19 @@ void Engine::setVisible(bool visible) {
 // The render thread draws whenever `wake` moved since its last frame (RenderThread::run).
 void Engine::redraw() { impl_->shared.bump(); }
 
+void Engine::setNetworkOptions(const NetworkOptions& options) {
+    std::lock_guard lock(impl_->networkMutex);
+    impl_->network = options;
+}
+
 Result Engine::open(const std::string& path) {
+    NetworkOptions network;
+    {
+        std::lock_guard lock(impl_->networkMutex);
+        network = impl_->network;
+    }
     // The disk work (header parse) runs without holding any engine lock.
-    Expected<std::unique_ptr<SlideSource>> src = openSlideSource(path, impl_->config.source, impl_->config.network);
+    Expected<std::unique_ptr<SlideSource>> src = openSlideSource(path, impl_->config.source, network);
     std::lock_guard lock(impl_->openMutex);
     if (!src) {
         close();

@@ -204,7 +204,11 @@ void FaultProxy::serve(int client) {
         }
         long status = 0;
         std::string type, body;
-        if (faulty && r.fault == Fault::NotFound) {
+        if (r.fault == Fault::Replace && !r.pathContains.empty() && path.find(r.pathContains) != std::string::npos) {
+            status = r.status;
+            type = r.type;
+            body = r.body;
+        } else if (faulty && r.fault == Fault::NotFound) {
             status = 404;
             type = "application/json";
             body = "{\"HttpStatus\": 404, \"Message\": \"Unknown resource\"}";

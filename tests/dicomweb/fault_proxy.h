@@ -1,6 +1,7 @@
 // A small HTTP/1.1 proxy on 127.0.0.1 in front of the suite's Orthanc, with plain sockets (and
 // OpenSSL when it terminates TLS), that misbehaves on purpose for WADO-RS frame requests: it delays answers (a slow
-// server), cuts the multipart body short, gives a wrong Content-Type, or answers 404. Everything else passes unchanged.
+// server), cuts the multipart body short, gives a wrong Content-Type, or answers 404; or answers any request of a
+// path (QIDO-RS searches) with a body of the test's choosing. Everything else passes unchanged.
 // It keeps connections alive like a server (one thread per client connection) and fetches from upstream with libcurl.
 // It counts the frame requests it saw, so that a test can tell how many a walk cost.
 //
@@ -28,11 +29,16 @@ public:
         Truncate,  // the multipart body loses its last part of the data and its closing delimiter
         WrongType, // Content-Type: text/html
         NotFound,  // HTTP 404
+        Replace,   // any request whose path holds `pathContains` gets `status`, `type` and `body` (a lying server)
     };
     struct Rule {
         Fault fault = Fault::None;
         int delayMs = 0;
         int fromFrame = 1; // frames numbered below this pass unchanged (frame 1 is read at open)
+        // Replace only:
+        std::string pathContains;
+        long status = 200;
+        std::string type, body;
     };
 
     struct Tls {

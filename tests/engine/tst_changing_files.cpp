@@ -1,7 +1,7 @@
 // Files that change under the viewer (issue 14): a slide truncated, deleted or replaced while it
-// is open, for the .iris reader (which parses through a memory map at open and then reads with
-// pread, so that a truncated file cannot raise SIGBUS) and the direct TIFF reader (libtiff
-// without its memory map: tiff_source.cpp opens with "m").
+// is open, for the .iris reader (which parses and reads with pread, never through a memory map,
+// so that a truncated file cannot raise SIGBUS; iris.bytes cuts a file during its parse) and the
+// direct TIFF reader (libtiff without its memory map: tiff_source.cpp opens with "m").
 //
 //   * truncated mid-walk: the walk goes on to complete frames, the tiles past the new end are
 //     drawn as the failed-tile placeholder, the engine's error names the file, and the engine

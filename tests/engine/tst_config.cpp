@@ -22,7 +22,7 @@ using namespace iristest;
 namespace {
 
 constexpr const char* kVariables[] = {"IRIS_PACE_FRAMES", "IRIS_DRAW_COVERED", "IRIS_MIP_SCHEDULE", "IRIS_DEVICE",
-                                      "IRIS_QUEUES"};
+                                      "IRIS_QUEUES",      "IRIS_TILE_RESOLVE", "IRIS_COLOR_LOOKUP"};
 
 // Sets the variables for its lifetime and puts back what was there before.
 class ScopedEnvironment {
@@ -83,9 +83,13 @@ private slots:
                                    {"IRIS_DRAW_COVERED", "1"},
                                    {"IRIS_MIP_SCHEDULE", "serial"},
                                    {"IRIS_DEVICE", "llvmpipe"},
-                                   {"IRIS_QUEUES", "single"}});
+                                   {"IRIS_QUEUES", "single"},
+                                   {"IRIS_TILE_RESOLVE", "quads"},
+                                   {"IRIS_COLOR_LOOKUP", "nodes"}});
             auto t = iris::tuningFromEnvironment();
             QVERIFY(t.ok());
+            QVERIFY(t->tileResolve == T::TileResolve::Quads);
+            QVERIFY(t->colorLookup == T::ColorLookup::Nodes);
             QVERIFY(t->pacing == T::Pacing::On);
             QVERIFY(t->drawCovered);
             QVERIFY(t->mipSchedule == T::MipSchedule::Serial);
@@ -94,7 +98,8 @@ private slots:
         }
         {
             ScopedEnvironment env({{"IRIS_PACE_FRAMES", "0"}, {"IRIS_MIP_SCHEDULE", "wide"}, {"IRIS_QUEUES", "auto"},
-                                   {"IRIS_DRAW_COVERED", "0"}});
+                                   {"IRIS_DRAW_COVERED", "0"}, {"IRIS_TILE_RESOLVE", "compute"},
+                                   {"IRIS_COLOR_LOOKUP", "sampler"}});
             T base;
             base.singleQueue = true;
             base.drawCovered = true;
@@ -104,6 +109,8 @@ private slots:
             QVERIFY(t->mipSchedule == T::MipSchedule::Wide);
             QVERIFY(!t->singleQueue);
             QVERIFY(!t->drawCovered);
+            QVERIFY(t->tileResolve == T::TileResolve::Compute);
+            QVERIFY(t->colorLookup == T::ColorLookup::Sampler);
         }
     }
 
@@ -133,6 +140,8 @@ private slots:
         QTest::newRow("covered true") << "IRIS_DRAW_COVERED" << "true" << "0, 1";
         QTest::newRow("schedule Wide") << "IRIS_MIP_SCHEDULE" << "Wide" << "wide, serial";
         QTest::newRow("queues one") << "IRIS_QUEUES" << "one" << "single, auto";
+        QTest::newRow("resolve pixels") << "IRIS_TILE_RESOLVE" << "pixels" << "auto, quads, compute";
+        QTest::newRow("lookup Sampler") << "IRIS_COLOR_LOOKUP" << "Sampler" << "auto, sampler, nodes";
     }
     void badValuesAreErrorsNamingTheVariable() {
         QFETCH(QString, name);

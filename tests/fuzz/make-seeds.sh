@@ -46,7 +46,7 @@ build=$1
 out=$2
 max_bytes=${IRIS_FUZZ_SEED_MAX_BYTES:-262144}
 here="$(cd "$(dirname "$0")" && pwd)"
-targets="iris_reader tiff_reader jp2k pyramid icc_profile dicom_file multipart dicom_json"
+targets="iris_reader tiff_reader jp2k pyramid icc_profile dicom_file multipart dicom_json qido"
 
 for t in $targets; do
   rm -rf "${out:?}/$t"
@@ -199,6 +199,21 @@ JSON
   echo ','; instance 1.2.3.4.3 LABEL 240 200 1; echo ']'
 } > "$out/dicom_json/series.json"
 echo '[]' > "$out/dicom_json/empty-array.json"
+# QIDO-RS (fuzz_qido.cpp: the first byte picks studies 'S', series 'E' or query fields 'Q'):
+# answers as Orthanc 1.10 writes them, and search fields one a line.
+{
+  printf 'S[{"00080020":{"vr":"DA","Value":["20240103"]},"00080050":{"vr":"SH","Value":["ACC-3"]},'
+  printf '"00080061":{"vr":"CS","Value":["SM"]},"00081030":{"vr":"LO","Value":["Slide study 3"]},'
+  printf '"00100010":{"vr":"PN","Value":[{"Alphabetic":"Doe^Jane3"}]},"00100020":{"vr":"LO","Value":["PID3"]},'
+  printf '"00100030":{"vr":"DA"},"0020000D":{"vr":"UI","Value":["1.2.276.0.7230010.3.1.2.1"]},'
+  printf '"00201206":{"vr":"IS","Value":[1]},"00201208":{"vr":"IS","Value":[2]}}]'
+} > "$out/qido/studies.json"
+{
+  printf 'E[{"00080060":{"vr":"CS","Value":["SM"]},"0008103E":{"vr":"LO","Value":["Slide 3"]},'
+  printf '"0020000D":{"vr":"UI","Value":["1.2.3"]},"0020000E":{"vr":"UI","Value":["1.2.3.1"]},'
+  printf '"00200011":{"vr":"IS"},"00201209":{"vr":"IS","Value":["2"]}}]'
+} > "$out/qido/series.json"
+printf 'QDoe^J*ne?\nPID 3\nACC-3\n20240101\n20241231\nSlide study 3\nSM\n\003' > "$out/qido/query.txt"
 
 # --- annotations (geojson, asap_xml): the small files committed in annotation-seeds/ -------
 for t in geojson asap_xml; do

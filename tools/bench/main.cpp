@@ -322,6 +322,9 @@ Json resultJson(const Options& o, const SizeResult& r) {
                    {"tile_resolve", o.tuning.tileResolve == iris::EngineTuning::TileResolve::Compute ? "compute"
                                     : o.tuning.tileResolve == iris::EngineTuning::TileResolve::Quads ? "quads"
                                                                                                      : "auto"},
+                   {"color_lookup", o.tuning.colorLookup == iris::EngineTuning::ColorLookup::Sampler ? "sampler"
+                                    : o.tuning.colorLookup == iris::EngineTuning::ColorLookup::Nodes ? "nodes"
+                                                                                                     : "auto"},
                    {"device_filter", o.tuning.deviceName}};
     j["mip_us_per_tile"] = jsonNumber(r.mipUsPerTile);
     j["mip_share_of_hr_tpt"] = jsonNumber(r.mipUsPerTile / quartiles(r.hrTpt).median);

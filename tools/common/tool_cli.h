@@ -26,7 +26,9 @@ inline constexpr const char* kTuningEnvironmentHelp =
     "  IRIS_DEVICE=TEXT               use the Vulkan device whose name contains TEXT\n"
     "  IRIS_QUEUES=single|auto        every role on the graphics queue\n"
     "  IRIS_TILE_RESOLVE=auto|quads|compute  tiles as quads, or resolved per pixel\n"
-    "                                 (default: compute offscreen on a GPU)";
+    "                                 (default: compute offscreen on a GPU)\n"
+    "  IRIS_COLOR_LOOKUP=auto|sampler|nodes  the colour table's interpolation\n"
+    "                                 (default: sampler)";
 
 // "  -o, --output FILE       text (default: x)" within 80 columns.
 class HelpFormatter : public CLI::Formatter {

@@ -75,6 +75,7 @@ bool EngineHost::create(QVulkanInstance *vulkan, const EngineSettings &settings,
     config.instance = vulkan->vkInstance();
     config.log = &logEngineMessage;
     config.color = toEngineColor(settings);
+    config.network = settings.network;
 
     auto created = iris::Engine::create(config);
     if (!created) {

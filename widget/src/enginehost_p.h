@@ -47,6 +47,8 @@ struct EngineSettings {
     bool colorManaged = iris::EngineConfig{}.color.managed;
     iris::RenderingIntent intent = iris::EngineConfig{}.color.intent;
     QByteArray displayProfile;
+    // DICOMweb credentials and TLS (IrisSlideView::setNetworkCredentials); memory only, never logged.
+    iris::NetworkOptions network;
 };
 
 // The engine's colour settings for `settings`.

@@ -2,6 +2,7 @@
 
 #include <cstring>
 
+#include <QtCore/QFile>
 #include <QtGui/QKeyEvent>
 #include <QtGui/QMouseEvent>
 #include <QtGui/QWheelEvent>
@@ -75,6 +76,31 @@ QImage IrisSlideView::associatedImage(const QString &name) const
     for (int y = 0; y < out.height(); ++y)
         memcpy(out.scanLine(y), rgba.rgba.data() + size_t(y) * rgba.width * 4, size_t(rgba.width) * 4);
     return out;
+}
+
+void IrisSlideView::setNetworkCredentials(const NetworkCredentials &credentials)
+{
+    Q_D(IrisSlideView);
+    // Only the credentials change: the timeouts and connection counts stay the engine's defaults.
+    iris::NetworkOptions o;
+    const std::string secret = credentials.secret.toStdString();
+    if (credentials.kind == NetworkCredentials::Basic) {
+        o.username = credentials.user.toStdString();
+        o.password = secret;
+    } else if (credentials.kind == NetworkCredentials::Bearer) {
+        o.bearerToken = secret;
+    }
+    o.caFile = QFile::encodeName(credentials.caFile).toStdString();
+    o.verifyTls = credentials.verifyTls;
+    d->settings.network = o; // for an engine made later (the first slide, a budget change)
+    if (d->engine())
+        d->engine()->setNetworkOptions(o);
+}
+
+bool IrisSlideView::hasNetworkCredentials() const
+{
+    Q_D(const IrisSlideView);
+    return !d->settings.network.username.empty() || !d->settings.network.bearerToken.empty();
 }
 
 bool IrisSlideView::openSlide(const QString &path)

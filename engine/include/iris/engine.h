@@ -53,6 +53,14 @@ struct EngineTuning {
     // nothing visible), quads on a CPU device (lavapipe resolves 3× slower per pixel).
     enum class TileResolve { Auto, Quads, Compute };
     TileResolve tileResolve = TileResolve::Auto;
+    // How the colour step interpolates its table (docs/COLOR.md, "Cost"). Sampler: one
+    // trilinear fetch, weighted by the sampler's filter (at least 8 fractional bits: at most
+    // 1/512 of a node step off the exact weights, far under one 8-bit code). Nodes: the eight
+    // nodes around the colour fetched and weighted in 32-bit float (8 fetches; the CPU model's
+    // exact weights). Auto: Sampler, measured equal to Nodes within the accuracy tests and
+    // 2-3× cheaper per frame on the H200 and on lavapipe.
+    enum class ColorLookup { Auto, Sampler, Nodes };
+    ColorLookup colorLookup = ColorLookup::Auto;
 };
 
 struct EngineConfig {
@@ -108,11 +116,16 @@ public:
     // Opens a slide (replacing the current one) and fits it into the target: a slide file, a
     // DICOM series folder (or one of its files), or a DICOMweb series URL
     // (https://host/prefix/studies/<StudyUID>/series/<SeriesUID>; credentials and TLS from
-    // EngineConfig::network; docs/DICOM.md). A path of the form "synthetic:WIDTHxHEIGHT" opens
-    // a procedural test slide of that size. Returns a clear error for missing, unreadable,
+    // EngineConfig::network or setNetworkOptions(); docs/DICOM.md). A path of the form
+    // "synthetic:WIDTHxHEIGHT" opens a procedural test slide of that size. Returns a clear error for missing, unreadable,
     // corrupt or unsupported files and unreachable or refusing servers; on error the previous
     // slide is closed and the engine stays usable.
     Result open(const std::string& path);
+    // Credentials, TLS and timeouts for the DICOMweb series URLs given to later open() calls
+    // (replacing EngineConfig::network): a host that asks the user for a password after the
+    // engine exists sets it here. A slide already open keeps the options it was opened with.
+    // Thread-safe; never logged.
+    void setNetworkOptions(const NetworkOptions& options);
     void close();
     std::optional<SlideInfo> slideInfo() const;
     // An associated image ("label", "macro", "thumbnail", …; SlideInfo::associatedImages).

@@ -10,6 +10,7 @@
 //   IRIS_DEVICE=TEXT              tuning.deviceName (a part of the Vulkan device's name)
 //   IRIS_QUEUES=single|auto       tuning.singleQueue = true | false
 //   IRIS_TILE_RESOLVE=auto|quads|compute  tuning.tileResolve = Auto | Quads | Compute
+//   IRIS_COLOR_LOOKUP=auto|sampler|nodes  tuning.colorLookup = Auto | Sampler | Nodes
 //
 // An unset or empty variable leaves `base`'s value. Any other value is an error
 // (InvalidArgument) naming the variable and the values it takes, so a typo in a benchmark

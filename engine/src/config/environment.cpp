@@ -53,6 +53,13 @@ Expected<EngineTuning> tuningFromEnvironment(EngineTuning base) {
                                                    base.tileResolve);
         !r.ok())
         return r;
+    if (Result r = pick<EngineTuning::ColorLookup>("IRIS_COLOR_LOOKUP",
+                                                   {{"auto", EngineTuning::ColorLookup::Auto},
+                                                    {"sampler", EngineTuning::ColorLookup::Sampler},
+                                                    {"nodes", EngineTuning::ColorLookup::Nodes}},
+                                                   base.colorLookup);
+        !r.ok())
+        return r;
     if (std::string device = variable("IRIS_DEVICE"); !device.empty()) base.deviceName = std::move(device);
     return base;
 }

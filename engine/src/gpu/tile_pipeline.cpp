@@ -10,8 +10,9 @@
 
 namespace iris::gpu {
 
-Result TilePipeline::init(uint32_t frameSlots) {
+Result TilePipeline::init(uint32_t frameSlots, EngineTuning::ColorLookup lookup) {
     VkDevice dev = device_.device();
+    lutSampled_ = lookup != EngineTuning::ColorLookup::Nodes;
     const auto module = [&](const uint32_t* code, size_t bytes, vk::ShaderModule& out) {
         return vk::createShaderModule(dev, code, bytes, *out.replace(dev));
     };
@@ -47,8 +48,7 @@ Expected<VkPipeline> TilePipeline::create(VkFormat format, bool seams, bool colo
         {.location = 4, .binding = 0, .format = VK_FORMAT_R32G32B32A32_SFLOAT, .offset = offsetof(TileInstance, corners)},
     };
     // Premultiplied "over": tiles are premultiplied RGBA; the target stays opaque.
-    const ColorSpecialization spec(colorManaged,
-                                   device_.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU);
+    const ColorSpecialization spec(colorManaged, lutSampled_);
     Expected<VkPipeline> p = vk::createInstancedQuadPipeline(
         device_.device(), layout_.get(), (seams ? seamVert_ : vert_).get(), (seams ? seamFrag_ : frag_).get(),
         sizeof(TileInstance), attrs, seams ? 5 : 4, format, &spec.info);

@@ -34,8 +34,11 @@ class TilePipeline {
 public:
     TilePipeline(Device& device, TileAtlas& atlas) : device_(device), atlas_(atlas), colorLut_(device) {}
     ~TilePipeline() = default;
-    // frameSlots: frames in flight (the colour table's staging buffers).
-    Result init(uint32_t frameSlots);
+    // frameSlots: frames in flight (the colour table's staging buffers). lookup: how the
+    // colour step interpolates the table (EngineTuning::colorLookup; Auto by device type).
+    Result init(uint32_t frameSlots, EngineTuning::ColorLookup lookup);
+    // Whether the colour step's table is interpolated by the sampler (else from its 8 nodes).
+    bool lutSampled() const { return lutSampled_; }
     // The tile pass's and the seam pass's pipelines for a colour format, with or without the
     // colour transform, created on first use (render thread only). All use layout() and
     // descriptorSet().
@@ -52,6 +55,7 @@ private:
     Device& device_;
     TileAtlas& atlas_;
     ColorLutTexture colorLut_;
+    bool lutSampled_ = false;
     vk::ShaderModule vert_, frag_, seamVert_, seamFrag_;
     vk::DescriptorSetLayout setLayout_;
     vk::PipelineLayout layout_;

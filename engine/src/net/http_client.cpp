@@ -29,7 +29,42 @@ std::string urlPart(CURLU* u, CURLUPart part, unsigned flags = 0) {
     return out;
 }
 
+std::string reason(long status) {
+    switch (status) {
+    case 400: return "Bad Request";
+    case 401: return "Unauthorized";
+    case 403: return "Forbidden";
+    case 404: return "Not Found";
+    case 406: return "Not Acceptable";
+    case 408: return "Request Timeout";
+    case 429: return "Too Many Requests";
+    case 500: return "Internal Server Error";
+    case 502: return "Bad Gateway";
+    case 503: return "Service Unavailable";
+    case 504: return "Gateway Timeout";
+    default: return {};
+    }
+}
+
 } // namespace
+
+Result httpError(long status, const std::string& context, const std::string& what, bool credentialsGiven) {
+    const std::string code = "HTTP " + std::to_string(status) + (reason(status).empty() ? "" : " " + reason(status));
+    if (status == 401) {
+        return Result(Status::IoError,
+                      context + (credentialsGiven
+                                     ? "the server refused the credentials given (" + code + ")"
+                                     : "the server asks for credentials (" + code + "); give them in NetworkOptions"));
+    }
+    if (status == 403)
+        return Result(Status::IoError, context + "the server refuses access to " + what + " (" + code + ")");
+    if (status == 404) return Result(Status::NotFound, context + what + " is not on the server (" + code + ")");
+    if (status == 408 || status == 429 || (status >= 500 && status <= 599))
+        return Result(Status::IoError, context + "the server failed (" + code + ")");
+    if (status >= 300 && status <= 399)
+        return Result(Status::IoError, context + "the server redirects (" + code + "), which is not followed");
+    return Result(Status::CorruptData, context + "the server answered " + code + " for " + what);
+}
 
 bool Url::loopback() const {
     if (host == "localhost" || host == "[::1]") return true;
@@ -42,7 +77,7 @@ bool Url::loopback() const {
 
 std::string Url::origin() const { return scheme + "://" + host + ":" + std::to_string(port); }
 
-Expected<Url> parseUrl(const std::string& text) {
+Expected<Url> parseUrl(const std::string& text, bool allowQuery) {
     initCurlOnce();
     const auto bad = [&](const std::string& why) {
         // The text may hold credentials: name only what comes after them.
@@ -72,7 +107,7 @@ Expected<Url> parseUrl(const std::string& text) {
         return bad("credentials in the URL are not accepted (they would end up in logs and recent-file lists); "
                    "give them in NetworkOptions");
     }
-    if (!query.empty()) return bad("a query (?…) is not part of a series URL");
+    if (!query.empty() && !allowQuery) return bad("a query (?…) is not part of a series URL");
     url.port = std::atoi(port.c_str());
     if (url.port <= 0 || url.port > 65535) return bad("no valid port");
     return url;
@@ -156,7 +191,7 @@ HttpClient::~HttpClient() {
 
 void HttpClient::get(std::string url, std::string accept, size_t maxBytes, Callback done, Clock::time_point notBefore) {
     auto t = std::make_unique<Transfer>();
-    auto parsed = parseUrl(url);
+    auto parsed = parseUrl(url, /*allowQuery=*/true); // a QIDO-RS search; the origin check below still holds
     if (!parsed.ok()) {
         t->refused = parsed.error();
     } else if (!parsed->sameOrigin(origin_)) {

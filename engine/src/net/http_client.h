@@ -43,8 +43,14 @@ struct Url {
     }
     std::string origin() const; // scheme://host:port
 };
-// InvalidArgument naming the defect: not http(s), no host, credentials in the URL, a query.
-Expected<Url> parseUrl(const std::string& text);
+// InvalidArgument naming the defect: not http(s), no host, credentials in the URL, a query
+// (unless `allowQuery`: a QIDO-RS search is one; a series URL is not).
+Expected<Url> parseUrl(const std::string& text, bool allowQuery = false);
+
+// A DICOMweb answer whose HTTP status is not 200, as an error saying what it means for `what`
+// ("the series", "the study list"); `context` starts the message ("Cannot open X: "). Shared by
+// the WADO-RS source and the QIDO-RS client so that both word 401/403/404/5xx alike.
+Result httpError(long status, const std::string& context, const std::string& what, bool credentialsGiven);
 
 struct Response {
     Result error;    // no HTTP answer: IoError (refused, reset, TLS), Timeout, Cancelled, CorruptData (too large)

@@ -53,8 +53,7 @@ Result ResolvePass::init(uint32_t frameSlots) {
                                           .pPushConstantRanges = nullptr};
     IRIS_VK_TRY(vkCreatePipelineLayout(dev, &plci, nullptr, layout_.replace(dev)));
     for (int managed = 0; managed < 2; ++managed) {
-        const gpu::ColorSpecialization spec(managed != 0,
-                                            device_.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU);
+        const gpu::ColorSpecialization spec(managed != 0, tiles_.lutSampled());
         Expected<VkPipeline> pipeline = vk::createComputePipeline(dev, layout_.get(), shader_.get(), &spec.info);
         if (!pipeline) return pipeline.error();
         pipelines_[managed] = vk::Pipeline(dev, *pipeline);

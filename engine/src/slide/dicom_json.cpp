@@ -204,7 +204,34 @@ private:
     const Json& o_;
 };
 
+// `json` parsed as a JSON array, or CorruptData "<what> <why>".
+Expected<Json> parseArray(const uint8_t* json, size_t size, const std::string& what, const std::string& elements) {
+    const auto corrupt = [&](const std::string& why) { return Result(Status::CorruptData, what + " " + why); };
+    if (!json || size == 0) return corrupt("is empty");
+    if (nesting(json, size, kMaxJsonDepth) > kMaxJsonDepth) {
+        return corrupt("is nested deeper than " + std::to_string(kMaxJsonDepth) + " levels");
+    }
+    Json doc = Json::parse(json, json + size, nullptr, /*allow_exceptions=*/false);
+    if (doc.is_discarded()) return corrupt("is not valid JSON");
+    if (!doc.is_array()) return corrupt("is not a JSON array of " + elements + " (DICOM JSON)");
+    return doc;
+}
+
 } // namespace
+
+Result forEachJsonObject(const uint8_t* json, size_t size, const std::string& what,
+                         const std::function<Result(size_t index, const Attributes& object)>& each) {
+    auto doc = parseArray(json, size, what, "objects");
+    if (!doc.ok()) return doc.error();
+    for (size_t i = 0; i < doc->size(); ++i) {
+        if (!(*doc)[i].is_object()) {
+            return Result(Status::CorruptData,
+                          what + " element " + std::to_string(i + 1) + " is not a DICOM JSON object");
+        }
+        if (Result r = each(i, JsonAttributes((*doc)[i])); !r.ok()) return r;
+    }
+    return {};
+}
 
 bool isUid(const std::string& uid) {
     if (uid.empty() || uid.size() > 64) return false;
@@ -218,13 +245,9 @@ Expected<JsonSeries> describeJsonSeries(const uint8_t* json, size_t size, const 
     const auto corrupt = [&](const std::string& why) {
         return Result(Status::CorruptData, "Cannot open " + seriesName + ": its metadata " + why);
     };
-    if (!json || size == 0) return corrupt("is empty");
-    if (nesting(json, size, kMaxJsonDepth) > kMaxJsonDepth) {
-        return corrupt("is nested deeper than " + std::to_string(kMaxJsonDepth) + " levels");
-    }
-    const Json doc = Json::parse(json, json + size, nullptr, /*allow_exceptions=*/false);
-    if (doc.is_discarded()) return corrupt("is not valid JSON");
-    if (!doc.is_array()) return corrupt("is not a JSON array of instances (DICOM JSON)");
+    auto parsed = parseArray(json, size, "Cannot open " + seriesName + ": its metadata", "instances");
+    if (!parsed.ok()) return parsed.error();
+    const Json& doc = *parsed;
     JsonSeries out;
     std::vector<size_t> element; // the JSON element of each instance
     std::set<std::string> seen;

@@ -7,6 +7,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -30,6 +31,14 @@ struct JsonSeries {
 // an instance the mapping refuses; UnsupportedFormat when no instance is a whole-slide image.
 Expected<JsonSeries> describeJsonSeries(const uint8_t* json, size_t size, const std::string& seriesUid,
                                         const std::string& seriesName);
+
+// `json` parsed as a DICOM JSON array of objects (a QIDO-RS answer: one object per match), each
+// object handed to `each` as Attributes, in order, with its 0-based index; stops at the first
+// error `each` returns and returns it. CorruptData "<what> is empty / is nested deeper than … /
+// is not valid JSON / is not a JSON array / element N is not a DICOM JSON object" otherwise.
+// The same checks as describeJsonSeries (nesting limit, no exceptions), shared rather than copied.
+Result forEachJsonObject(const uint8_t* json, size_t size, const std::string& what,
+                         const std::function<Result(size_t index, const Attributes& object)>& each);
 
 // Whether `uid` is a DICOM UID (digits and dots, 1 to 64 characters): one that can go into a URL.
 bool isUid(const std::string& uid);

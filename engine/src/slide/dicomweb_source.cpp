@@ -29,42 +29,6 @@ bool passing(const net::Response& r) {
     return r.status == 408 || r.status == 429 || (r.status >= 500 && r.status <= 599);
 }
 
-std::string reason(long status) {
-    switch (status) {
-    case 400: return "Bad Request";
-    case 401: return "Unauthorized";
-    case 403: return "Forbidden";
-    case 404: return "Not Found";
-    case 406: return "Not Acceptable";
-    case 408: return "Request Timeout";
-    case 429: return "Too Many Requests";
-    case 500: return "Internal Server Error";
-    case 502: return "Bad Gateway";
-    case 503: return "Service Unavailable";
-    case 504: return "Gateway Timeout";
-    default: return {};
-    }
-}
-
-// An HTTP answer that is not 200, as an error saying what it means for `what`.
-Result httpError(long status, const std::string& context, const std::string& what, bool credentialsGiven) {
-    const std::string code = "HTTP " + std::to_string(status) + (reason(status).empty() ? "" : " " + reason(status));
-    if (status == 401) {
-        return Result(Status::IoError,
-                      context + (credentialsGiven ? "the server refused the credentials given (" + code + ")"
-                                                  : "the server asks for credentials (" + code +
-                                                        "); give them in EngineConfig::network"));
-    }
-    if (status == 403)
-        return Result(Status::IoError, context + "the server refuses access to " + what + " (" + code + ")");
-    if (status == 404) return Result(Status::NotFound, context + what + " is not on the server (" + code + ")");
-    if (status == 408 || status == 429 || (status >= 500 && status <= 599))
-        return Result(Status::IoError, context + "the server failed (" + code + ")");
-    if (status >= 300 && status <= 399)
-        return Result(Status::IoError, context + "the server redirects (" + code + "), which is not followed");
-    return Result(Status::CorruptData, context + "the server answered " + code + " for " + what);
-}
-
 // The transfer syntax of a frame: its part's Content-Type parameter; else the message's
 // transfer-syntax parameter, or one inside its type parameter (Orthanc writes
 // type="image/jpeg; transfer-syntax=…"); else what the media type implies (PS3.18 8.7.3.5.2).
@@ -130,7 +94,7 @@ Expected<std::unique_ptr<SlideSource>> DicomWebSource::open(const std::string& t
     const net::Response meta =
         src->client_->getNow(seriesUrl + "/metadata", "application/dicom+json", kMaxMetadataBytes);
     if (!meta.error.ok()) return Result(meta.error.status(), context + meta.error.message());
-    if (meta.status != 200) return httpError(meta.status, context, "the series", credentials);
+    if (meta.status != 200) return net::httpError(meta.status, context, "the series", credentials);
     const auto type = net::parseMediaType(meta.contentType);
     if (!type.ok() || (type->type != "application/dicom+json" && type->type != "application/json")) {
         return Result(Status::UnsupportedFormat, context + "the server answered with Content-Type '" +
@@ -154,7 +118,7 @@ Expected<std::unique_ptr<SlideSource>> DicomWebSource::open(const std::string& t
         if (!icc.error.ok()) {
             why = icc.error.message();
         } else if (icc.status != 200) {
-            why = httpError(icc.status, "", "the ICC profile", credentials).message();
+            why = net::httpError(icc.status, "", "the ICC profile", credentials).message();
         } else if (auto parts = net::parseMultipart(icc.contentType, icc.body.data(), icc.body.size()); !parts.ok()) {
             why = parts.error().message();
         } else {
@@ -190,7 +154,7 @@ Expected<DicomWebSource::Payload> DicomWebSource::parseFrameAnswer(size_t instan
     if (!r.error.ok()) return Result(r.error.status(), context + r.error.message());
     if (r.status != 200) {
         const bool credentials = !options_.username.empty() || !options_.bearerToken.empty();
-        return httpError(r.status, context, "the frame", credentials);
+        return net::httpError(r.status, context, "the frame", credentials);
     }
     const auto message = net::parseMediaType(r.contentType);
     if (!message.ok() || message->type != "multipart/related") {

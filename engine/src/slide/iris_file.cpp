@@ -14,7 +14,6 @@
 
 #include <fcntl.h>
 #include <png.h>
-#include <sys/mman.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -95,19 +94,27 @@ std::string fmt(float v) {
 
 class Parser {
 public:
-    Parser(const uint8_t* data, uint64_t size, const std::string& name) : d_(data), n_(size), name_(name) {}
+    Parser(const ByteSource& source, const std::string& name) : s_(source), n_(source.size()), name_(name) {}
 
     // [off, off + len) lies inside the file, without overflow.
     bool fits(uint64_t off, uint64_t len) const { return off <= n_ && len <= n_ - off; }
 
-    uint8_t u8(uint64_t off) const { return d_[off]; }
-    uint16_t u16(uint64_t off) const { return uint16_t(loadLE(d_ + off, 2)); }
-    uint32_t u24(uint64_t off) const { return uint32_t(loadLE(d_ + off, 3)); }
-    uint32_t u32(uint64_t off) const { return uint32_t(loadLE(d_ + off, 4)); }
-    uint64_t u40(uint64_t off) const { return loadLE(d_ + off, 5); }
-    uint64_t u64(uint64_t off) const { return loadLE(d_ + off, 8); }
-    float f32(uint64_t off) const { return loadF32(d_ + off); }
-    std::string str(uint64_t off, uint64_t len) const { return std::string(reinterpret_cast<const char*>(d_ + off), len); }
+    uint8_t u8(uint64_t off) const { return uint8_t(le(off, 1)); }
+    uint16_t u16(uint64_t off) const { return uint16_t(le(off, 2)); }
+    uint32_t u24(uint64_t off) const { return uint32_t(le(off, 3)); }
+    uint32_t u32(uint64_t off) const { return uint32_t(le(off, 4)); }
+    uint64_t u40(uint64_t off) const { return le(off, 5); }
+    uint64_t u64(uint64_t off) const { return le(off, 8); }
+    float f32(uint64_t off) const {
+        uint8_t b[4];
+        s_.read(off, b, 4);
+        return loadF32(b);
+    }
+    std::string str(uint64_t off, uint64_t len) const {
+        std::string out(size_t(len), '\0');
+        s_.read(off, out.data(), size_t(len));
+        return out;
+    }
     uint64_t size() const { return n_; }
 
     Result corrupt(const std::string& what) const {
@@ -180,7 +187,12 @@ public:
     }
 
 private:
-    const uint8_t* d_;
+    uint64_t le(uint64_t off, int bytes) const {
+        uint8_t b[8];
+        s_.read(off, b, size_t(bytes));
+        return loadLE(b, bytes);
+    }
+    const ByteSource& s_;
     uint64_t n_;
     const std::string& name_;
 };
@@ -446,10 +458,86 @@ Result parseAnnotations(const Parser& p, uint64_t off, Layout& out) {
     return {};
 }
 
+// The structure, read through `source` (a failed read gives zeros; parse() checks).
+Expected<Layout> parseStructure(const ByteSource& source, const std::string& name);
+
 } // namespace
 
 Expected<Layout> parse(const uint8_t* data, uint64_t size, const std::string& name) {
-    const Parser p(data, size, name);
+    return parse(ByteSource::memory(data, size), name);
+}
+
+Expected<Layout> parse(const ByteSource& source, const std::string& name) {
+    Expected<Layout> layout = parseStructure(source, name);
+    // Whatever the structure said, bytes that could not be read (zeros instead) decide.
+    if (!source.failure().ok()) return source.failure();
+    return layout;
+}
+
+namespace {
+constexpr uint64_t kSourceBlock = 64 * 1024;
+} // namespace
+
+ByteSource ByteSource::memory(const uint8_t* data, uint64_t size) {
+    ByteSource s;
+    s.data_ = data;
+    s.size_ = size;
+    return s;
+}
+
+ByteSource ByteSource::file(int fd, uint64_t size, std::string name) {
+    ByteSource s;
+    s.fd_ = fd;
+    s.size_ = size;
+    s.name_ = std::move(name);
+    return s;
+}
+
+void ByteSource::read(uint64_t off, void* dst, size_t n) const {
+    auto* out = static_cast<uint8_t*>(dst);
+    if (data_) {
+        std::memcpy(out, data_ + off, n);
+        return;
+    }
+    while (n > 0) {
+        const uint64_t index = off / kSourceBlock;
+        auto it = blocks_.find(index);
+        if (it == blocks_.end()) {
+            const uint64_t start = index * kSourceBlock;
+            std::vector<uint8_t> block(size_t(std::min(kSourceBlock, size_ - start)), 0);
+            size_t done = 0;
+            while (done < block.size()) {
+                const ssize_t r = ::pread(fd_, block.data() + done, block.size() - done, off_t(start + done));
+                if (r < 0 && errno == EINTR) continue;
+                if (r <= 0) {
+                    if (failure_.ok()) {
+                        failure_ = Result(Status::IoError,
+                                          "Cannot open '" + name_ + "': cannot read byte " + num(start + done) +
+                                              " of its " + num(size_) + " bytes" +
+                                              (r == 0 ? std::string(": the file is shorter now: it was truncated or "
+                                                                    "rewritten while being opened")
+                                                      : std::string(": ") + std::strerror(errno)));
+                    }
+                    break; // the rest of the block stays zero
+                }
+                done += size_t(r);
+            }
+            it = blocks_.emplace(index, std::move(block)).first;
+        }
+        const uint64_t at = off - index * kSourceBlock;
+        const size_t take = size_t(std::min<uint64_t>(n, it->second.size() - at));
+        std::memcpy(out, it->second.data() + at, take);
+        out += take;
+        off += take;
+        n -= take;
+    }
+}
+
+namespace {
+
+Expected<Layout> parseStructure(const ByteSource& source, const std::string& name) {
+    const uint64_t size = source.size();
+    const Parser p(source, name);
     Layout out;
 
     // FILE_HEADER
@@ -458,8 +546,8 @@ Expected<Layout> parse(const uint8_t* data, uint64_t size, const std::string& na
         for (uint64_t i = 0; i < std::min<uint64_t>(size, 4); ++i) {
             static const char digits[] = "0123456789abcdef";
             if (i) found += ' ';
-            found += digits[data[i] >> 4];
-            found += digits[data[i] & 15];
+            found += digits[p.u8(i) >> 4];
+            found += digits[p.u8(i) & 15];
         }
         return p.unsupported("not an Iris file: its magic bytes are " + (found.empty() ? std::string("missing") : found) +
                              ", not 73 69 72 49 (\"sirI\")");
@@ -571,6 +659,8 @@ Expected<Layout> parse(const uint8_t* data, uint64_t size, const std::string& na
     }
     return out;
 }
+
+} // namespace
 
 TileStream tileStream(const uint8_t* data, const Layout& layout, size_t layer, uint32_t x, uint32_t y) {
     const Layer& l = layout.layers[layer];
@@ -771,15 +861,14 @@ Expected<Image> decodePng(const uint8_t* data, size_t size, uint64_t maxPixels) 
     return img;
 }
 
-// A read-only mapping of a whole file, for parse() at open, and the file, kept open for the
-// reads that follow (ife::Bytes).
-struct Mapping {
-    const uint8_t* data = nullptr;
-    uint64_t size = 0;
+// The file, open, and its size when opened: parse() reads it through a ByteSource, and the
+// reader keeps it for the tile reads that follow (ife::Bytes).
+struct OpenedFile {
     int fd = -1;
+    uint64_t size = 0;
 };
 
-Expected<Mapping> mapFile(const std::string& path, const std::string& name) {
+Expected<OpenedFile> openFile(const std::string& path, const std::string& name) {
     const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
     if (fd < 0) return Result(Status::IoError, "Cannot open '" + name + "': " + std::strerror(errno));
     struct stat st {};
@@ -796,13 +885,7 @@ Expected<Mapping> mapFile(const std::string& path, const std::string& name) {
         ::close(fd);
         return Result(Status::UnsupportedFormat, "Cannot open '" + name + "': the file is empty");
     }
-    void* p = ::mmap(nullptr, size_t(st.st_size), PROT_READ, MAP_PRIVATE, fd, 0);
-    const int err = errno;
-    if (p == MAP_FAILED) {
-        ::close(fd);
-        return Result(Status::IoError, "Cannot open '" + name + "': cannot map the file (" + std::strerror(err) + ")");
-    }
-    return Mapping{static_cast<const uint8_t*>(p), uint64_t(st.st_size), fd};
+    return OpenedFile{fd, uint64_t(st.st_size)};
 }
 
 } // namespace
@@ -819,21 +902,22 @@ bool IrisFileSource::detect(const std::string& path) {
 
 Expected<std::unique_ptr<SlideSource>> IrisFileSource::open(const std::string& path) {
     const std::string name = fs::path(path).filename().string();
-    Expected<Mapping> map = mapFile(path, name);
-    if (!map) return map.error();
-    // The map lives only while open() parses (the tile table, the metadata, the ICC profile);
-    // tiles and images are read later with pread (ife::Bytes). A file truncated in the
-    // milliseconds of this parse can still fault here; one truncated while it is shown cannot.
-    Expected<ife::Layout> layout = ife::parse(map->data, map->size, name);
+    Expected<OpenedFile> file = openFile(path, name);
+    if (!file) return file.error();
+    // The structure (tile table, metadata, ICC profile) is read with pread, never mapped, and
+    // so are the tiles and images later (ife::Bytes): a file truncated while it is opened or
+    // shown fails those reads with an IoError instead of raising SIGBUS.
+    const ife::ByteSource source = ife::ByteSource::file(file->fd, file->size, name);
+    Expected<ife::Layout> layout = ife::parse(source, name);
     std::optional<SlideInfo> info;
-    if (layout) info = ife::slideInfo(map->data, *layout, path);
-    ::munmap(const_cast<uint8_t*>(map->data), size_t(map->size));
+    if (layout) info = ife::slideInfo(source, *layout, path);
+    if (layout && !source.failure().ok()) layout = source.failure(); // the profile's read failed
     if (!layout) {
-        ::close(map->fd);
+        ::close(file->fd);
         return layout.error();
     }
     return std::unique_ptr<SlideSource>(
-        new IrisFileSource(map->fd, name, std::move(layout.value()), std::move(*info)));
+        new IrisFileSource(file->fd, name, std::move(layout.value()), std::move(*info)));
 }
 
 IrisFileSource::IrisFileSource(int fd, std::string fileName, ife::Layout layout, SlideInfo info)
@@ -847,10 +931,15 @@ IrisFileSource::~IrisFileSource() {
 namespace ife {
 
 SlideInfo slideInfo(const uint8_t* data, const Layout& layout, const std::string& path) {
+    return slideInfo(ByteSource::memory(data, UINT64_MAX), layout, path);
+}
+
+SlideInfo slideInfo(const ByteSource& source, const Layout& layout, const std::string& path) {
     SlideInfo info = makeInfo(path, layout);
     if (layout.hasIcc && layout.iccSize > 0) {
         // parse() checked that the profile's bytes lie inside the file.
-        info.iccProfile.assign(data + layout.iccOffset, data + layout.iccOffset + layout.iccSize);
+        info.iccProfile.resize(layout.iccSize);
+        source.read(layout.iccOffset, info.iccProfile.data(), layout.iccSize);
     }
     fillLevelPhysics(info);
     return info;

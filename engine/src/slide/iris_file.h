@@ -14,6 +14,7 @@
 
 #include <cstdint>
 #include <string>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -147,12 +148,40 @@ struct Layout {
     uint8_t clinicalEncoding = 0;
 };
 
-// Parses and validates the whole structure of an .iris file held in memory. Never reads
-// outside [data, data + size), whatever the bytes say; every offset and length is checked
-// with overflow-safe arithmetic. `name` is the file name the messages use ("Cannot open
-// 'NAME': …"). Returns CorruptData for a broken file and UnsupportedFormat for a valid one
-// this reader cannot show (another major version, encrypted tiles, the reserved IRIS codec,
-// tiles other than 256 pixels).
+// The bytes parse() and slideInfo() read: a whole file in memory (tests, fuzzing), or an open
+// file read with pread in 64 KiB blocks kept for the parse (IrisFileSource::open). The file
+// is never memory-mapped: a file truncated while it is parsed would raise SIGBUS on a map's
+// pages past its new end, which kills the host. A read past what the file holds now (it
+// shrank after its size was taken) gives zeros and makes failure() an IoError, which parse()
+// returns. One thread at a time.
+class ByteSource {
+public:
+    static ByteSource memory(const uint8_t* data, uint64_t size);
+    static ByteSource file(int fd, uint64_t size, std::string name);
+    uint64_t size() const { return size_; }
+    // Bytes [off, off + n), which the caller has checked lie inside size().
+    void read(uint64_t off, void* dst, size_t n) const;
+    // OK, or the first failed read's IoError.
+    const Result& failure() const { return failure_; }
+
+private:
+    ByteSource() = default;
+    const uint8_t* data_ = nullptr; // memory()
+    int fd_ = -1;                   // file()
+    uint64_t size_ = 0;
+    std::string name_;
+    mutable std::unordered_map<uint64_t, std::vector<uint8_t>> blocks_; // file(): block index → bytes
+    mutable Result failure_;
+};
+
+// Parses and validates the whole structure of an .iris file. Never reads outside
+// [0, source.size()), whatever the bytes say; every offset and length is checked with
+// overflow-safe arithmetic. `name` is the file name the messages use ("Cannot open 'NAME':
+// …"). Returns CorruptData for a broken file and UnsupportedFormat for a valid one this reader
+// cannot show (another major version, encrypted tiles, the reserved IRIS codec, tiles other
+// than 256 pixels), and IoError when the file could not be read (truncated meanwhile).
+Expected<Layout> parse(const ByteSource& source, const std::string& name);
+// The same over a whole file in memory.
 Expected<Layout> parse(const uint8_t* data, uint64_t size, const std::string& name);
 
 // The tile stream of tile (x, y) of `layer` (indices as stored); the layout must come from
@@ -182,6 +211,8 @@ Expected<TileStream> tileStream(const Bytes& bytes, const Layout& layout, size_t
 // the properties (the reader's own "iris.*" entries, then the attributes), the associated
 // images' names and the ICC profile. `path` becomes SlideInfo::path.
 SlideInfo slideInfo(const uint8_t* data, const Layout& layout, const std::string& path);
+// The same through a ByteSource (a failed read leaves zeros and source.failure() set).
+SlideInfo slideInfo(const ByteSource& source, const Layout& layout, const std::string& path);
 // SlideSource::readTile: tile (tx, ty) of engine level `level` decoded into dst (kTileBytes).
 Result readTile(const uint8_t* data, const Layout& layout, const std::string& name, int level, int64_t tx, int64_t ty,
                 uint8_t* dst);

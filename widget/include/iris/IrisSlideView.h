@@ -77,6 +77,19 @@ public:
     enum RenderingIntent { Perceptual, RelativeColorimetric };
     Q_ENUM(RenderingIntent)
 
+    // How the view authenticates to a DICOMweb server when openSlide() is given a series URL
+    // (https://host/prefix/studies/<StudyUID>/series/<SeriesUID>). Deliberately not a
+    // Q_PROPERTY: it is never stored in a form, in settings or in a recent-files list, and
+    // never logged; the view keeps it in memory only and there is no getter for the secret.
+    struct NetworkCredentials {
+        enum Kind { None, Basic, Bearer };
+        Kind kind = None;
+        QString user;      // Basic: the user name
+        QString secret;    // Basic: the password; Bearer: the token
+        QString caFile;    // PEM file of the certificate authorities to trust; empty: the system's
+        bool verifyTls = true; // check the server's certificate and host name (off only to debug a server)
+    };
+
     explicit IrisSlideView(QWidget *parent = nullptr);
     ~IrisSlideView() override;
 
@@ -92,6 +105,13 @@ public:
     // While colour management applies the slide's profile, the image is converted the same
     // way (so a label shown beside the slide has the slide's colours); else as stored.
     QImage associatedImage(const QString &name) const;
+    // Credentials and TLS for the DICOMweb series URLs opened after this call (a slide already
+    // open keeps the ones it was opened with); kept across engine restarts (budget changes).
+    // A host that asks the user for a password sets it here before openSlide(url).
+    void setNetworkCredentials(const NetworkCredentials &credentials);
+    void clearNetworkCredentials() { setNetworkCredentials(NetworkCredentials()); }
+    // Whether credentials (Basic or Bearer) are set; the secret itself cannot be read back.
+    bool hasNetworkCredentials() const;
 
     // --- view ----------------------------------------------------------------------
     double magnification() const;

@@ -204,7 +204,7 @@ void TestAnnotationStore::failedEditsChangeNothing() {
     cases.push_back({{{points(AnnotationKind::Polyline, {{1, 1}})}, {}, {}, {}}, "annotation 0 to add: a polyline needs at least 2 points"});
     for (auto& c : cases) {
         auto r = store.apply(c.edit);
-        QVERIFY(!r.ok());
+        QVERIFY2(!r.ok(), c.expected);
         QCOMPARE(QString::fromStdString(r.error().message()), QString(c.expected));
         QCOMPARE(store.snapshot()->generation(), gen);
         QCOMPARE(store.snapshot()->size(), size_t(1));

@@ -114,6 +114,8 @@ icc_profile tests/fuzz/icc.dict 1/1
 dicom_file tests/fuzz/dicom.dict 1/1
 multipart - 1/2
 dicom_json - 1/2
+geojson tests/fuzz/geojson.dict 1/2
+asap_xml tests/fuzz/asap_xml.dict 1/2
 qido - 1/4
 EOF
 while [ "${#fuzz_pids[@]}" -gt 0 ]; do

@@ -215,6 +215,12 @@ echo '[]' > "$out/dicom_json/empty-array.json"
 } > "$out/qido/series.json"
 printf 'QDoe^J*ne?\nPID 3\nACC-3\n20240101\n20241231\nSlide study 3\nSM\n\003' > "$out/qido/query.txt"
 
+# --- annotations (geojson, asap_xml): the small files committed in annotation-seeds/ -------
+for t in geojson asap_xml; do
+  rm -rf "${out:?}/$t" && mkdir -p "$out/$t" && cp "$here/annotation-seeds/$t"/* "$out/$t/"
+  echo "make-seeds: $(find "$out/$t" -maxdepth 1 -type f | wc -l) seed(s) in $out/$t"
+done
+
 status=0
 for t in $targets; do
   count=$(find "$out/$t" -maxdepth 1 -type f | wc -l)

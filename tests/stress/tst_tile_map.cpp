@@ -7,10 +7,10 @@
 #include <thread>
 #include <unordered_set>
 
-#include "gpu/tile_map.h"
+#include "core/tile_map.h"
 #include "view/view_model.h"
 
-using iris::gpu::TileMap;
+using iris::TileMap;
 
 class TestTileMap : public QObject {
     Q_OBJECT

@@ -141,7 +141,7 @@ void BufferThread::run() {
 bool BufferThread::regionDone(const Snapshot& snap) const {
     if (regionSlide_ != snap.slide.get() || regionSerial_ != snap.viewSerial) return false; // not planned yet
     if (atlasFull_) return true;
-    const gpu::TileMap& map = atlas_.map();
+    const TileMap& map = atlas_.map();
     return std::all_of(region_.begin(), region_.end(), [&](const TileRef& t) { return map.contains(t.key); });
 }
 
@@ -207,7 +207,7 @@ bool BufferThread::submitNew(const Snapshot& snap) {
     atlasFull_ = false;
     const std::vector<TileRef>& region = region_;
     const std::unordered_set<uint64_t>& keep = keep_;
-    gpu::TileMap& map = atlas_.map();
+    TileMap& map = atlas_.map();
     // allocate() may reclaim a slot only for a tile outside the region.
     const auto inRegion = [&](uint64_t k) { return keep.count(k) != 0; };
     auto* base = static_cast<uint8_t*>(staging_.mapped);

@@ -14,7 +14,7 @@
 
 #include <vulkan/vulkan.h>
 
-#include "gpu/tile_map.h"
+#include "core/tile_map.h"
 
 namespace iris {
 
@@ -49,8 +49,8 @@ public:
 private:
     std::vector<HandoverItem> ring_;
     size_t mask_;
-    alignas(gpu::kCacheLine) std::atomic<size_t> head_{0};
-    alignas(gpu::kCacheLine) std::atomic<size_t> tail_{0};
+    alignas(kCacheLine) std::atomic<size_t> head_{0};
+    alignas(kCacheLine) std::atomic<size_t> tail_{0};
 };
 
 } // namespace iris

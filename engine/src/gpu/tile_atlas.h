@@ -1,6 +1,6 @@
 // The tile atlas: one 2D-array image of 256×256 RGBA8 tiles with a full mip chain, one layer
 // per slot, sized from the VRAM budget at startup (no Vulkan allocation after startup), and
-// the lock-free TileMap (gpu/tile_map.h) saying which slot holds which tile.
+// the lock-free TileMap (core/tile_map.h) saying which slot holds which tile.
 //
 // The image stays in VK_IMAGE_LAYOUT_GENERAL for its whole life: uploads (copy, mips) and
 // sampling are ordered by barriers alone, so an upload into one layer never needs a layout
@@ -11,7 +11,7 @@
 #include <memory>
 
 #include "gpu/device.h"
-#include "gpu/tile_map.h"
+#include "core/tile_map.h"
 #include "gpu/vk_handle.h"
 
 namespace iris::gpu {

@@ -19,7 +19,7 @@
 
 namespace iris::render {
 
-// What the builder asks of the GPU tile map (gpu::TileMap on the render thread).
+// What the builder asks of the tile map (TileMap, core/tile_map.h, on the render thread).
 class TileResidency {
 public:
     // The atlas layer of `key` when its tile is resident, pinned until the frame that draws

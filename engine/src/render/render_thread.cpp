@@ -21,18 +21,18 @@ float clearUnorm(float v) {
 // recorded in the frame slot's list, released after the frame's fence.
 class FramePins final : public render::TileResidency {
 public:
-    FramePins(gpu::TileMap& map, uint64_t serial, std::vector<int>* pinned)
+    FramePins(TileMap& map, uint64_t serial, std::vector<int>* pinned)
         : map_(map), serial_(serial), pinned_(pinned) {}
     int pin(uint64_t key) override {
         const int slot = pinned_ ? map_.pin(key, serial_) : -1;
         if (slot >= 0) pinned_->push_back(slot);
         return slot;
     }
-    bool isActive(uint64_t key) const override { return map_.statusOf(key) == gpu::TileMap::Status::Active; }
+    bool isActive(uint64_t key) const override { return map_.statusOf(key) == TileMap::Status::Active; }
     uint64_t uploadSeq(int layer) const override { return map_.uploadSeqOf(layer); }
 
 private:
-    gpu::TileMap& map_;
+    TileMap& map_;
     uint64_t serial_;
     std::vector<int>* pinned_; // null: lookups only
 };
@@ -395,7 +395,7 @@ Result RenderThread::waitSlot(FrameSlot& f) {
         f.timed = false;
     }
     // The GPU is done with this frame: its slots may be reclaimed.
-    gpu::TileMap& map = atlas_.map();
+    TileMap& map = atlas_.map();
     for (int s : f.pinned) map.unpin(s);
     f.pinned.clear();
     return {};

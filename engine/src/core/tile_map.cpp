@@ -1,8 +1,8 @@
-#include "gpu/tile_map.h"
+#include "core/tile_map.h"
 
 #include <bit>
 
-namespace iris::gpu {
+namespace iris {
 
 TileMap::Table::Table(size_t capacity)
     : mask(capacity - 1), keys(new std::atomic<uint64_t>[capacity]), vals(new std::atomic<int32_t>[capacity]) {
@@ -218,4 +218,4 @@ void TileMap::abandon(int slot) {
     s.status.store(uint32_t(Status::Free), std::memory_order_release);
 }
 
-} // namespace iris::gpu
+} // namespace iris

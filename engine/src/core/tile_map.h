@@ -1,4 +1,6 @@
-// The GPU tile map: which atlas slot holds which tile, readable without locks or waits.
+// The tile map: which slot of the GPU tile atlas holds which tile, readable without locks or
+// waits. A CPU structure (core/, not gpu/): the atlas owns one, the buffer and render threads
+// share it.
 //
 // Slots: a fixed array sized at startup. Each slot has an atomic key, an atomic status
 // (FREE → FILLING → ACTIVE, and back to FILLING when reclaimed for another tile) and an
@@ -30,7 +32,7 @@
 #include <memory>
 #include <vector>
 
-namespace iris::gpu {
+namespace iris {
 
 inline constexpr size_t kCacheLine = 64;
 
@@ -169,4 +171,4 @@ int TileMap::allocate(uint64_t key, Keep&& keep) {
     return -1;
 }
 
-} // namespace iris::gpu
+} // namespace iris

@@ -11,9 +11,9 @@
 #           the slide and its DICOM copy are kept there and reused by the next run
 #   --out   where the JSON goes (default docs/benchmarks)
 #   --tag   the JSON names: <out>/<tag>-{tiff,dicom,dicomweb}.json (default dicom-lavapipe)
-#   --max-load L  before each run, wait (at most 10 minutes) until the 1-minute load average is
-#           below L: on a machine shared with builds, the runs then start when it is quietest
-#           (each run's load is printed either way)
+#   --max-load L  before the runs, wait (at most --max-wait seconds, default 600) until the
+#           1-minute load average is below L: on a machine shared with builds the three runs then
+#           start, back to back, in a quiet moment (each run's load is printed either way)
 #   after --: iris-bench's options (default --size 1920x1080 --moves 10 --magnifications 40,10)
 #
 # Needs Debian orthanc, orthanc-dicomweb, orthanc-wsi, curl and python3 (scripts/install-deps.sh).
@@ -27,6 +27,7 @@ work=$root/build/bench-dicom
 out=$root/docs/benchmarks
 tag=dicom-lavapipe
 max_load=
+max_wait=600
 bench_opts=(--size 1920x1080 --moves 10 --magnifications 40,10)
 while [ $# -gt 0 ]; do
     case $1 in
@@ -35,6 +36,7 @@ while [ $# -gt 0 ]; do
     --out) out=$(realpath -m "$2"); shift 2 ;;
     --tag) tag=$2; shift 2 ;;
     --max-load) max_load=$2; shift 2 ;;
+    --max-wait) max_wait=$2; shift 2 ;;
     --) shift; bench_opts=("$@"); break ;;
     *) echo "bench-dicom.sh: unknown option $1 (see the comment at the top)" >&2; exit 2 ;;
     esac
@@ -114,15 +116,13 @@ print("%s/dicom-web/studies/%s/series/%s" % (base, study["MainDicomTags"]["Study
 echo "bench-dicom.sh: series $series_url" >&2
 
 # Three runs back to back, each with OpenSlide's read of the TIFF as its baseline.
-quiet() {
-    if [ -n "$max_load" ]; then
-        for _ in $(seq 1 600); do
-            awk -v max="$max_load" '{ exit !($1 < max) }' /proc/loadavg && break
-            sleep 1
-        done
-    fi
-    echo "bench-dicom.sh: starting $1 at load $(cut -d' ' -f1-3 /proc/loadavg)" >&2
-}
+if [ -n "$max_load" ]; then
+    for _ in $(seq 1 "$max_wait"); do
+        awk -v max="$max_load" '{ exit !($1 < max) }' /proc/loadavg && break
+        sleep 1
+    done
+fi
+quiet() { echo "bench-dicom.sh: starting $1 at load $(cut -d' ' -f1-3 /proc/loadavg)" >&2; }
 quiet "the TIFF run"
 "$bin/iris-bench" "$slide" "${bench_opts[@]}" --json "$out/$tag-tiff.json"
 quiet "the local DICOM run"

@@ -14,7 +14,10 @@
 #   --max-load L  before the runs, wait (at most --max-wait seconds, default 600) until the
 #           1-minute load average is below L: on a machine shared with builds the three runs then
 #           start, back to back, in a quiet moment (each run's load is printed either way)
-#   after --: iris-bench's options (default --size 1920x1080 --moves 10 --magnifications 40,10)
+#   after --: iris-bench's options (default --size 1920x1080 --moves 10 --magnifications 40,10
+#           --color-managed off: the dicomizer gives the DICOM copy an sRGB ICC profile that the
+#           TIFF lacks, so with colour management on only the DICOM runs would pay for the
+#           colour transform)
 #
 # Needs Debian orthanc, orthanc-dicomweb, orthanc-wsi, curl and python3 (scripts/install-deps.sh).
 # Orthanc runs with a generated configuration, no DICOM port, no remote access, and is stopped by
@@ -28,7 +31,7 @@ out=$root/docs/benchmarks
 tag=dicom-lavapipe
 max_load=
 max_wait=600
-bench_opts=(--size 1920x1080 --moves 10 --magnifications 40,10)
+bench_opts=(--size 1920x1080 --moves 10 --magnifications 40,10 --color-managed off)
 while [ $# -gt 0 ]; do
     case $1 in
     --bin) bin=$(realpath "$2"); shift 2 ;;
@@ -58,7 +61,7 @@ if [ ! -s "$slide" ]; then
     "$bin/iris-sample" --out "$slide.part" && mv "$slide.part" "$slide"
 fi
 dicom=$work/sample-dicom
-if [ ! -s "$dicom/.complete" ]; then
+if [ ! -e "$dicom/.complete" ]; then
     echo "bench-dicom.sh: dicomizing into $dicom (JPEG tiles copied)" >&2
     rm -rf "$dicom" && mkdir -p "$dicom"
     OrthancWSIDicomizer --threads=2 --reencode=0 --folder="$dicom" "$slide" >"$work/dicomizer.log" 2>&1

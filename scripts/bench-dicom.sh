@@ -61,11 +61,16 @@ if [ ! -s "$slide" ]; then
     "$bin/iris-sample" --out "$slide.part" && mv "$slide.part" "$slide"
 fi
 dicom=$work/sample-dicom
-if [ ! -e "$dicom/.complete" ]; then
+if [ ! -e "$dicom/.complete-0.25um" ]; then
     echo "bench-dicom.sh: dicomizing into $dicom (JPEG tiles copied)" >&2
     rm -rf "$dicom" && mkdir -p "$dicom"
-    OrthancWSIDicomizer --threads=2 --reencode=0 --folder="$dicom" "$slide" >"$work/dicomizer.log" 2>&1
-    touch "$dicom/.complete"
+    # The dicomizer does not read the TIFF's resolution: it writes Pixel Spacing from the imaged
+    # size (15 mm × 15 mm unless told), and no Objective Lens Power. The sample is 50000 × 40000
+    # px at 0.25 µm (iris-sample's defaults): 12.5 mm × 10 mm gives the DICOM copy the same mpp,
+    # so iris-bench maps 40× and 10× to the same downsamples and walks the same fields.
+    OrthancWSIDicomizer --threads=2 --reencode=0 --imaged-width=12.5 --imaged-height=10 --folder="$dicom" \
+        "$slide" >"$work/dicomizer.log" 2>&1
+    touch "$dicom/.complete-0.25um"
 fi
 
 # Orthanc on a free loopback port, storage of its own, stopped by its PID on exit.

@@ -61,16 +61,18 @@ if [ ! -s "$slide" ]; then
     "$bin/iris-sample" --out "$slide.part" && mv "$slide.part" "$slide"
 fi
 dicom=$work/sample-dicom
-if [ ! -e "$dicom/.complete-0.25um" ]; then
+if [ ! -e "$dicom/.complete-mpp-0.25" ]; then
     echo "bench-dicom.sh: dicomizing into $dicom (JPEG tiles copied)" >&2
     rm -rf "$dicom" && mkdir -p "$dicom"
     # The dicomizer does not read the TIFF's resolution: it writes Pixel Spacing from the imaged
     # size (15 mm × 15 mm unless told), and no Objective Lens Power. The sample is 50000 × 40000
-    # px at 0.25 µm (iris-sample's defaults): 12.5 mm × 10 mm gives the DICOM copy the same mpp,
-    # so iris-bench maps 40× and 10× to the same downsamples and walks the same fields.
-    OrthancWSIDicomizer --threads=2 --reencode=0 --imaged-width=12.5 --imaged-height=10 --folder="$dicom" \
+    # px at 0.25 µm (iris-sample's defaults). OrthancWSIDicomizer 1.1 divides --imaged-width by
+    # the rows and --imaged-height by the columns (measured: 12.5 and 10 gave 0.3125 \ 0.2 µm),
+    # so 10 and 12.5 give the DICOM copy 0.25 µm both ways, and iris-bench maps 40× and 10× to
+    # the same downsamples as on the TIFF and walks the same fields.
+    OrthancWSIDicomizer --threads=2 --reencode=0 --imaged-width=10 --imaged-height=12.5 --folder="$dicom" \
         "$slide" >"$work/dicomizer.log" 2>&1
-    touch "$dicom/.complete-0.25um"
+    touch "$dicom/.complete-mpp-0.25"
 fi
 
 # Orthanc on a free loopback port, storage of its own, stopped by its PID on exit.

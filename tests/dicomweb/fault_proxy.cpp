@@ -212,6 +212,10 @@ void FaultProxy::serve(int client) {
             status = 404;
             type = "application/json";
             body = "{\"HttpStatus\": 404, \"Message\": \"Unknown resource\"}";
+        } else if (faulty && r.fault == Fault::Unavailable) {
+            status = 503;
+            type = "text/plain";
+            body = "Service Unavailable";
         } else {
             const std::string url = "http://127.0.0.1:" + std::to_string(upstream_) + path;
             curl_slist* headers = nullptr;

@@ -1,9 +1,9 @@
 // A small HTTP/1.1 proxy on 127.0.0.1 in front of the suite's Orthanc, with plain sockets (and
 // OpenSSL when it terminates TLS), that misbehaves on purpose for WADO-RS frame requests: it delays answers (a slow
-// server), cuts the multipart body short, gives a wrong Content-Type, or answers 404; or answers any request of a
-// path (QIDO-RS searches) with a body of the test's choosing. Everything else passes unchanged.
-// It keeps connections alive like a server (one thread per client connection) and fetches from upstream with libcurl.
-// It counts the frame requests it saw, so that a test can tell how many a walk cost.
+// server), cuts the multipart body short, gives a wrong Content-Type, or answers 404 or 503; or answers any request of
+// a path (QIDO-RS searches) with a body of the test's choosing. Everything else passes unchanged. It keeps connections
+// alive like a server (one thread per client connection) and fetches from upstream with libcurl. It counts the frame
+// requests it saw, so that a test can tell how many a walk cost.
 //
 // TLS: Debian 12's Orthanc 1.10.1 crashes on its first HTTPS request (its libcivetweb calls a
 // null OpenSSL function), so the suite's HTTPS server is this proxy, given a certificate and key.
@@ -25,11 +25,12 @@ class FaultProxy {
 public:
     enum class Fault {
         None,
-        Delay,     // answer delayMs late
-        Truncate,  // the multipart body loses its last part of the data and its closing delimiter
-        WrongType, // Content-Type: text/html
-        NotFound,  // HTTP 404
-        Replace,   // any request whose path holds `pathContains` gets `status`, `type` and `body` (a lying server)
+        Delay,       // answer delayMs late
+        Truncate,    // the multipart body loses its last part of the data and its closing delimiter
+        WrongType,   // Content-Type: text/html
+        NotFound,    // HTTP 404
+        Unavailable, // HTTP 503 (a server that is down behind a gateway), answered at once
+        Replace,     // any request whose path holds `pathContains` gets `status`, `type` and `body` (a lying server)
     };
     struct Rule {
         Fault fault = Fault::None;

@@ -10,7 +10,8 @@
 //   * faults, through a proxy that misbehaves on purpose (fault_proxy.h): a truncated multipart
 //     body, a wrong content type, a 404 frame (the placeholder is drawn), a slow server (views
 //     keep moving, superseded requests are dropped), the server stopped in the middle of a walk
-//     (clear error, the engine stays usable and recovers when the server is back), and an
+//     (clear error, the engine stays usable and recovers when the server is back), a server
+//     answering 503 while views keep asking (the source backs off instead of hammering it), and an
 //     instance in a transfer syntax the engine does not decode.
 // Every wait is an engine event (waitForFrame) or bounded by a deadline; nothing sleeps a guess.
 #include <QtTest>
@@ -560,6 +561,77 @@ private slots:
                 st.differing == 0,
                 saveFailureArtefacts("dicomweb.recovered", f->image, expected[i == 0 ? 1 : 0].image, nullptr).c_str());
         }
+        QVERIFY2(e_->error().ok(), describe(e_->error()).c_str());
+        const std::string lines = e_.endTest(TestEngine::ErrorLines::Show);
+        QVERIFY2(lines.empty(), lines.c_str());
+        e_->close();
+    }
+
+    // A server that is down behind a gateway (503 for every frame) while the view keeps changing
+    // for 6 s: the source backs off as a whole, so a dead server sees a few rounds of at most one
+    // request per connection however many views ask for the failed tiles (without that, every
+    // view re-sent every failed frame three times: about 90 requests here). The engine keeps
+    // drawing, the failure is reported as passing (IoError), and once the server answers again
+    // the field that failed loads within the longest back-off, although the view has not moved:
+    // its tiles are still needed, so they are tried again (before, only a view change did).
+    void unavailableServerBacksOff() {
+        std::string why;
+        auto proxy = FaultProxy::start(server_->port(), &why);
+        QVERIFY2(proxy, why.c_str());
+        std::string url = sampleUrl_;
+        url.replace(url.find(std::to_string(server_->port())), std::to_string(server_->port()).size(),
+                    std::to_string(proxy->port()));
+        e_.beginTest();
+        const iris::View view = viewWithOrigin(3000, 1500, 1, kW, kH);
+        const iris::View nudged = viewWithOrigin(3001, 1500, 1, kW, kH); // the same tiles
+        auto expected = render(sampleJpeg_.string(), view, &why);
+        QVERIFY2(expected, why.c_str());
+        QVERIFY(e_->open(url).ok()); // frame 1 of each instance passes: open succeeds
+        proxy->setRule({.fault = FaultProxy::Fault::Unavailable, .fromFrame = 2});
+        proxy->resetCount();
+        int views = 0;
+        const auto downUntil = Clock::now() + std::chrono::seconds(6);
+        while (Clock::now() < downUntil) {
+            e_->setView(views++ % 2 == 0 ? view : nudged);
+            (void)e_->waitForFrame(std::chrono::milliseconds(50));
+        }
+        const int requests = proxy->frameRequests();
+        const iris::Result err = e_->error();
+        qInfo("server unavailable for 6 s: %d views, %d frame requests; %s", views, requests, describe(err).c_str());
+        QCOMPARE(err.status(), iris::Status::IoError);
+        QVERIFY2(err.message().find("HTTP 503") != std::string::npos, err.message().c_str());
+        // Back-offs of 0.25, 0.5, 1, 2 and 4 s: five rounds in 6 s, each at most one request on
+        // each of the 6 connections.
+        QVERIFY2(requests <= 6 * 6, "the unavailable server was not left alone between attempts");
+        QVERIFY2(e_->readFrame().ok(), "the engine stopped drawing");
+
+        // The view stays where it is while the server comes back: the tiles that failed in it are
+        // still needed, so they are tried again when the back-off ends, without a view change.
+        e_->clearError();
+        e_->setView(view);
+        const auto failDeadline = Clock::now() + std::chrono::seconds(30);
+        while (e_->error().ok() && Clock::now() < failDeadline) (void)e_->waitForFrame(std::chrono::milliseconds(100));
+        QCOMPARE(e_->error().status(), iris::Status::IoError); // this view's tiles failed too
+        proxy->setRule({});
+        e_->clearError();
+        const auto back = Clock::now();
+        iris::Result drawn(iris::Status::Timeout, "no complete frame in 20 s");
+        while (Clock::now() - back < std::chrono::seconds(20)) {
+            drawn = e_->waitForFrame(std::chrono::milliseconds(200));
+            if (drawn.ok()) break;
+            e_->clearError(); // a read that failed before the server was back: wait on
+        }
+        QVERIFY2(
+            drawn.ok(),
+            ("the field that failed was not loaded again while the view still needed it: " + describe(drawn)).c_str());
+        auto frame = e_->readFrame();
+        QVERIFY(frame.ok());
+        const double recoveredS = std::chrono::duration<double>(Clock::now() - back).count();
+        qInfo("the field loaded %.2f s after the server was back, with no view change", recoveredS);
+        const DiffStats st = compareImages(frame->image, expected->image);
+        QVERIFY2(st.differing == 0,
+                 saveFailureArtefacts("dicomweb.backoff", frame->image, expected->image, nullptr).c_str());
+        QVERIFY2(recoveredS < 8 + 5, "the failed field waited longer than the longest back-off");
         QVERIFY2(e_->error().ok(), describe(e_->error()).c_str());
         const std::string lines = e_.endTest(TestEngine::ErrorLines::Show);
         QVERIFY2(lines.empty(), lines.c_str());

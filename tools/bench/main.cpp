@@ -162,7 +162,13 @@ SizeResult runSize(const Options& o, uint32_t W, uint32_t H, bool colorManaged) 
     });
     // Magnification → downsample: from the objective power, else from mpp (10 µm/px ≈ 1×),
     // else the list is read as downsamples.
-    const double objective = info.objectivePower > 0 ? info.objectivePower : info.mppX > 0 ? 10.0 / info.mppX : 0;
+    // The objective from mpp is rounded to six significant digits: DICOM Pixel Spacing is often
+    // written in single precision (OrthancWSIDicomizer: 0.000312499993 mm), and a downsample a
+    // hair under a level's (3.9999998 for 4) would draw from the level above and walk other
+    // fields than the same slide's TIFF.
+    const double objective = info.objectivePower > 0 ? info.objectivePower
+                             : info.mppX > 0         ? std::strtod(shortNumber(10.0 / info.mppX).c_str(), nullptr)
+                                                     : 0;
     std::mt19937_64 rng(o.seed);
     std::vector<BenchField> fields;
     const iris::EngineMetrics m0 = e.metrics();

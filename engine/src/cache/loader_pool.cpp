@@ -113,9 +113,12 @@ void LoaderPool::decode(const Snapshot& snap, Plan& plan, const TileRef& t) {
         log_.error(r.message());
         if (source.readsOverNetwork() && (r.status() == Status::IoError || r.status() == Status::Timeout)) {
             // Perhaps only for now (no connection, a timeout, a server error): no placeholder
-            // (the layers below show through), and the claim stays with the plan until it is
-            // replaced; a later view that needs the tile asks for it again.
-            hold(plan, t, &Plan::failed);
+            // (the layers below show through), and the claim stays with the plan. The view still
+            // needs the tile, so it is asked for again at once: the source sends the request when
+            // its back-off of the server ends, and the tile waits for it like any other (a view
+            // that stays put recovers when the server is back). Only a source that still has
+            // the failure at hand leaves it failed until a later view asks again.
+            hold(plan, t, source.requestTile(t.level, t.tx, t.ty) ? &Plan::failed : &Plan::waiting);
             return;
         }
         if (!source.keepsPartialTiles(t.level)) fillFailedTilePlaceholder(buf.get());

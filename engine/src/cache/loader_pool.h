@@ -55,7 +55,7 @@ private:
         std::mutex heldMutex;
         std::vector<TileRef> waiting; // data still on the way, priority order
         std::deque<TileRef> ready;    // taken from `waiting` once their data landed, priority order
-        std::vector<TileRef> failed;  // read failed for a reason that may pass
+        std::vector<TileRef> failed;  // read failed for a reason that may pass, and not asked for again yet
         bool retired = false;         // replaced: claims handed to it are given back at once
         uint64_t arrivalsSeen = 0;    // arrivals_ when `waiting` was last looked through
     };

@@ -20,8 +20,17 @@ constexpr size_t kFrameBudgetBytes = size_t(64) << 20; // compressed frames kept
 constexpr int kAttempts = 3;                           // per frame, when failures may pass
 constexpr size_t kMaxStreams = 64;                     // in flight over HTTP/2
 
-// Back-off before attempt n + 1 (n ≥ 1).
+// Back-off before attempt n + 1 (n ≥ 1) of one frame.
 std::chrono::milliseconds backoff(int attempts) { return std::chrono::milliseconds(attempts <= 1 ? 250 : 1000); }
+
+// The server's back-off after `streak` failures in a row that may pass (streak ≥ 1): 250 ms,
+// doubling, at most kMaxQuiet.
+constexpr std::chrono::milliseconds kFirstQuiet{250};
+constexpr std::chrono::milliseconds kMaxQuiet{8000};
+std::chrono::milliseconds quietAfter(int streak) {
+    const int doublings = std::min(streak - 1, 6); // 250 ms << 6 = 16 s > kMaxQuiet
+    return std::min(kFirstQuiet * (1 << doublings), kMaxQuiet);
+}
 
 // Whether a failed request may succeed when tried again soon.
 bool passing(const net::Response& r) {
@@ -259,7 +268,16 @@ void DicomWebSource::evict() {
     }
 }
 
+void DicomWebSource::serverFailed(Clock::time_point now) {
+    // Failures of requests sent in one round (several connections) arrive together: only the
+    // first one after the quiet period ended lengthens the next.
+    if (now < quietUntil_) return;
+    ++failStreak_;
+    quietUntil_ = now + quietAfter(failStreak_);
+}
+
 void DicomWebSource::send(FrameKey key, Clock::time_point notBefore) {
+    notBefore = std::max(notBefore, quietUntil_); // nothing reaches a server that is backed off
     const size_t instance = size_t(key >> 32);
     const uint32_t frame = uint32_t(key & 0xffffffffu);
     client_->get(
@@ -295,7 +313,15 @@ void DicomWebSource::onFrame(FrameKey key, net::Response&& r) {
             return;
         }
         Frame& f = it->second;
-        if (!payload.ok() && passing(r) && ++f.attempts < kAttempts) {
+        const bool mayPass = !payload.ok() && passing(r);
+        if (mayPass) {
+            serverFailed(Clock::now());
+        } else {
+            // Any answer (even a 404 or a broken body) says the server is there.
+            failStreak_ = 0;
+            quietUntil_ = {};
+        }
+        if (mayPass && ++f.attempts < kAttempts) {
             send(key, Clock::now() + backoff(f.attempts)); // still counted in sent_
             return;
         }
@@ -323,6 +349,10 @@ void DicomWebSource::prefetch(const std::vector<TileAddress>& tiles, std::functi
     std::lock_guard lock(mutex_);
     if (abandoned_) return;
     const uint64_t batch = ++batch_;
+    // While the server is backed off a failed frame stays failed: the loaders read its failure
+    // (reported, then forgotten: the next view that needs it asks again, sent when the back-off
+    // ends). Queued again at once, it would wait unreported for the end of the back-off.
+    const bool quiet = Clock::now() < quietUntil_;
     std::vector<FrameKey> order;
     for (const TileAddress& t : tiles) {
         for (const uint64_t cell : cellsOfTile(t.level, t.tx, t.ty)) {
@@ -335,7 +365,7 @@ void DicomWebSource::prefetch(const std::vector<TileAddress>& tiles, std::functi
             f.wantedBy = batch;
             if (inserted || f.state == Frame::State::Queued) {
                 order.push_back(key);
-            } else if (f.state == Frame::State::Failed) { // needed again: try again
+            } else if (f.state == Frame::State::Failed && !quiet) { // needed again: try again
                 f.state = Frame::State::Queued;
                 f.error = {};
                 f.attempts = 0;
@@ -399,9 +429,10 @@ Result DicomWebSource::readFrame(size_t instance, uint32_t frame, uint8_t* dst, 
     {
         std::unique_lock lock(mutex_);
         // Each attempt is bounded by the request timeout; the last waits at most that long after
-        // its back-off. A server that never answers cannot hold a reader longer than this.
+        // its back-off, and the server's back-off delays each at most kMaxQuiet. A server that
+        // never answers cannot hold a reader longer than this.
         const auto deadline =
-            Clock::now() +
+            std::max(Clock::now(), quietUntil_) + kMaxQuiet +
             kAttempts * std::chrono::milliseconds(options_.connectTimeoutMs + options_.requestTimeoutMs) +
             std::chrono::seconds(2);
         for (;;) {

@@ -84,6 +84,8 @@ private:
     // With mutex_ held.
     void pump();
     void send(FrameKey key, net::HttpClient::Clock::time_point notBefore);
+    // A request failed for a reason that may pass (with now = its answer's time): back off.
+    void serverFailed(net::HttpClient::Clock::time_point now);
     void storeReady(FrameKey key, Frame& f, std::vector<uint8_t> bytes);
     void evict();
     // On the client's thread.
@@ -102,6 +104,13 @@ private:
     std::list<FrameKey> readyLru_; // Ready frames, most recently used first
     size_t readyBytes_ = 0;
     bool abandoned_ = false;
+    // The server as a whole (not one frame) is backed off after a failure that may pass (no
+    // connection, a timeout, 408/429/5xx): until quietUntil_ no request is sent (those due are
+    // sent then), so a server that is down sees a round of at most one request per connection per
+    // back-off, however many frames and views ask. Each failure seen after a quiet period ended
+    // doubles the next one (failStreak_), up to kMaxQuiet; any answer resets both.
+    int failStreak_ = 0;
+    net::HttpClient::Clock::time_point quietUntil_{};
 
     std::mutex callbackMutex_; // guards arrived_, held while it runs
     std::function<void()> arrived_;

@@ -57,7 +57,8 @@ public:
     //
     // True when reads go over a network: the loaders then hint each view's tiles with
     // prefetch(), read a tile only once requestTile() says it is there, and treat a failed read
-    // with Status::IoError or Timeout as passing (the tile is not published; it is tried again
+    // with Status::IoError or Timeout as passing (the tile is not published; it is asked for
+    // again at once with requestTile(), which such a source sends when its back-off ends, or
     // when a later view needs it).
     virtual bool readsOverNetwork() const { return false; }
     // The tiles the engine wants now, in priority order (a new view's buffer region, centre

@@ -50,7 +50,8 @@ done
 for cmd in Orthanc OrthancWSIDicomizer curl python3; do
     command -v "$cmd" >/dev/null || { echo "bench-dicom.sh: $cmd is not installed (scripts/install-deps.sh)" >&2; exit 1; }
 done
-plugin=$(ls /usr/lib/orthanc/libOrthancDicomWeb.so* 2>/dev/null | head -n1)
+# ORTHANC_DICOMWEB_PLUGIN: the plugin elsewhere than Debian puts it (a machine given the binaries).
+plugin=${ORTHANC_DICOMWEB_PLUGIN:-$(ls /usr/lib/orthanc/libOrthancDicomWeb.so* 2>/dev/null | head -n1)}
 [ -n "$plugin" ] || { echo "bench-dicom.sh: the Orthanc DICOMweb plugin (orthanc-dicomweb) is missing" >&2; exit 1; }
 mkdir -p "$work" "$out"
 

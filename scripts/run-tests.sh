@@ -33,18 +33,44 @@ scripts/check-deps.py
 echo "== dev tests"
 xvfb-run -a -s "-screen 0 1920x1080x24" ctest --preset dev -j 1
 
+# The programs the suites labelled $2 run in build tree $1, read from the CTestTestfile.cmake
+# files its configure wrote (CTest itself leaves out a test whose program is not built yet),
+# so that a new suite with the label is built with no list here to forget: a hand-kept list
+# once left iris.bytes, dicomweb.qido and the annotation suites configured but unbuilt.
+suite_targets() {
+  python3 - "$1" "$2" <<'PY'
+import os, re, sys
+tree, label = sys.argv[1], sys.argv[2]
+commands, labels = {}, {}
+for d, _, files in os.walk(tree):
+    if "CTestTestfile.cmake" not in files:
+        continue
+    text = open(os.path.join(d, "CTestTestfile.cmake"), encoding="utf-8").read()
+    for name, args in re.findall(r'add_test\(\[=\[(.+?)\]=\]\s+(.*)\)\s*$', text, re.M):
+        commands[name] = re.findall(r'"([^"]*)"', args)
+    for name, labs in re.findall(r'set_tests_properties\(\[=\[(.+?)\]=\] PROPERTIES .*?LABELS "([^"]*)"', text):
+        labels[name] = labs.split(";")
+names = {os.path.basename(a) for t, cmd in commands.items() if label in labels.get(t, [])
+         for a in cmd if "/bin/" in a and os.path.basename(a).startswith(("tst_", "iris-"))}
+if not names:
+    sys.exit("run-tests.sh: no programs found for the suites labelled " + label + " in " + tree)
+print(" ".join(sorted(names)))
+PY
+}
+
 echo "== asan build"
 cmake --preset asan >/dev/null
 # Only what the "asan" suites run (and their fixtures), to keep CI short.
-cmake --build --preset asan -j "$JOBS" --target iris_no_dlclose iris-sample tst_bad_input tst_lifecycle tst_tile_map tst_draw_list tst_config tst_storm \
-  tst_iris_reader tst_irisslideview tst_quit_midzoom tst_overlay tst_pyramid tst_color_lut tst_dicom tst_dicomweb tst_changing_files
+asan_targets=$(suite_targets build/asan asan)
+cmake --build --preset asan -j "$JOBS" --target iris_no_dlclose iris-sample $asan_targets
 echo "== asan tests"
 # (the sanitizer options and the LeakSanitizer suppressions come from tests/CMakeLists.txt)
 xvfb-run -a -s "-screen 0 1920x1080x24" ctest --preset asan -L asan -j 1
 
 echo "== tsan build"
 cmake --preset tsan >/dev/null
-cmake --build --preset tsan -j "$JOBS" --target iris-sample tst_tile_map tst_storm tst_pyramid tst_dicom
+tsan_targets=$(suite_targets build/tsan tsan)
+cmake --build --preset tsan -j "$JOBS" --target iris-sample $tsan_targets
 echo "== tsan tests"
 ctest --preset tsan -L tsan -j 1
 

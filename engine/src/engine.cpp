@@ -2,6 +2,7 @@
 // engine thread, and turns API calls into published state (SharedState::update) that the
 // threads pull. See docs/ARCHITECTURE.md.
 #include "iris/engine.h"
+#include "iris/annotations.h"
 
 #include <cmath>
 
@@ -147,6 +148,12 @@ struct Engine::Impl {
     uint32_t generation = 0;
     bool surfaceBound = false;
     bool offscreenBound = false;
+    // The annotations shown (setAnnotations) and the registration that wakes the render
+    // thread after each change the store publishes. Declared after `shared`, which the
+    // registration's function bumps: it is destroyed (and waits out a call) first.
+    mutable std::mutex annotationMutex;
+    std::shared_ptr<AnnotationStore> annotationStore; // guarded by annotationMutex
+    AnnotationSubscription annotationWake;            // guarded by annotationMutex
 };
 
 Expected<std::unique_ptr<Engine>> Engine::create(const EngineConfig& config) {
@@ -474,6 +481,35 @@ namespace {
 bool validOverlay(Overlay o) { return int(o) >= 0 && int(o) < kOverlayCount; }
 bool labelled(Overlay o) { return o == Overlay::ScaleBar || o == Overlay::Magnification; }
 } // namespace
+
+void Engine::setAnnotations(std::shared_ptr<AnnotationStore> store) {
+    std::lock_guard lock(impl_->annotationMutex);
+    if (store == impl_->annotationStore) return;
+    impl_->annotationWake.reset();
+    if (store) {
+        SharedState* shared = &impl_->shared;
+        impl_->annotationWake = store->onChange([shared] { shared->bump(); });
+    }
+    impl_->annotationStore = store;
+    impl_->shared.update([&](Snapshot& s) { s.annotations = std::move(store); });
+}
+
+std::shared_ptr<AnnotationStore> Engine::annotations() const {
+    std::lock_guard lock(impl_->annotationMutex);
+    return impl_->annotationStore;
+}
+
+void Engine::setAnnotationsVisible(bool visible) {
+    impl_->shared.update([&](Snapshot& s) { s.annotationsVisible = visible; });
+}
+
+bool Engine::annotationsVisible() const { return impl_->shared.snapshot().annotationsVisible; }
+
+void Engine::setSelectedAnnotation(uint64_t id) {
+    impl_->shared.update([&](Snapshot& s) { s.selectedAnnotation = id; });
+}
+
+uint64_t Engine::selectedAnnotation() const { return impl_->shared.snapshot().selectedAnnotation; }
 
 void Engine::setCrosshair(std::optional<std::array<double, 2>> slidePos) {
     if (slidePos && (!std::isfinite((*slidePos)[0]) || !std::isfinite((*slidePos)[1]))) slidePos.reset();

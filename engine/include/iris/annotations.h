@@ -266,6 +266,27 @@ struct AnnotationEdit {
     std::vector<AnnotationClass> classes;   // set or replace class entries
 };
 
+// A registration made by AnnotationStore::onChange: while it lives, its function is called after
+// every publication; destroying (or reset()) it ends the calls and waits for one in progress.
+class IRIS_API AnnotationSubscription {
+public:
+    AnnotationSubscription() = default;
+    AnnotationSubscription(AnnotationSubscription&& o) noexcept;
+    AnnotationSubscription& operator=(AnnotationSubscription&& o) noexcept;
+    AnnotationSubscription(const AnnotationSubscription&) = delete;
+    AnnotationSubscription& operator=(const AnnotationSubscription&) = delete;
+    ~AnnotationSubscription();
+    void reset();
+    explicit operator bool() const { return id_ != 0; }
+
+    struct Registry; // engine-internal
+private:
+    friend class AnnotationStore;
+    AnnotationSubscription(std::weak_ptr<Registry> r, uint64_t id) : registry_(std::move(r)), id_(id) {}
+    std::weak_ptr<Registry> registry_;
+    uint64_t id_ = 0;
+};
+
 class IRIS_API AnnotationStore {
 public:
     AnnotationStore();
@@ -289,6 +310,12 @@ public:
     Expected<std::vector<uint64_t>> apply(AnnotationEdit edit);
     // Everything replaced by `objects` and `classes` (a loaded file), one publication.
     Result replaceAll(std::vector<AnnotationObject> objects, std::vector<AnnotationClass> classes);
+
+    // Calls `fn` after every publication, on the writer's thread, with the writers' lock held:
+    // it must be quick and must not call this store's writers or end its own subscription (an
+    // engine bumps its render thread's wake counter). The store may die first: the
+    // subscription then does nothing.
+    [[nodiscard]] AnnotationSubscription onChange(std::function<void()> fn);
 
 private:
     struct Impl;

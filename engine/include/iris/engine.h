@@ -18,6 +18,8 @@
 
 namespace iris {
 
+class AnnotationStore; // iris/annotations.h
+
 // Switches for debugging, A/B benchmarks and device choice. The defaults are what a viewer
 // wants. The engine never reads the environment, so a host does not inherit behaviour from
 // the shell it was started in and two engines in one process can be set up differently; a
@@ -217,6 +219,21 @@ public:
     Result setOverlayFont(const std::string& path);
     // The overlays of the last frame rendered (into either kind of target): for hit-testing.
     OverlayLayout overlayLayout() const;
+    // --- annotations (docs/ANNOTATIONS.md) -------------------------------------------
+    // The store whose objects the render thread draws over the slide, under the HUD overlays,
+    // in level-0 coordinates of the open slide (null: none, the default). The engine keeps the
+    // store alive while it shows it and draws a new frame after every change the store
+    // publishes, from any thread; several engines may show one store. Nothing is drawn while
+    // no slide is open.
+    void setAnnotations(std::shared_ptr<AnnotationStore> store);
+    std::shared_ptr<AnnotationStore> annotations() const;
+    // Shown by default.
+    void setAnnotationsVisible(bool visible);
+    bool annotationsVisible() const;
+    // The object drawn selected (a contrasting outline and its vertex handles); 0: none.
+    void setSelectedAnnotation(uint64_t id);
+    uint64_t selectedAnnotation() const;
+
     // A cross-hair marker over the slide at a level-0 position (a linked view's cursor), drawn
     // over the tiles and the other overlays, turned with the view; std::nullopt hides it
     // (the default).

@@ -9,6 +9,8 @@
 // them by their bounds alone.
 #pragma once
 
+#include <atomic>
+
 // Boost 1.74's R-tree includes <boost/detail/no_exceptions_support.hpp>, which prints a
 // deprecation #pragma message in every file that includes it; nothing here can change that.
 #ifndef BOOST_ALLOW_DEPRECATED_HEADERS
@@ -32,7 +34,14 @@ namespace iris {
 struct AnnotationFillCache {
     std::once_flag once;
     std::optional<Expected<std::shared_ptr<const AnnotationTriangles>>> result;
+    // Set (release) once `result` is written: the render pass asks, without waiting, whether a
+    // fill is ready or would cost a triangulation (render/annotation_geometry.cpp).
+    std::atomic<bool> ready{false};
 };
+// Whether fillTriangles(a) would return at once: not a polygon, or its triangulation is cached.
+inline bool fillReady(const StoredAnnotation& a) {
+    return !a.fillCache || a.fillCache->ready.load(std::memory_order_acquire);
+}
 
 namespace ann {
 

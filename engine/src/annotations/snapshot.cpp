@@ -141,7 +141,10 @@ Expected<std::shared_ptr<const AnnotationTriangles>> AnnotationSnapshot::fillTri
         return std::shared_ptr<const AnnotationTriangles>(std::make_shared<AnnotationTriangles>(std::move(*t)));
     };
     if (!cache) return compute(); // a StoredAnnotation made outside the store
-    std::call_once(cache->once, [&] { cache->result.emplace(compute()); });
+    std::call_once(cache->once, [&] {
+        cache->result.emplace(compute());
+        cache->ready.store(true, std::memory_order_release);
+    });
     return *cache->result;
 }
 

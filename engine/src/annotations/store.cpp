@@ -6,6 +6,7 @@
 #include <mutex>
 #include <unordered_map>
 #include <unordered_set>
+#include <utility>
 
 #include "annotations/annotation_index.h"
 #include "core/published.h"
@@ -102,8 +103,41 @@ Entry makeEntry(AnnotationObject o) {
 
 } // namespace
 
+// The functions onChange registered. Calls run under `m`, so a subscription's reset() returns
+// only when no call of its function is running or can start.
+struct AnnotationSubscription::Registry {
+    std::mutex m;
+    uint64_t next = 1;
+    std::vector<std::pair<uint64_t, std::function<void()>>> fns;
+    void notify() {
+        std::lock_guard lock(m);
+        for (auto& [id, fn] : fns) fn();
+    }
+};
+
+AnnotationSubscription::AnnotationSubscription(AnnotationSubscription&& o) noexcept
+    : registry_(std::move(o.registry_)), id_(std::exchange(o.id_, 0)) {}
+AnnotationSubscription& AnnotationSubscription::operator=(AnnotationSubscription&& o) noexcept {
+    if (this != &o) {
+        reset();
+        registry_ = std::move(o.registry_);
+        id_ = std::exchange(o.id_, 0);
+    }
+    return *this;
+}
+AnnotationSubscription::~AnnotationSubscription() { reset(); }
+void AnnotationSubscription::reset() {
+    if (auto r = registry_.lock()) {
+        std::lock_guard lock(r->m);
+        std::erase_if(r->fns, [&](const auto& e) { return e.first == id_; });
+    }
+    registry_.reset();
+    id_ = 0;
+}
+
 struct AnnotationStore::Impl {
     std::mutex writers; // serialises writers; readers never take it
+    std::shared_ptr<AnnotationSubscription::Registry> listeners = std::make_shared<AnnotationSubscription::Registry>();
     Published<AnnotationSnapshot> current;
     uint64_t nextId = 1;     // under `writers`
     uint64_t generation = 0; // under `writers`: the published snapshot's
@@ -134,6 +168,7 @@ struct AnnotationStore::Impl {
         impl->buckets = std::move(d.buckets);
         impl->classes = std::move(d.classes);
         current.store(std::make_shared<const AnnotationSnapshot>(std::move(impl)));
+        listeners->notify();
     }
 
     // Applies `e` to a fresh draft; nothing is published on error.
@@ -256,6 +291,14 @@ AnnotationStore::AnnotationStore() : impl_(std::make_unique<Impl>()) {
 AnnotationStore::~AnnotationStore() = default;
 
 std::shared_ptr<const AnnotationSnapshot> AnnotationStore::snapshot() const { return impl_->current.load(); }
+
+AnnotationSubscription AnnotationStore::onChange(std::function<void()> fn) {
+    if (!fn) return {};
+    std::lock_guard lock(impl_->listeners->m);
+    const uint64_t id = impl_->listeners->next++;
+    impl_->listeners->fns.emplace_back(id, std::move(fn));
+    return AnnotationSubscription(impl_->listeners, id);
+}
 
 Expected<std::vector<uint64_t>> AnnotationStore::apply(AnnotationEdit edit) {
     std::lock_guard lock(impl_->writers);

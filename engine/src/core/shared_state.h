@@ -16,6 +16,7 @@
 
 #include "color/color_lut.h"
 #include "core/published.h"
+#include "iris/annotations.h"
 #include "iris/engine.h"
 #include "iris/types.h"
 #include "overlay/overlay_settings.h"
@@ -42,6 +43,12 @@ struct Snapshot {
     // management off, or a profile that could not be used).
     std::shared_ptr<const color::Lut3D> colorLut;
     overlay::OverlaySettings overlays; // which overlays are on, where, the device pixel ratio, the font
+    // Annotations drawn over the slide, under the HUD (render/annotation_pass.h): the host's
+    // store (each frame takes its newest snapshot), whether they are shown, and the object drawn
+    // selected with its vertex handles (0: none).
+    std::shared_ptr<const AnnotationStore> annotations;
+    bool annotationsVisible = true;
+    uint64_t selectedAnnotation = 0;
     // The newest move to an entirely new field of view (0: none being timed). Set by the API
     // call that made the move; the render thread times the field from fieldStart.
     uint64_t fieldId = 0;

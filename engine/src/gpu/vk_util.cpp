@@ -220,20 +220,31 @@ Expected<VkPipeline> createInstancedQuadPipeline(VkDevice dev, VkPipelineLayout 
                                                  const VkVertexInputAttributeDescription* attributes,
                                                  uint32_t attributeCount, VkFormat format,
                                                  const VkSpecializationInfo* fragSpecialization) {
+    return createBlendedPipeline(dev, layout, vert, frag, instanceStride, VK_VERTEX_INPUT_RATE_INSTANCE,
+                                 VK_PRIMITIVE_TOPOLOGY_TRIANGLE_STRIP, attributes, attributeCount, format,
+                                 fragSpecialization);
+}
+
+Expected<VkPipeline> createBlendedPipeline(VkDevice dev, VkPipelineLayout layout, VkShaderModule vert,
+                                           VkShaderModule frag, uint32_t stride, VkVertexInputRate inputRate,
+                                           VkPrimitiveTopology topology,
+                                           const VkVertexInputAttributeDescription* attributes,
+                                           uint32_t attributeCount, VkFormat format,
+                                           const VkSpecializationInfo* fragSpecialization) {
     const VkPipelineShaderStageCreateInfo stages[2] = {
         {.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, .pNext = nullptr, .flags = 0,
          .stage = VK_SHADER_STAGE_VERTEX_BIT, .module = vert, .pName = "main", .pSpecializationInfo = nullptr},
         {.sType = VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO, .pNext = nullptr, .flags = 0,
          .stage = VK_SHADER_STAGE_FRAGMENT_BIT, .module = frag, .pName = "main", .pSpecializationInfo = fragSpecialization},
     };
-    const VkVertexInputBindingDescription vib{.binding = 0, .stride = instanceStride, .inputRate = VK_VERTEX_INPUT_RATE_INSTANCE};
+    const VkVertexInputBindingDescription vib{.binding = 0, .stride = stride, .inputRate = inputRate};
     const VkPipelineVertexInputStateCreateInfo vi{
         .sType = VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO, .pNext = nullptr, .flags = 0,
         .vertexBindingDescriptionCount = 1, .pVertexBindingDescriptions = &vib,
         .vertexAttributeDescriptionCount = attributeCount, .pVertexAttributeDescriptions = attributes};
     const VkPipelineInputAssemblyStateCreateInfo ia{
         .sType = VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO, .pNext = nullptr, .flags = 0,
-        .topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_STRIP, .primitiveRestartEnable = VK_FALSE};
+        .topology = topology, .primitiveRestartEnable = VK_FALSE};
     const VkPipelineViewportStateCreateInfo vp{
         .sType = VK_STRUCTURE_TYPE_PIPELINE_VIEWPORT_STATE_CREATE_INFO, .pNext = nullptr, .flags = 0,
         .viewportCount = 1, .pViewports = nullptr, .scissorCount = 1, .pScissors = nullptr};

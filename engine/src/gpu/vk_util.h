@@ -199,6 +199,14 @@ Expected<VkPipeline> createInstancedQuadPipeline(VkDevice dev, VkPipelineLayout 
                                                  const VkVertexInputAttributeDescription* attributes,
                                                  uint32_t attributeCount, VkFormat format,
                                                  const VkSpecializationInfo* fragSpecialization = nullptr);
+// The same blending and dynamic state for any vertex input rate and topology (the annotation
+// pass's fill triangles are a per-vertex triangle list).
+Expected<VkPipeline> createBlendedPipeline(VkDevice dev, VkPipelineLayout layout, VkShaderModule vert,
+                                           VkShaderModule frag, uint32_t stride, VkVertexInputRate inputRate,
+                                           VkPrimitiveTopology topology,
+                                           const VkVertexInputAttributeDescription* attributes,
+                                           uint32_t attributeCount, VkFormat format,
+                                           const VkSpecializationInfo* fragSpecialization = nullptr);
 
 // A compute pipeline of `module`'s "main" with `layout` and, optionally, specialization
 // constants.

@@ -7,9 +7,10 @@
 //   recordUploads(cmd, frame) transfers before the render pass (glyphs, later layer data);
 //   recordDraws(cmd, frame)   draws inside the one render pass, over the passes before it.
 //
-// The passes today: tiles (render/tile_pass.h: base, LR, HR, seams), then the HUD
-// (render/hud_pass.h: scale bar, magnification, overview map). Overlay layers (annotations,
-// heat maps) go between the two; a colour transform is a step of the tile pass's shader.
+// The passes today: tiles (render/tile_pass.h: base, LR, HR, seams), annotations
+// (render/annotation_pass.h), then the HUD (render/hud_pass.h: scale bar, magnification,
+// overview map). Heat maps will go before the annotations; a colour transform is a step of the
+// tile pass's shader.
 //
 // Passes are owned and called by the render thread only; they read nothing but the frame's
 // snapshot and the context, so they need no synchronisation of their own.
@@ -51,6 +52,9 @@ struct FrameContext {
     // Cleared by any pass whose content is not whole: a complete frame is what TeFOV times and
     // what waitForFrame waits for.
     bool complete = true;
+    // Set by a pass that has more to show than this frame could take (fills triangulated over
+    // several frames): the render thread draws another frame after this one.
+    bool redraw = false;
 };
 
 class FramePass {

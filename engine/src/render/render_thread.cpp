@@ -43,7 +43,7 @@ RenderThread::RenderThread(SharedState& shared, gpu::Device& device, gpu::TileAt
                            const EngineTuning& tuning)
     : shared_(shared), device_(device), atlas_(atlas), pipeline_(pipeline), handover_(handover), counters_(counters),
       log_(log), metrics_(counters), tuning_(tuning), tilePass_(pipeline, tuning.drawCovered),
-      hudPass_(device, log, tilePass_) {
+      annotationPass_(device, log), hudPass_(device, log, tilePass_) {
     if (tuning_.drawCovered) log_.info("draw covered: coarse tiles are drawn also under resident finer tiles");
 }
 
@@ -70,6 +70,7 @@ Result RenderThread::init() {
     case EngineTuning::Pacing::Off: paceFrames_ = false; break;
     }
     log_.info(std::string("frame pacing: ") + (paceFrames_ ? "on" : "off"));
+    if (Result r = annotationPass_.init(kFramesInFlight); !r.ok()) return r;
     if (Result r = hudPass_.init(kFramesInFlight); !r.ok()) return r;
     const bool cpuDevice = device_.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
     if (tuning_.tileResolve == EngineTuning::TileResolve::Compute ||
@@ -585,6 +586,7 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
     if (Result r = deliverFrame(f, target, frame); !r.ok()) return r;
     publishFrame(snap, frame.complete, buffered, tilePass_.tilesDrawn(),
                  std::chrono::duration<double, std::milli>(Clock::now() - t0).count(), hudPass_.layout());
+    if (frame.redraw) shared_.bump();
     return {};
 }
 

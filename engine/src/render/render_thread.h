@@ -1,7 +1,7 @@
 // The render thread: owns the render target (offscreen image or swapchain), the frame
 // command buffers and the instance buffers, and the frame's passes (render/frame_pass.h): the
 // tiles of the base, LR and HR levels (tiles not yet buffered are simply absent, so coarser
-// ones show through), then the HUD overlays. Per frame: handleSurfaceChanges() (target
+// ones show through), the host's annotations, then the HUD overlays. Per frame: handleSurfaceChanges() (target
 // requests, stale swapchains, a window that lags its resize, a lost surface), acquire the
 // target image, prepare the passes, record them in one render pass, submit, then present or
 // read back, and publish the frame. It renders while something changes and sleeps on the
@@ -26,6 +26,7 @@
 #include "gpu/tile_pipeline.h"
 #include "gpu/vk_handle.h"
 #include "metrics/field_metrics.h"
+#include "render/annotation_pass.h"
 #include "render/frame_pass.h"
 #include "render/hud_pass.h"
 #include "render/resolve_pass.h"
@@ -141,11 +142,12 @@ private:
     // EngineConfig::tuning: drawCovered draws coarse tiles even where resident finer tiles
     // cover them (the engine before culling; for A/B measurements and the culling test).
     const EngineTuning tuning_;
-    // The frame's passes, in drawing order (render/frame_pass.h). Overlay layers (annotations,
-    // heat maps) go between the tiles and the HUD.
+    // The frame's passes, in drawing order (render/frame_pass.h): tiles, annotations, HUD.
+    // Heat-map layers will go between the tiles and the annotations.
     render::TilePass tilePass_;
+    render::AnnotationPass annotationPass_;
     render::HudPass hudPass_;
-    std::array<render::FramePass*, 2> passes_{&tilePass_, &hudPass_};
+    std::array<render::FramePass*, 3> passes_{&tilePass_, &annotationPass_, &hudPass_};
     // EngineTuning::TileResolve::Compute: offscreen frames resolve the tiles per pixel in a
     // compute pass instead of the tile pass's quads (null otherwise).
     std::unique_ptr<render::ResolvePass> resolvePass_;

@@ -13,13 +13,17 @@
 //   * Many objects: over the budget, the fit view draws the fit-view aggregate's cells as
 //     dots; the frame is complete and shows them.
 //   * The selection: a yellow outline and white-centred handles at the vertices.
+//   * iris-render --annotations FILE writes the frame the engine draws for the same view.
 //   * Changes from other threads redraw; hiding, detaching, and a store edited while engines
 //     that show it are created and destroyed (asan preset).
+#include <QImage>
+#include <QProcess>
 #include <QtTest>
 
 #include <atomic>
 #include <cmath>
 #include <condition_variable>
+#include <fstream>
 #include <mutex>
 #include <thread>
 
@@ -407,6 +411,48 @@ private slots:
         // The objects fill 6000 × 3960 of the slide: at this zoom, cells of the aggregate cover it
         // with dots (radius 1.5 px), a good part of that area dark.
         QVERIFY2(dark > 2000, ("only " + std::to_string(dark) + " dark pixels").c_str());
+    }
+
+    // iris-render --annotations: the same pixels as the engine's frame of the same view.
+    void irisRenderDrawsAnnotationFiles() {
+        const auto objects = scene(2000, 1500);
+        iris::AnnotationDocument doc;
+        doc.objects = objects;
+        const std::filesystem::path file = testOutDir() / "annotations-render.geojson";
+        std::ofstream(file) << iris::writeGeoJson(doc);
+        const std::filesystem::path png = testOutDir() / "annotations-render.png";
+        std::filesystem::remove(png);
+        QProcess p;
+        p.start(IRIS_RENDER_EXE, {QString::fromStdString(sampleSlidePath()->string()), "--out",
+                                  QString::fromStdString(png.string()), "--size", QString("%1x%2").arg(kW).arg(kH),
+                                  "--center", "2000,1500", "--downsample", "1.25", "--color-managed", "off",
+                                  "--annotations", QString::fromStdString(file.string())});
+        QVERIFY(p.waitForFinished(120000));
+        QVERIFY2(p.exitCode() == 0, p.readAllStandardError().constData());
+        QImage img(QString::fromStdString(png.string()));
+        QVERIFY(!img.isNull());
+        img = img.convertToFormat(QImage::Format_RGBA8888);
+        auto store = std::make_shared<iris::AnnotationStore>();
+        QVERIFY(store->addBatch(objects).ok());
+        e_->setAnnotations(store);
+        std::string why;
+        auto f = renderView(*e_.engine, iris::View{2000, 1500, 1.25}, kW, kH, 20s, &why);
+        QVERIFY2(f, why.c_str());
+        QCOMPARE(uint32_t(img.width()), kW);
+        uint64_t differing = 0;
+        for (uint32_t y = 0; y < kH; ++y)
+            differing += std::memcmp(img.constScanLine(int(y)), pixel(f->image, 0, y), kW * 4) != 0;
+        QCOMPARE(differing, uint64_t(0));
+        // And a file that is not annotations: exit 1, with the reader's message.
+        const std::filesystem::path bad = testOutDir() / "annotations-bad.geojson";
+        std::ofstream(bad) << "{\"type\": \"FeatureCollection\", \"features\": [}";
+        QProcess q;
+        q.start(IRIS_RENDER_EXE, {QString::fromStdString(sampleSlidePath()->string()), "--out",
+                                  QString::fromStdString(png.string()), "--annotations",
+                                  QString::fromStdString(bad.string())});
+        QVERIFY(q.waitForFinished(120000));
+        QCOMPARE(q.exitCode(), 1);
+        QVERIFY2(q.readAllStandardError().contains("GeoJSON line 1"), "no line in the error");
     }
 
     // A change made on another thread is drawn without the host asking for a frame.

@@ -3,7 +3,10 @@
 //
 //   iris-render SLIDE --out FILE.png [--size WxH] [--center X,Y] [--downsample D]
 //               [--rotate DEG] [--flip h|v|hv] [--enhance on|off] [--color-managed on|off] [--display-profile FILE.icc]
-//               [--intent perceptual|relative] [--timeout S] [--validation] [--verbose]
+//               [--intent perceptual|relative] [--annotations FILE]... [--timeout S] [--validation] [--verbose]
+//
+// --annotations draws a QuPath GeoJSON or ASAP XML file's objects over the slide (the format
+// is chosen by content; several files are drawn together), as the viewer does.
 //
 // --center is in level-0 pixels and --downsample is level-0 pixels per output pixel, so the
 // output's top-left pixel covers level-0 (X − W/2·D, Y − H/2·D). Without them the whole slide
@@ -20,6 +23,7 @@
 #include <vector>
 
 
+#include "iris/annotations.h"
 #include "iris/engine.h"
 #include "iris/environment.h"
 #include "tool_cli.h"
@@ -103,6 +107,12 @@ int main(int argc, char** argv) {
     app.add_option("--intent", intent, "Rendering intent of the colour transform\n(relative: relative colorimetric with\nblack-point compensation)")
         ->option_text("perceptual|relative")
         ->check(CLI::IsMember({"perceptual", "relative"}).description(""));
+    std::vector<std::string> annotationFiles;
+    app.add_option("--annotations", annotationFiles,
+                   "Draw the annotations of a QuPath GeoJSON or ASAP XML\n"
+                   "file over the slide (repeatable)")
+        ->option_text("FILE")
+        ->check(CLI::ExistingFile.description(""));
     app.add_option("--timeout", timeout, "Seconds to wait for the complete frame")
         ->option_text("S")
         ->check(iris::tools::textCheck([](const std::string& v) { double t = 0; return parseNumber(v, t) && t > 0; },
@@ -152,6 +162,21 @@ int main(int argc, char** argv) {
     if (iris::Result r = e.open(slide); !r.ok()) {
         std::fprintf(stderr, "iris-render: %s\n", r.message().c_str());
         return 1;
+    }
+    if (!annotationFiles.empty()) {
+        auto store = std::make_shared<iris::AnnotationStore>();
+        for (size_t i = 0; i < annotationFiles.size(); ++i) {
+            iris::AnnotationLoader loader(*store, annotationFiles[i], {},
+                                          i == 0 ? iris::AnnotationLoader::Mode::Replace
+                                                 : iris::AnnotationLoader::Mode::Append);
+            if (iris::Result r = loader.wait(); !r.ok()) {
+                std::fprintf(stderr, "iris-render: %s: %s\n", annotationFiles[i].c_str(), r.message().c_str());
+                return 1;
+            }
+        }
+        if (verbose)
+            std::fprintf(stderr, "iris-render: %zu annotation objects\n", store->snapshot()->size());
+        e.setAnnotations(store);
     }
     if (verbose) {
         const iris::ColorStatus cs = e.colorStatus();

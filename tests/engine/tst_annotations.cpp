@@ -475,11 +475,22 @@ private slots:
             (void)store->add(r);
         });
         writer.join();
-        QVERIFY2(frames.waitBeyond(seen, 10s), "no frame after the store changed");
-        auto after = e_->readFrame();
-        QVERIFY(after.ok());
-        const uint8_t* p = pixel(after->image, 100, 100); // (1900, 1450): inside the red rectangle
-        QVERIFY2(p[0] == 255 && p[1] == 0 && p[2] == 0, "the new object is not in the next frame");
+        // A frame under way when the store changed may come first, and the callback runs
+        // before the frame's read-back is published: wait frame by frame (each wait bounded)
+        // until one shows the object. Without the store's wake-up no frame comes at all.
+        const auto deadline = std::chrono::steady_clock::now() + 10s;
+        uint64_t n = seen;
+        bool shown = false;
+        while (!shown && std::chrono::steady_clock::now() < deadline) {
+            if (!frames.waitBeyond(n, 2s)) break;
+            n = frames.count();
+            auto after = e_->readFrame();
+            QVERIFY(after.ok());
+            const uint8_t* p = pixel(after->image, 100, 100); // (1900, 1450): inside the red rectangle
+            shown = p[0] == 255 && p[1] == 0 && p[2] == 0;
+            if (!shown && n - seen > 5) break; // frames came but none shows it
+        }
+        QVERIFY2(shown, "no frame shows the object added on another thread");
     }
 
     // Engines come and go while another thread keeps editing the store they show.

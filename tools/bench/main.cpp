@@ -29,6 +29,7 @@
 #include <nlohmann/json.hpp>
 
 #include "baselines.h"
+#include "annotations.h"
 #include "linked.h"
 #include "iris/engine.h"
 #include "iris/environment.h"
@@ -543,6 +544,20 @@ int main(int argc, char** argv) {
     app.add_option("--ticks", o.ticks, "Display ticks of the linked views' glide")
         ->option_text("N")
         ->check(iris::tools::wholeNumber(10, 100000));
+    std::string annotationCounts;
+    app.add_option("--annotations", annotationCounts,
+                   "The annotation layer instead of the walk: N generated\n"
+                   "detections per count in the comma-separated list\n"
+                   "(e.g. 10000,100000,1000000), frames with them shown\n"
+                   "and hidden")
+        ->option_text("N[,N...]")
+        ->check(CLI::Validator(
+            [](std::string& v) {
+                for (double d : parseList(v))
+                    if (d < 1 || d > 2e7 || d != std::floor(d)) return "'" + v + "' is not a list of counts from 1 to 2e7";
+                return parseList(v).empty() ? "'" + v + "' is not a list of counts" : std::string();
+            },
+            ""));
     app.add_option("--color-managed", o.colorManaged,
                    "Colour management (docs/COLOR.md); both: each size\n"
                    "is run off, then on, in this run (its cost)")
@@ -559,6 +574,17 @@ int main(int argc, char** argv) {
     for (const std::string& s : sizes) o.sizes.push_back(*parseSize(s)); // each checked above
     if (o.sizes.empty()) o.sizes = {{2774, 1750}, {1920, 1080}};
     o.mags = parseList(mags);
+    if (!annotationCounts.empty()) {
+        AnnotationBenchOptions a;
+        a.slide = o.slide;
+        a.sizes = sizes.empty() ? std::vector<std::pair<uint32_t, uint32_t>>{{1920, 1080}} : o.sizes;
+        for (double d : parseList(annotationCounts)) a.counts.push_back(size_t(d));
+        a.validation = o.validation;
+        a.tuning = o.tuning;
+        a.seed = o.seed;
+        a.json = o.json;
+        return runAnnotationBench(a);
+    }
     if (o.views > 0) {
         if (sizes.empty()) o.sizes = {{1920, 1080}};
         return runLinkedViews(o);

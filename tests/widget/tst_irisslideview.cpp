@@ -33,6 +33,7 @@
 #include <iris/types.h>
 
 #include "enginehost_p.h"
+#include "iris/annotations.h"
 #include "navigator_p.h"
 #include "widget_test_support.h"
 
@@ -114,6 +115,7 @@ private Q_SLOTS:
     void twoViewsOnTwoSlides();
     void closingWhileTilesLoad();
     void turnsAndMirrors();
+    void annotationsAreDrawnOverTheSlide();
 
 private:
     // Shows m_w with the sample slide and waits for a complete frame.
@@ -940,5 +942,50 @@ void TstIrisSlideView::turnsAndMirrors()
     checkPresentedMatchesHeadless(view, m_sample, QStringLiteral("turned45flipped"));
 }
 
+// --- annotations -------------------------------------------------------------------------
+
+void TstIrisSlideView::annotationsAreDrawnOverTheSlide()
+{
+    showSample();
+    IrisSlideView *view = m_w->view;
+    QVERIFY(m_w->frames->waitForCompleteFrame());
+    QSignalSpy changed(view, &IrisSlideView::annotationsChanged);
+    QVERIFY(view->annotationsVisible());
+    auto store = std::make_shared<iris::AnnotationStore>();
+    const QPointF c = view->centre();
+    const double ds = view->downsample() * 30; // 30 device pixels either side at any scale
+    iris::AnnotationObject r;
+    r.kind = iris::AnnotationKind::Rectangle;
+    r.box = {c.x() - ds, c.y() - ds, c.x() + ds, c.y() + ds};
+    r.color = iris::Rgba8{255, 0, 0, 255};
+    r.fill = true;
+    r.fillOpacity = 1.0f;
+    const auto id = store->add(r);
+    QVERIFY(id.ok());
+    const auto centreIsRed = [view] {
+        const QImage img = grabPresented(view);
+        const QColor p = img.pixelColor(img.width() / 2, img.height() / 2);
+        return p.red() == 255 && p.green() == 0 && p.blue() == 0;
+    };
+    QVERIFY(!centreIsRed());
+    view->setAnnotations(store);
+    QCOMPARE(changed.count(), 1);
+    QCOMPARE(view->annotations(), store);
+    QTRY_VERIFY(centreIsRed());
+    view->setAnnotationsVisible(false);
+    QCOMPARE(changed.count(), 2);
+    QTRY_VERIFY(!centreIsRed());
+    view->setAnnotationsVisible(true);
+    QTRY_VERIFY(centreIsRed());
+    view->setSelectedAnnotation(*id);
+    QCOMPARE(view->selectedAnnotation(), quint64(*id));
+    QCOMPARE(changed.count(), 4);
+    view->setAnnotations(nullptr);
+    QCOMPARE(changed.count(), 5);
+    QTRY_VERIFY(!centreIsRed());
+    finishView(*m_w);
+}
+
 IRIS_WIDGET_TEST_MAIN(TstIrisSlideView)
 #include "tst_irisslideview.moc"
+

@@ -89,6 +89,7 @@ bool EngineHost::create(QVulkanInstance *vulkan, const EngineSettings &settings,
     m_engine->setEnhance(settings.enhance);
     m_settings.overlayFont.clear(); // a new engine has no font of the host's yet
     applyOverlays(settings);
+    applyAnnotations(settings);
     g_liveEngines.fetch_add(1, std::memory_order_relaxed); // a counter for tests; orders nothing
 
     std::weak_ptr<Relay> weakRelay = m_relay;
@@ -139,6 +140,18 @@ void EngineHost::applyOverlays(const EngineSettings &settings)
     m_engine->setCrosshair(settings.crosshair ? std::optional(std::array<double, 2>{settings.crosshair->x(),
                                                                                    settings.crosshair->y()})
                                               : std::nullopt);
+}
+
+void EngineHost::applyAnnotations(const EngineSettings &settings)
+{
+    if (!m_engine)
+        return;
+    m_settings.annotations = settings.annotations;
+    m_settings.annotationsVisible = settings.annotationsVisible;
+    m_settings.selectedAnnotation = settings.selectedAnnotation;
+    m_engine->setAnnotations(settings.annotations);
+    m_engine->setAnnotationsVisible(settings.annotationsVisible);
+    m_engine->setSelectedAnnotation(settings.selectedAnnotation);
 }
 
 void EngineHost::applyColor(const EngineSettings &settings)

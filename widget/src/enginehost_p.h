@@ -49,6 +49,10 @@ struct EngineSettings {
     QByteArray displayProfile;
     // DICOMweb credentials and TLS (IrisSlideView::setNetworkCredentials); memory only, never logged.
     iris::NetworkOptions network;
+    // Annotations (IrisSlideView::setAnnotations): the host's store, shown, selected object.
+    std::shared_ptr<iris::AnnotationStore> annotations;
+    bool annotationsVisible = true;
+    quint64 selectedAnnotation = 0;
 };
 
 // The engine's colour settings for `settings`.
@@ -73,6 +77,7 @@ public:
     const EngineSettings &settings() const { return m_settings; }
     // Shows, places and re-fonts the overlays as `settings` say (only what changed).
     void applyOverlays(const EngineSettings &settings);
+    void applyAnnotations(const EngineSettings &settings);
     // Gives the engine the colour settings of `settings` when they differ from its own (a new
     // transform is baked on this thread: milliseconds).
     void applyColor(const EngineSettings &settings);

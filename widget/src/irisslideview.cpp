@@ -1,5 +1,7 @@
 #include "iris/IrisSlideView.h"
 
+#include "iris/annotations.h"
+
 #include <cstring>
 
 #include <QtCore/QFile>
@@ -341,6 +343,54 @@ bool IrisSlideView::hasCrosshair() const
 {
     Q_D(const IrisSlideView);
     return d->settings.crosshair.has_value();
+}
+
+void IrisSlideView::setAnnotations(std::shared_ptr<iris::AnnotationStore> store)
+{
+    Q_D(IrisSlideView);
+    if (store == d->settings.annotations)
+        return;
+    d->settings.annotations = std::move(store);
+    d->host.applyAnnotations(d->settings);
+    Q_EMIT annotationsChanged();
+}
+
+std::shared_ptr<iris::AnnotationStore> IrisSlideView::annotations() const
+{
+    Q_D(const IrisSlideView);
+    return d->settings.annotations;
+}
+
+bool IrisSlideView::annotationsVisible() const
+{
+    Q_D(const IrisSlideView);
+    return d->settings.annotationsVisible;
+}
+
+void IrisSlideView::setAnnotationsVisible(bool visible)
+{
+    Q_D(IrisSlideView);
+    if (visible == d->settings.annotationsVisible)
+        return;
+    d->settings.annotationsVisible = visible;
+    d->host.applyAnnotations(d->settings);
+    Q_EMIT annotationsChanged();
+}
+
+quint64 IrisSlideView::selectedAnnotation() const
+{
+    Q_D(const IrisSlideView);
+    return d->settings.selectedAnnotation;
+}
+
+void IrisSlideView::setSelectedAnnotation(quint64 id)
+{
+    Q_D(IrisSlideView);
+    if (id == d->settings.selectedAnnotation)
+        return;
+    d->settings.selectedAnnotation = id;
+    d->host.applyAnnotations(d->settings);
+    Q_EMIT annotationsChanged();
 }
 
 QSize IrisSlideView::targetSize() const

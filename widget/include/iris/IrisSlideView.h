@@ -10,6 +10,8 @@
 //     (objectivePower × level-0 downsample / downsample).
 #pragma once
 
+#include <memory>
+
 #include <QtCore/QByteArray>
 #include <QtCore/QPointF>
 #include <QtCore/QRectF>
@@ -25,6 +27,9 @@
 
 QT_BEGIN_NAMESPACE
 class QWindow;
+namespace iris {
+class AnnotationStore; // iris/annotations.h (the engine's public API)
+}
 QT_END_NAMESPACE
 
 class IrisSlideViewPrivate;
@@ -62,6 +67,10 @@ class IRIS_WIDGET_EXPORT IrisSlideView : public QWidget {
         RenderingIntent renderingIntent READ renderingIntent WRITE setRenderingIntent NOTIFY colorManagementChanged)
     Q_PROPERTY(QByteArray displayProfile READ displayProfile WRITE setDisplayProfile RESET resetDisplayProfile NOTIFY
             colorManagementChanged DESIGNABLE false STORED false)
+    // Annotations (setAnnotations, docs/ANNOTATIONS.md): shown by default.
+    Q_PROPERTY(bool annotationsVisible READ annotationsVisible WRITE setAnnotationsVisible NOTIFY annotationsChanged)
+    Q_PROPERTY(quint64 selectedAnnotation READ selectedAnnotation WRITE setSelectedAnnotation NOTIFY annotationsChanged
+                   DESIGNABLE false STORED false)
 
 public:
     // The overlays: a scale bar (hidden when the slide states no mpp), the magnification
@@ -132,6 +141,15 @@ public:
     void setCrosshair(const QPointF &slidePos);
     void clearCrosshair();
     bool hasCrosshair() const;
+    // The annotations drawn over the slide by the engine, under the overlays (null: none, the
+    // default): the host keeps the store and may change it from any thread; every change is
+    // drawn. The view keeps it across engine re-creation and slides opened later (a host that
+    // shows annotations per slide sets another store, or null, when it opens one).
+    void setAnnotations(std::shared_ptr<iris::AnnotationStore> store);
+    std::shared_ptr<iris::AnnotationStore> annotations() const;
+    bool annotationsVisible() const;
+    // The object drawn selected, with its vertex handles (0: none).
+    quint64 selectedAnnotation() const;
     // The render target's size in device pixels (the widget's size × devicePixelRatio).
     QSize targetSize() const;
 
@@ -253,6 +271,8 @@ public Q_SLOTS:
     void panBy(const QPointF &delta);
     // Multiplies the magnification by factor (>1 zooms in) about the view's centre.
     void zoomBy(double factor);
+    void setAnnotationsVisible(bool visible);
+    void setSelectedAnnotation(quint64 id);
 
 Q_SIGNALS:
     void slideOpened(const IrisSlideInfo &info);
@@ -270,6 +290,8 @@ Q_SIGNALS:
     // Colour management was switched, its intent or display profile changed, or a slide was
     // opened or closed (what is applied, and the descriptions, may then differ).
     void colorManagementChanged();
+    // Another store was set, the annotations were shown or hidden, or the selection changed.
+    void annotationsChanged();
 
 protected:
     bool event(QEvent *event) override;

@@ -158,6 +158,7 @@ private slots:
     void storeRoundTrip();
     void qupathFileByHand();
     void asapFileByHand();
+    void asapRingClosedTwice();
     void malformedGeoJson_data();
     void malformedGeoJson();
     void malformedAsap_data();
@@ -441,6 +442,27 @@ void TestAnnotationFormats::malformedGeoJson() {
     QVERIFY(r.error().status() == Status::CorruptData || r.error().status() == Status::UnsupportedFormat);
 }
 
+void TestAnnotationFormats::asapRingClosedTwice() {
+    // Rings are stored open and written as stored, so every copy of the first point at a ring's
+    // end is dropped, not only the last: otherwise [a b c a a] was kept as [a b c a] and lost
+    // the closing vertex only when Iris read its own file again (fuzz_asap_xml).
+    const std::string text = R"(<ASAP_Annotations><Annotations>
+<Annotation Name="p" Type="Polygon" PartOfGroup="None"><Coordinates>
+<Coordinate Order="0" X="0" Y="0"/><Coordinate Order="1" X="10" Y="0"/><Coordinate Order="2" X="10" Y="10"/>
+<Coordinate Order="3" X="0" Y="0"/><Coordinate Order="4" X="0" Y="0"/></Coordinates>
+<Coordinates IrisRole="hole"><Coordinate X="1" Y="1"/><Coordinate X="2" Y="1"/><Coordinate X="2" Y="2"/><Coordinate X="1" Y="1"/><Coordinate X="1" Y="1"/></Coordinates>
+</Annotation></Annotations></ASAP_Annotations>)";
+    auto doc = readAsapXml(text);
+    QVERIFY2(doc.ok(), doc.ok() ? "" : doc.error().message().c_str());
+    QCOMPARE(doc->objects.at(0).polygons.at(0).outer.size(), size_t(3));
+    QCOMPARE(doc->objects.at(0).polygons.at(0).holes.at(0).size(), size_t(3));
+    const std::string once = writeAsapXml(*doc);
+    auto again = readAsapXml(once);
+    QVERIFY2(again.ok(), again.ok() ? "" : again.error().message().c_str());
+    QCOMPARE(again->objects.at(0).polygons, doc->objects.at(0).polygons);
+    QCOMPARE(writeAsapXml(*again), once);
+}
+
 void TestAnnotationFormats::malformedAsap_data() {
     QTest::addColumn<QString>("text");
     QTest::addColumn<QString>("error");
@@ -457,6 +479,8 @@ void TestAnnotationFormats::malformedAsap_data() {
                           << "ASAP XML line 4: annotation \"c\" has Type \"Circle\" (Polygon, Spline, Rectangle, Dot, PointSet, Measurement are known)";
     QTest::newRow("two coordinates") << head + "<Annotation Name=\"p\" Type=\"Polygon\">\n<Coordinates><Coordinate Order=\"0\" X=\"1\" Y=\"1\"/><Coordinate Order=\"1\" X=\"2\" Y=\"2\"/></Coordinates></Annotation>\n" + tail
                                      << "ASAP XML line 5: annotation \"p\" (Polygon) has fewer than 3 coordinates";
+    QTest::newRow("closed twice, two left") << head + "<Annotation Name=\"p\" Type=\"Polygon\">\n<Coordinates><Coordinate X=\"1\" Y=\"1\"/><Coordinate X=\"2\" Y=\"2\"/><Coordinate X=\"1\" Y=\"1\"/><Coordinate X=\"1\" Y=\"1\"/></Coordinates></Annotation>\n" + tail
+                                           << "ASAP XML line 5: annotation \"p\" (Polygon) has fewer than 3 coordinates";
     QTest::newRow("colour") << head + "<Annotation Name=\"p\" Type=\"Dot\" Color=\"red\"><Coordinates><Coordinate X=\"1\" Y=\"1\"/></Coordinates></Annotation>\n" + tail
                             << "ASAP XML line 4: annotation \"p\" has Color \"red\", not #RRGGBB";
     QTest::newRow("no coordinates") << head + "<Annotation Name=\"p\" Type=\"Dot\"/>\n" + tail

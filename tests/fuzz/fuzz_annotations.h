@@ -15,6 +15,7 @@
 #include <string>
 #include <string_view>
 
+#include "fuzz_signals.h"
 #include "iris/annotations.h"
 
 namespace fuzz_ann {

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "fuzz_signals.h"
 #include "slide/dicom_json.h"
 
 namespace {

@@ -28,6 +28,7 @@
 
 #include <turbojpeg.h>
 
+#include "fuzz_signals.h"
 #include "slide/iris_file.h"
 #include "slide/jpeg_decode.h"
 

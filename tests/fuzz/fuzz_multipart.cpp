@@ -14,6 +14,7 @@
 #include <string>
 #include <string_view>
 
+#include "fuzz_signals.h"
 #include "net/multipart.h"
 
 namespace {

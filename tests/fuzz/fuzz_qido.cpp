@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "fuzz_signals.h"
 #include "net/qido_parse.h"
 #include "slide/dicom_json.h"
 

@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "fuzz_signals.h"
 #include "iris/types.h"
 #include "slide/slide_source.h"
 

@@ -107,6 +107,14 @@ private:
         return {};
     }
 
+    // A ring is stored open (the writer writes it as stored), so every copy of the first point
+    // at its end goes, not only the last: a ring closed twice, [a b c a a], kept [a b c a],
+    // written so, lost another vertex when read again (or fell under 3 coordinates and the
+    // file Iris had written was refused).
+    static void dropClosingRepeats(std::vector<Point2>& ring) {
+        while (ring.size() >= 2 && ring.front() == ring.back()) ring.pop_back();
+    }
+
     Result annotation(pugi::xml_node a, AnnotationObject& o, const std::map<std::string, Rgba8, std::less<>>& groups) const {
         const std::string type = a.attribute("Type").value();
         o.name = a.attribute("Name").value();
@@ -148,7 +156,7 @@ private:
         // dropped); otherwise (rotated, more corners) it is read as a polygon that remembers its Type.
         bool rectangle = false;
         if (type == "Rectangle") {
-            if (outline.size() >= 2 && outline.front() == outline.back()) outline.pop_back();
+            dropClosingRepeats(outline);
             Box2 b;
             for (Point2 p : outline) b.expand(p);
             rectangle = outline.size() == 4 && !first.next_sibling("Coordinates") &&
@@ -176,13 +184,13 @@ private:
                 o.box = b;
             } else {
                 o.kind = AnnotationKind::Polygon;
-                if (outline.size() >= 2 && outline.front() == outline.back()) outline.pop_back();
+                dropClosingRepeats(outline);
                 if (outline.size() < 3) return fail(first, where + " has fewer than 3 coordinates");
                 o.polygons.push_back({std::move(outline), {}});
                 for (pugi::xml_node c = first.next_sibling("Coordinates"); c; c = c.next_sibling("Coordinates")) {
                     std::vector<Point2> ring;
                     if (Result r = coordinates(c, ring); !r.ok()) return r;
-                    if (ring.size() >= 2 && ring.front() == ring.back()) ring.pop_back();
+                    dropClosingRepeats(ring);
                     if (ring.size() < 3) return fail(c, where + ": a ring has fewer than 3 coordinates");
                     const std::string_view role = c.attribute("IrisRole").value();
                     if (role == "hole") o.polygons.back().holes.push_back(std::move(ring));

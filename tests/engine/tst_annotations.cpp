@@ -16,6 +16,7 @@
 //   * iris-render --annotations FILE writes the frame the engine draws for the same view.
 //   * Changes from other threads redraw; hiding, detaching, and a store edited while engines
 //     that show it are created and destroyed (asan preset).
+#include <QFileInfo>
 #include <QImage>
 #include <QProcess>
 #include <QtTest>
@@ -422,12 +423,15 @@ private slots:
         std::ofstream(file) << iris::writeGeoJson(doc);
         const std::filesystem::path png = testOutDir() / "annotations-render.png";
         std::filesystem::remove(png);
+        // iris-render beside this program (a bundle copied to another machine), else the build's.
+        QString exe = QCoreApplication::applicationDirPath() + "/iris-render";
+        if (!QFileInfo::exists(exe)) exe = IRIS_RENDER_EXE;
         QProcess p;
-        p.start(IRIS_RENDER_EXE, {QString::fromStdString(sampleSlidePath()->string()), "--out",
+        p.start(exe, {QString::fromStdString(sampleSlidePath()->string()), "--out",
                                   QString::fromStdString(png.string()), "--size", QString("%1x%2").arg(kW).arg(kH),
                                   "--center", "2000,1500", "--downsample", "1.25", "--color-managed", "off",
                                   "--annotations", QString::fromStdString(file.string())});
-        QVERIFY(p.waitForFinished(120000));
+        QVERIFY2(p.waitForFinished(120000), qPrintable(exe + ": " + p.errorString()));
         QVERIFY2(p.exitCode() == 0, p.readAllStandardError().constData());
         QImage img(QString::fromStdString(png.string()));
         QVERIFY(!img.isNull());
@@ -447,7 +451,7 @@ private slots:
         const std::filesystem::path bad = testOutDir() / "annotations-bad.geojson";
         std::ofstream(bad) << "{\"type\": \"FeatureCollection\", \"features\": [}";
         QProcess q;
-        q.start(IRIS_RENDER_EXE, {QString::fromStdString(sampleSlidePath()->string()), "--out",
+        q.start(exe, {QString::fromStdString(sampleSlidePath()->string()), "--out",
                                   QString::fromStdString(png.string()), "--annotations",
                                   QString::fromStdString(bad.string())});
         QVERIFY(q.waitForFinished(120000));

@@ -46,7 +46,14 @@ struct Engine::Impl {
 
     Result init() {
         if (Result r = device.init(config); !r.ok()) return r;
-        if (Result r = atlas.init(config.vramBudgetBytes); !r.ok()) return r;
+        if (Result r = atlas.init(config.vramBudgetBytes, config.tuning.deviceAllocationLimit); !r.ok()) return r;
+        if (atlas.slotCount() < atlas.requestedSlots()) {
+            const auto mib = [](uint64_t slots) { return std::to_string(slots * gpu::TileAtlas::bytesPerSlot() >> 20); };
+            log.warn("VRAM: the device could not allocate a tile atlas of " + std::to_string(atlas.requestedSlots()) +
+                     " slots (" + mib(atlas.requestedSlots()) + " MiB, from the VRAM budget); using " +
+                     std::to_string(atlas.slotCount()) + " slots (" + mib(atlas.slotCount()) +
+                     " MiB): fewer tiles stay resident, views are drawn as before");
+        }
         if (Result r = pipeline.init(RenderThread::kFramesInFlight, config.tuning.colorLookup); !r.ok()) return r;
         log.info(std::string("colour lookup: ") + (pipeline.lutSampled() ? "sampler" : "8 nodes in float"));
         if (Result r = mips.init(config.tuning.mipSchedule); !r.ok()) return r;

@@ -8,6 +8,10 @@
 //   * two engines in one process can be set up differently (the mip schedule, the device).
 #include <QtTest>
 
+#include <vector>
+
+#include <mutex>
+
 #include <cstdlib>
 #include <map>
 #include <optional>
@@ -18,6 +22,8 @@
 #include "test_support.h"
 
 using namespace iristest;
+using namespace std::chrono_literals;
+using namespace std::chrono_literals;
 
 namespace {
 
@@ -209,6 +215,78 @@ private slots:
         QVERIFY2(d.error.message().find("no device is called this") != std::string::npos,
                  describe(d.error).c_str());
         for (TestEngine* t : {&a, &b, &c}) QCOMPARE((*t)->validationMessageCount(), uint64_t(0));
+    }
+
+    // Issue 14: a VRAM budget the device cannot allocate (VK_ERROR_OUT_OF_DEVICE_MEMORY,
+    // injected through EngineTuning::deviceAllocationLimit) gives a smaller atlas, a logged
+    // warning naming both sizes, and the same frames; a device that cannot hold even the
+    // smallest atlas is a clear creation error.
+    void atlasFallsBackWhenTheDeviceRunsOut() {
+        ScopedEnvironment env(std::map<std::string, std::string>{});
+        const auto sample = sampleSlidePath();
+        if (!sample) QSKIP("no sample slide");
+        struct Warnings {
+            std::mutex m;
+            std::vector<std::string> lines;
+        };
+        auto warnings = std::make_shared<Warnings>();
+        const auto make = [&](uint64_t limit) {
+            iris::EngineConfig cfg;
+            cfg.vramBudgetBytes = 256ull << 20;
+            cfg.tuning.deviceAllocationLimit = limit;
+            auto log = std::make_shared<LogSink>();
+            cfg = testEngineConfig(log, cfg);
+            auto inner = cfg.log;
+            cfg.log = [inner, warnings](iris::LogLevel level, std::string_view line) {
+                if (level == iris::LogLevel::Warning) {
+                    std::lock_guard lock(warnings->m);
+                    warnings->lines.emplace_back(line);
+                }
+                if (inner) inner(level, line);
+            };
+            return iris::Engine::create(cfg);
+        };
+        auto full = make(0);
+        QVERIFY2(full.ok(), describe(full.error()).c_str());
+        {
+            std::lock_guard lock(warnings->m);
+            QVERIFY(warnings->lines.empty());
+        }
+        auto small = make(40ull << 20);
+        QVERIFY2(small.ok(), describe(small.error()).c_str());
+        const iris::MemoryStats fs = (*full)->memoryStats(), ss = (*small)->memoryStats();
+        QVERIFY2(ss.atlasSlots < fs.atlasSlots && ss.atlasSlots >= 64,
+                 (std::to_string(ss.atlasSlots) + " vs " + std::to_string(fs.atlasSlots)).c_str());
+        QVERIFY(ss.vramAtlasBytes <= (40ull << 20));
+        {
+            std::lock_guard lock(warnings->m);
+            QCOMPARE(warnings->lines.size(), size_t(1));
+            const std::string& w = warnings->lines.front();
+            QVERIFY2(w.find("could not allocate") != std::string::npos &&
+                         w.find(std::to_string(fs.atlasSlots) + " slots") != std::string::npos &&
+                         w.find(std::to_string(ss.atlasSlots) + " slots") != std::string::npos,
+                     w.c_str());
+        }
+        // The same frames from both.
+        for (auto* e : {full->get(), small->get()}) {
+            QVERIFY(e->bindOffscreen(320, 240).ok());
+            QVERIFY(e->open(sample->string()).ok());
+        }
+        for (const iris::View v : {iris::View{3000, 2000, 1.0}, iris::View{1500, 1000, 4.0}, iris::View{4500, 3000, 2.0}}) {
+            std::string why;
+            auto a = renderView(**full, v, 320, 240, 20s, &why);
+            QVERIFY2(a, why.c_str());
+            auto b = renderView(**small, v, 320, 240, 20s, &why);
+            QVERIFY2(b, why.c_str());
+            QVERIFY(a->image.rgba == b->image.rgba);
+        }
+        QCOMPARE((*small)->validationMessageCount(), uint64_t(0));
+        // Not even 64 slots: creation fails, saying why.
+        auto none = make(1ull << 20);
+        QVERIFY(!none.ok());
+        QCOMPARE(none.error().status(), iris::Status::OutOfMemory);
+        QVERIFY2(none.error().message().find("OUT_OF_DEVICE_MEMORY") != std::string::npos,
+                 describe(none.error()).c_str());
     }
 };
 

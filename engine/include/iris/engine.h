@@ -63,6 +63,10 @@ struct EngineTuning {
     // 2-3× cheaper per frame on the H200 and on lavapipe.
     enum class ColorLookup { Auto, Sampler, Nodes };
     ColorLookup colorLookup = ColorLookup::Auto;
+    // Fault injection for tests: a device allocation of the tile atlas larger than this many
+    // bytes fails as VK_ERROR_OUT_OF_DEVICE_MEMORY would (0: no limit), so that the fallback to a
+    // smaller atlas can be tested on any device.
+    uint64_t deviceAllocationLimit = 0;
 };
 
 struct EngineConfig {

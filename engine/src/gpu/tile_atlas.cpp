@@ -57,11 +57,12 @@ Result transitionToGeneral(Device& device, VkImage image) {
 }
 } // namespace
 
-Result TileAtlas::init(uint64_t vramBudgetBytes) {
+Result TileAtlas::init(uint64_t vramBudgetBytes, uint64_t allocationLimit) {
     VkDevice dev = device_.device();
     const auto& limits = device_.properties().limits;
     uint64_t n = vramBudgetBytes / bytesPerSlot();
     n = std::clamp<uint64_t>(n, 64, limits.maxImageArrayLayers);
+    requested_ = uint32_t(n);
 
     constexpr VkFormat kFormat = VK_FORMAT_R8G8B8A8_UNORM; // UNORM: bytes in, bytes out, no sRGB conversion
     VkFormatProperties fp;
@@ -78,6 +79,10 @@ Result TileAtlas::init(uint64_t vramBudgetBytes) {
         const VkImageCreateInfo ici =
             vk::image2D(kFormat, uint32_t(kTileSize), uint32_t(kTileSize), kTileMipLevels, uint32_t(n),
                         VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_STORAGE_BIT);
+        if (allocationLimit > 0 && n * bytesPerSlot() > allocationLimit) {
+            made = Result(Status::OutOfMemory, "VK_ERROR_OUT_OF_DEVICE_MEMORY (the allocation limit set for tests)");
+            continue;
+        }
         made = vk::createDeviceImage(device_.physical(), dev, ici, image_, memory_);
         if (made.ok()) break;
     }

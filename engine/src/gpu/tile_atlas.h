@@ -21,7 +21,13 @@ inline constexpr uint32_t kTileMipLevels = 9; // 256 → 1
 class TileAtlas {
 public:
     explicit TileAtlas(Device& device) : device_(device) {}
-    Result init(uint64_t vramBudgetBytes);
+    // An atlas of vramBudgetBytes / bytesPerSlot() slots (64 .. maxImageArrayLayers), halved
+    // while the device cannot allocate it (VK_ERROR_OUT_OF_DEVICE_MEMORY: a budget larger than
+    // the device allows). allocationLimit > 0 makes every allocation above that many bytes fail
+    // as if the device had run out (EngineTuning::deviceAllocationLimit, for tests).
+    Result init(uint64_t vramBudgetBytes, uint64_t allocationLimit = 0);
+    // The slots the budget asked for; slotCount() is what the device gave.
+    uint32_t requestedSlots() const { return requested_; }
 
     static uint64_t bytesPerSlot();
     VkImage image() const { return image_.get(); }
@@ -43,6 +49,7 @@ private:
     vk::Sampler sampler_;
 
     std::unique_ptr<TileMap> map_;
+    uint32_t requested_ = 0;
 };
 
 } // namespace iris::gpu

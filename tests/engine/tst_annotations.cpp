@@ -384,7 +384,7 @@ private slots:
     void manyObjectsAtFitDrawCells() {
         auto store = std::make_shared<iris::AnnotationStore>();
         std::vector<iris::AnnotationObject> many;
-        const int n = 120000; // over AnnotationBudget::maxObjects (100000)
+        const int n = 120000; // over AnnotationBudget::maxObjects (20000)
         many.reserve(n);
         for (int i = 0; i < n; ++i) {
             const double x = 20 + (i % 400) * 14.9, y = 20 + (i / 400) * 13.2;

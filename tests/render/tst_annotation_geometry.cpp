@@ -120,6 +120,26 @@ private slots:
         QVERIFY(g.objects > 0 && g.objects <= 500);
     }
 
+    // Over the budget but with the aggregate's cells far apart on screen (a dense cluster in a
+    // store whose bounds are wide): the objects are drawn, never a few coarse dots for them.
+    void aClusterIsNotDrawnAsCoarseCells() {
+        AnnotationStore store;
+        std::vector<AnnotationObject> v;
+        for (int i = 0; i < 2000; ++i) v.push_back(square(1000 + (i % 50) * 8.0, 1000 + (i / 50) * 8.0, 4));
+        v.push_back(square(0, 0, 4));
+        v.push_back(square(100000, 0, 4)); // cells of ~195 level-0 pixels
+        QVERIFY(store.addBatch(v).ok());
+        AnnotationBudget budget;
+        budget.maxObjects = 500;
+        AnnotationGeometry g;
+        buildAnnotationGeometry(*store.snapshot(), viewport(1200, 1160, 1.0), 0, budget, g);
+        QVERIFY(!g.overview);
+        QCOMPARE(g.objects, 2000u);
+        // Zoomed out until cells are a few pixels apart: the aggregate.
+        buildAnnotationGeometry(*store.snapshot(), viewport(50000, 0, 150.0), 0, budget, g);
+        QVERIFY(g.overview);
+    }
+
     void fillsAreTriangulatedOverSeveralFrames() {
         AnnotationStore store;
         std::vector<AnnotationObject> v;

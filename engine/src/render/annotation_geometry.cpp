@@ -184,7 +184,7 @@ void buildAnnotationGeometry(const AnnotationSnapshot& snap, const Viewport& vp,
     }
 
     // Too many objects in view: the fit-view aggregate.
-    if (snap.size() > budget.maxObjects) {
+    if (snap.size() > budget.maxObjects && snap.overview().cellSize / ds <= budget.aggregateCellPixels) {
         const AnnotationOverview& ov = snap.overview();
         size_t inView = 0;
         if (ov.cellSize > 0) {

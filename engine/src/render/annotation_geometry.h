@@ -4,10 +4,10 @@
 // render/draw_list is. The render thread calls it in the pass's prepare().
 //
 //   1. The view's footprint (the target grown by a margin for outlines and handles, turned with
-//      the view) in level-0 pixels. When the snapshot holds more objects than the budget and
-//      the fit-view aggregate (AnnotationSnapshot::overview) counts more than the budget in the
-//      footprint, the aggregate's cells are drawn as dots and nothing else: bounded work at fit
-//      view whatever the count.
+//      the view) in level-0 pixels. When the snapshot holds more objects than the budget, the
+//      fit-view aggregate (AnnotationSnapshot::overview) counts more than the budget in the
+//      footprint and its cells are at most a few pixels apart on screen, the cells are drawn as
+//      dots and nothing else: bounded work at fit view whatever the count.
 //   2. Otherwise the drawn objects the footprint touches (the R-tree query), each at its level
 //      of detail (annotationLod): a dot, an outline, or an outline over its fill. Points are
 //      dots of a fixed size. Outlines are capsules of the object's line width in screen pixels
@@ -30,7 +30,12 @@
 namespace iris::render {
 
 struct AnnotationBudget {
-    size_t maxObjects = 100000;   // more in the footprint: the overview's cells instead
+    // More drawn objects than this in the footprint, and the fit-view aggregate's cells no more
+    // than aggregateCellPixels apart on screen: the cells are drawn instead of the objects (a
+    // dot each). Where cells would be further apart the objects are drawn whatever their count,
+    // so the aggregate never shows visibly coarser than the data.
+    size_t maxObjects = 20000;
+    double aggregateCellPixels = 4.0;
     double triangulateMs = 4.0;   // new fill triangulations a frame, wall time
     size_t maxHandles = 20000;    // vertex handles of the selected object
 };

@@ -19,6 +19,7 @@
 
 #include <QtCore/QDeadlineTimer>
 #include <QtCore/QDir>
+#include <QtCore/QElapsedTimer>
 #include <QtCore/QFileInfo>
 #include <QtGui/QScreen>
 #include <QtGui/QWindow>
@@ -116,6 +117,7 @@ private Q_SLOTS:
     void closingWhileTilesLoad();
     void turnsAndMirrors();
     void annotationsAreDrawnOverTheSlide();
+    void resizeStormEndsRightAndValid();
 
 private:
     // Shows m_w with the sample slide and waits for a complete frame.
@@ -984,6 +986,42 @@ void TstIrisSlideView::annotationsAreDrawnOverTheSlide()
     QCOMPARE(changed.count(), 5);
     QTRY_VERIFY(!centreIsRed());
     finishView(*m_w);
+}
+
+// Issue 14: a window edge dragged — hundreds of resizes, each handed to the window system
+// and its events processed, as a drag delivers them — then the last size: the view presents a
+// complete frame of exactly that size showing what the headless engine shows, and the
+// validation layer said nothing throughout (finishView checks the count too).
+void TstIrisSlideView::resizeStormEndsRightAndValid()
+{
+    showSample();
+    IrisSlideView *view = m_w->view;
+    view->setCentre(QPointF(2500, 1700));
+    view->setDownsample(3);
+    const QPointF centre = view->centre();
+    int completeFrames = 0;
+    const auto counter = connect(view, &IrisSlideView::framePresented, this,
+                                 [&](const IrisFrameMetrics &metrics) { completeFrames += metrics.complete; });
+    QElapsedTimer timer;
+    timer.start();
+    constexpr int kResizes = 300;
+    for (int i = 0; i < kResizes; ++i) {
+        m_w->window->resize(QSize(200 + (i * 37) % 500, 150 + (i * 23) % 350));
+        QCoreApplication::processEvents();
+    }
+    const double seconds = timer.elapsed() / 1000.0;
+    disconnect(counter);
+    qInfo("%d resizes in %.2f s (%.0f a second), %d complete frames presented meanwhile", kResizes, seconds,
+          kResizes / std::max(seconds, 1e-3), completeFrames);
+    QCOMPARE(view->validationMessageCount(), quint64(0));
+    m_w->window->resize(kViewSize);
+    const QSize target = kViewSize * m_w->dpr();
+    QTRY_COMPARE(view->targetSize(), target);
+    QCOMPARE(view->centre(), centre);
+    QVERIFY(m_w->frames->waitForCompleteFrame());
+    QTRY_COMPARE(grabPresented(view).size(), target);
+    checkPresentedMatchesHeadless(view, m_sample, QStringLiteral("after a resize storm"));
+    QCOMPARE(view->validationMessageCount(), quint64(0));
 }
 
 IRIS_WIDGET_TEST_MAIN(TstIrisSlideView)

@@ -138,6 +138,10 @@ private slots:
         // Zoomed out until cells are a few pixels apart: the aggregate.
         buildAnnotationGeometry(*store.snapshot(), viewport(50000, 0, 150.0), 0, budget, g);
         QVERIFY(g.overview);
+        // Over the hard cap, the aggregate whatever the spacing.
+        budget.hardMaxObjects = 1000;
+        buildAnnotationGeometry(*store.snapshot(), viewport(1200, 1160, 1.0), 0, budget, g);
+        QVERIFY(g.overview);
     }
 
     void fillsAreTriangulatedOverSeveralFrames() {

@@ -184,8 +184,9 @@ void buildAnnotationGeometry(const AnnotationSnapshot& snap, const Viewport& vp,
     }
 
     // Too many objects in view: the fit-view aggregate.
-    if (snap.size() > budget.maxObjects && snap.overview().cellSize / ds <= budget.aggregateCellPixels) {
+    if (snap.size() > budget.maxObjects) {
         const AnnotationOverview& ov = snap.overview();
+        const bool fine = ov.cellSize / ds <= budget.aggregateCellPixels;
         size_t inView = 0;
         if (ov.cellSize > 0) {
             for (const AnnotationOverview::Cell& c : ov.cells) {
@@ -196,7 +197,7 @@ void buildAnnotationGeometry(const AnnotationSnapshot& snap, const Viewport& vp,
                 if (cell.intersects(field)) inView += c.count;
             }
         }
-        if (inView > budget.maxObjects) {
+        if ((fine && inView > budget.maxObjects) || inView > budget.hardMaxObjects) {
             out.overview = true;
             for (const AnnotationOverview::Cell& c : ov.cells) {
                 if (c.centroid.x < field.minX || c.centroid.x > field.maxX || c.centroid.y < field.minY ||

@@ -39,6 +39,7 @@ AnnotationsDock::AnnotationsDock(IrisSlideView *view, QWidget *parent)
     , m_objectTable(new QTableView)
 {
     setObjectName(QStringLiteral("annotationsDock"));
+    m_showAll->setObjectName(QStringLiteral("showAnnotationsCheck"));
     m_classTable->setObjectName(QStringLiteral("annotationClassTable"));
     m_objectTable->setObjectName(QStringLiteral("annotationObjectTable"));
     m_pool.setMaxThreadCount(1);

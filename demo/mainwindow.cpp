@@ -2,6 +2,7 @@
 
 #include <QtCore/QDir>
 #include <QtCore/QFileInfo>
+#include <QtCore/QLocale>
 #include <QtCore/QMimeData>
 #include <QtCore/QSettings>
 #include <QtGui/QAction>
@@ -36,6 +37,13 @@
 namespace {
 constexpr int kMessageMs = 8000;
 const double kPresets[] = {5, 10, 20, 40};
+
+// "1 annotation", "12,345 annotations" (the demo ships no translations, so no %n plurals).
+QString annotationCount(qsizetype n)
+{
+    return n == 1 ? MainWindow::tr("1 annotation")
+                  : MainWindow::tr("%1 annotations").arg(QLocale().toString(qlonglong(n)));
+}
 } // namespace
 
 MainWindow::MainWindow(QWidget *parent)
@@ -543,7 +551,7 @@ void MainWindow::showImportAnnotationsDialog()
     const qsizetype held = qsizetype(m_annotations->snapshot()->size());
     if (held > 0) {
         QMessageBox ask(QMessageBox::Question, tr("Import Annotations"),
-                        tr("The slide has %n annotation(s) already.", nullptr, int(held)), QMessageBox::NoButton, this);
+                        tr("The slide has %1 already.").arg(annotationCount(held)), QMessageBox::NoButton, this);
         ask.setObjectName(QStringLiteral("annotationImportModeBox"));
         ask.setInformativeText(tr("Add those of %1 to them, or replace them?").arg(QFileInfo(path).fileName()));
         QPushButton *append = ask.addButton(tr("&Append"), QMessageBox::AcceptRole);
@@ -592,8 +600,8 @@ void MainWindow::onImportFinished(AnnotationImport *import, bool automatic, bool
         m_import = nullptr;
     import->deleteLater();
     if (ok) {
-        statusBar()->showMessage(automatic ? tr("Restored %n annotation(s) from %1", nullptr, int(objects)).arg(name)
-                                           : tr("Imported %n annotation(s) from %1", nullptr, int(objects)).arg(name),
+        statusBar()->showMessage(automatic ? tr("Restored %1 from %2").arg(annotationCount(objects), name)
+                                           : tr("Imported %1 from %2").arg(annotationCount(objects), name),
                                  kMessageMs);
     } else if (cancelled) {
         statusBar()->showMessage(tr("Import of %1 cancelled; the annotations are as they were.").arg(name), kMessageMs);
@@ -647,7 +655,7 @@ bool MainWindow::exportAnnotations(const QString &path, QString *error)
         return false;
     }
     statusBar()->showMessage(
-        tr("Exported %n annotation(s) to %1", nullptr, int(snapshot->size())).arg(QDir::toNativeSeparators(path)),
+        tr("Exported %1 to %2").arg(annotationCount(qsizetype(snapshot->size())), QDir::toNativeSeparators(path)),
         kMessageMs);
     return true;
 }
@@ -673,7 +681,7 @@ bool MainWindow::saveAnnotationsBesideSlide(QString *error)
         return false;
     }
     statusBar()->showMessage(
-        tr("Saved %n annotation(s) to %1", nullptr, int(snapshot->size())).arg(QDir::toNativeSeparators(path)),
+        tr("Saved %1 to %2").arg(annotationCount(qsizetype(snapshot->size())), QDir::toNativeSeparators(path)),
         kMessageMs);
     return true;
 }

@@ -52,6 +52,7 @@ MainWindow::MainWindow(QWidget *parent)
     , m_properties(new SlidePropertiesDock(this))
     , m_images(new AssociatedImagesDock(this))
     , m_annotationsDock(new AnnotationsDock(m_view, this))
+    , m_writing(new QProgressBar)
     , m_status(nullptr)
     , m_sample(new SampleSlide(this))
     , m_busy(new QProgressBar)
@@ -70,6 +71,12 @@ MainWindow::MainWindow(QWidget *parent)
     m_busy->setMaximumWidth(120);
     m_busy->hide();
     statusBar()->addWidget(m_busy);
+    m_writing->setRange(0, 0);
+    m_writing->setMaximumWidth(120);
+    m_writing->setObjectName(QStringLiteral("annotationWriteBusy"));
+    m_writing->hide();
+    statusBar()->addWidget(m_writing);
+    m_writer.setMaxThreadCount(1);
     m_status = new ViewStatus(m_view, statusBar());
 
     createActions();
@@ -111,7 +118,10 @@ MainWindow::MainWindow(QWidget *parent)
     updateActions();
 }
 
-MainWindow::~MainWindow() = default;
+MainWindow::~MainWindow()
+{
+    m_writer.waitForDone();
+}
 
 void MainWindow::createActions()
 {
@@ -547,6 +557,13 @@ void MainWindow::showImportAnnotationsDialog()
     if (path.isEmpty())
         return;
     settings.setValue(QStringLiteral("annotations/lastFolder"), QFileInfo(path).absolutePath());
+    chooseModeAndImport(path);
+}
+
+bool MainWindow::chooseModeAndImport(const QString &path)
+{
+    if (!m_annotations)
+        return false;
     auto mode = iris::AnnotationLoader::Mode::Replace;
     const qsizetype held = qsizetype(m_annotations->snapshot()->size());
     if (held > 0) {
@@ -562,9 +579,9 @@ void MainWindow::showImportAnnotationsDialog()
         if (ask.clickedButton() == append)
             mode = iris::AnnotationLoader::Mode::Append;
         else if (ask.clickedButton() != replace)
-            return;
+            return false;
     }
-    importAnnotations(path, mode);
+    return importAnnotations(path, mode);
 }
 
 bool MainWindow::importAnnotations(const QString &path, iris::AnnotationLoader::Mode mode)
@@ -638,52 +655,58 @@ void MainWindow::showExportAnnotationsDialog()
     exportAnnotations(path);
 }
 
-bool MainWindow::exportAnnotations(const QString &path, QString *error)
+bool MainWindow::exportAnnotations(const QString &path)
 {
     if (!m_annotations)
         return false;
-    const auto snapshot = m_annotations->snapshot();
-    QApplication::setOverrideCursor(Qt::WaitCursor);
-    const QString why = AnnotationFiles::write(
-        *snapshot, path, AnnotationFiles::formatOfName(path).value_or(iris::AnnotationFormat::GeoJson));
-    QApplication::restoreOverrideCursor();
-    if (error)
-        *error = why;
-    if (!why.isEmpty()) {
-        statusBar()->showMessage(why, kMessageMs);
-        showAnnotationError(tr("Cannot export annotations"), why);
-        return false;
-    }
-    statusBar()->showMessage(
-        tr("Exported %1 to %2").arg(annotationCount(qsizetype(snapshot->size())), QDir::toNativeSeparators(path)),
-        kMessageMs);
+    startWrite(path, AnnotationFiles::formatOfName(path).value_or(iris::AnnotationFormat::GeoJson),
+               tr("Cannot export annotations"));
     return true;
 }
 
-bool MainWindow::saveAnnotationsBesideSlide(QString *error)
+bool MainWindow::saveAnnotationsBesideSlide()
 {
     if (!m_annotations)
         return false;
     const QString slide = m_view->slidePath();
-    QString why = AnnotationFiles::whyNotBeside(slide);
-    const auto snapshot = m_annotations->snapshot();
-    const QString path = AnnotationFiles::besidePath(slide);
-    if (why.isEmpty()) {
-        QApplication::setOverrideCursor(Qt::WaitCursor);
-        why = AnnotationFiles::write(*snapshot, path, iris::AnnotationFormat::GeoJson);
-        QApplication::restoreOverrideCursor();
-    }
-    if (error)
-        *error = why;
+    const QString why = AnnotationFiles::whyNotBeside(slide);
     if (!why.isEmpty()) {
         statusBar()->showMessage(why, kMessageMs);
         showAnnotationError(tr("Cannot save annotations beside the slide"), why);
         return false;
     }
-    statusBar()->showMessage(
-        tr("Saved %1 to %2").arg(annotationCount(qsizetype(snapshot->size())), QDir::toNativeSeparators(path)),
-        kMessageMs);
+    startWrite(AnnotationFiles::besidePath(slide), iris::AnnotationFormat::GeoJson,
+               tr("Cannot save annotations beside the slide"));
     return true;
+}
+
+void MainWindow::startWrite(const QString &path, iris::AnnotationFormat format, const QString &failureTitle)
+{
+    // The snapshot as it is now: edits made while it is written are not in the file.
+    auto snapshot = m_annotations->snapshot();
+    const qsizetype objects = qsizetype(snapshot->size());
+    ++m_writes;
+    m_writing->show();
+    statusBar()->showMessage(tr("Writing %1 to %2…").arg(annotationCount(objects), QDir::toNativeSeparators(path)));
+    m_writer.start([this, snapshot = std::move(snapshot), path, format, failureTitle, objects] {
+        const QString error = AnnotationFiles::write(*snapshot, path, format);
+        QMetaObject::invokeMethod(
+            this, [this, path, objects, failureTitle, error] { onWritten(path, objects, failureTitle, error); },
+            Qt::QueuedConnection);
+    });
+}
+
+void MainWindow::onWritten(const QString &path, qsizetype objects, const QString &failureTitle, const QString &error)
+{
+    m_writing->setVisible(--m_writes > 0);
+    if (error.isEmpty()) {
+        statusBar()->showMessage(tr("Saved %1 to %2").arg(annotationCount(objects), QDir::toNativeSeparators(path)),
+                                 kMessageMs);
+    } else {
+        statusBar()->showMessage(error, kMessageMs);
+        showAnnotationError(failureTitle, error);
+    }
+    Q_EMIT annotationsWritten(path, error.isEmpty(), error);
 }
 
 void MainWindow::showAnnotationError(const QString &title, const QString &text, const QString &details)

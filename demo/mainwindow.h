@@ -11,6 +11,7 @@
 
 #include <QtCore/QList>
 #include <QtCore/QPointer>
+#include <QtCore/QThreadPool>
 #include <QtWidgets/QMainWindow>
 
 #include <iris/IrisSlideInfo.h>
@@ -60,9 +61,11 @@ public Q_SLOTS:
     // CompareWindow::kMaxSlides in all); it closes with this window.
     CompareWindow *compare(const QStringList &others);
 
-    // File › Import Annotations…: a file dialog, then Append or Replace when the slide has
-    // annotations already, then importAnnotations().
+    // File › Import Annotations…: a file dialog, then chooseModeAndImport().
     void showImportAnnotationsDialog();
+    // Asks Append or Replace when the slide has annotations already (Cancel: false, nothing
+    // started), then importAnnotations().
+    bool chooseModeAndImport(const QString &path);
     // Reads a GeoJSON or ASAP XML file into the open slide's store on a worker thread, with a
     // progress dialog that cancels; annotationImportFinished follows. An error shows in a
     // message box naming the file and the reader's message, and changes nothing. False when
@@ -70,18 +73,22 @@ public Q_SLOTS:
     bool importAnnotations(const QString &path, iris::AnnotationLoader::Mode mode);
     // File › Export Annotations…: a file dialog; the format by the name's suffix or the filter.
     void showExportAnnotationsDialog();
-    // Writes the open slide's annotations to `path`: ASAP XML for .xml, else GeoJSON; through
-    // a temporary file renamed over `path`, so a failed write loses nothing. Errors show in a
-    // message box; *error gets them too.
-    bool exportAnnotations(const QString &path, QString *error = nullptr);
-    // File › Save Annotations Beside Slide: `<slide path>.annotations.geojson`, read back when
-    // the slide is opened again. Says why not for a DICOMweb slide or a read-only folder.
-    bool saveAnnotationsBesideSlide(QString *error = nullptr);
+    // Writes the open slide's annotations as they are now to `path` (ASAP XML for .xml, else
+    // GeoJSON) on a worker thread, through a temporary file renamed over `path`, so a failed
+    // write loses nothing; annotationsWritten follows, and an error shows in a message box.
+    // False when no slide is open (nothing started).
+    bool exportAnnotations(const QString &path);
+    // File › Save Annotations Beside Slide: the same into `<slide path>.annotations.geojson`,
+    // read back when the slide is opened again. False, with a message box saying why, for a
+    // DICOMweb slide or a read-only folder.
+    bool saveAnnotationsBesideSlide();
 
 Q_SIGNALS:
     // An import started by importAnnotations() (or a slide's own file, read when it opened)
     // ended: ok, or cancelled, or failed with `message`.
     void annotationImportFinished(const QString &path, bool ok, bool cancelled, const QString &message);
+    // A write started by exportAnnotations() or saveAnnotationsBesideSlide() ended.
+    void annotationsWritten(const QString &path, bool ok, const QString &message);
 
 protected:
     void dragEnterEvent(QDragEnterEvent *event) override;
@@ -106,6 +113,8 @@ private:
     void attachAnnotations(const IrisSlideInfo &info);
     void detachAnnotations();
     void startImport(const QString &path, iris::AnnotationLoader::Mode mode, bool automatic);
+    void startWrite(const QString &path, iris::AnnotationFormat format, const QString &failureTitle);
+    void onWritten(const QString &path, qsizetype objects, const QString &failureTitle, const QString &error);
     void onImportFinished(AnnotationImport *import, bool automatic, bool ok, bool cancelled, qsizetype objects,
                           const QString &message);
     // A message box that does not block (open(), deleted on close): the outcome of work that
@@ -119,6 +128,8 @@ private:
     AnnotationsDock *m_annotationsDock;
     std::shared_ptr<iris::AnnotationStore> m_annotations;
     QPointer<AnnotationImport> m_import; // at most one at a time
+    QProgressBar *m_writing;             // busy while a write runs
+    int m_writes = 0;                    // writes started and not yet reported
     ViewStatus *m_status;
     SampleSlide *m_sample;
     RecentFiles *m_recent = nullptr;
@@ -150,4 +161,8 @@ private:
     QAction *m_perceptualAction = nullptr;
     QAction *m_relativeAction = nullptr;
     QList<QAction *> m_presetActions;
+
+    // Annotation files are written here, one at a time; the destructor waits for the one
+    // running (its file is complete or untouched), so no worker posts to a window that is gone.
+    QThreadPool m_writer;
 };

@@ -14,6 +14,7 @@
 // Settings go to a folder of the test's own (XDG_CONFIG_HOME), emptied first.
 
 #include <algorithm>
+#include <functional>
 #include <cmath>
 #include <memory>
 #include <numbers>
@@ -26,6 +27,7 @@
 #include <QtCore/QFileInfo>
 #include <QtCore/QSettings>
 #include <QtCore/QTemporaryDir>
+#include <QtCore/QTimer>
 #include <QtGui/QAction>
 #include <QtGui/QCursor>
 #include <QtGui/QScreen>
@@ -37,6 +39,8 @@
 #include <QtWidgets/QMenu>
 #include <QtWidgets/QMenuBar>
 #include <QtWidgets/QMessageBox>
+#include <QtWidgets/QProgressDialog>
+#include <QtWidgets/QPushButton>
 #include <QtWidgets/QScrollBar>
 #include <QtWidgets/QStatusBar>
 #include <QtWidgets/QTableView>
@@ -163,12 +167,16 @@ private Q_SLOTS:
     void exportThenImportRoundTrips();
     void savedBesideTheSlideComesBack();
     void malformedFileShowsErrorAndKeepsTheStore();
+    void appendOrReplaceIsAsked();
+    void cancelledImportChangesNothing();
     void noSlideNoAnnotationActions();
 
 private:
     void showMain(const QString &path);
     // Imports `path` and waits for the outcome; the dock is then brought up to date.
     void importAndWait(const QString &path, Mode mode, bool expectOk = true);
+    // Waits for the write that `start` begins (an export or a save beside the slide).
+    void writeAndWait(const std::function<bool()> &start, const QString &path, bool expectOk = true);
     // Waits until the dock shows the store's newest snapshot.
     void waitForDock();
     void checkValidation(const IrisSlideView *view);
@@ -246,6 +254,16 @@ void TstAnnotationsDock::importAndWait(const QString &path, Mode mode, bool expe
     QCOMPARE(finished.first().at(0).toString(), path);
     QVERIFY2(finished.first().at(1).toBool() == expectOk, qPrintable(finished.first().at(3).toString()));
     waitForDock();
+}
+
+void TstAnnotationsDock::writeAndWait(const std::function<bool()> &start, const QString &path, bool expectOk)
+{
+    QSignalSpy written(m_main.get(), &MainWindow::annotationsWritten);
+    QVERIFY(start());
+    QVERIFY(written.wait(kWaitMs));
+    QCOMPARE(written.size(), 1);
+    QCOMPARE(written.first().at(0).toString(), path);
+    QVERIFY2(written.first().at(1).toBool() == expectOk, qPrintable(written.first().at(2).toString()));
 }
 
 void TstAnnotationsDock::waitForDock()
@@ -435,8 +453,7 @@ void TstAnnotationsDock::exportThenImportRoundTrips()
 
     for (const char *name : {"out.geojson", "out.xml"}) {
         const QString path = m_dir.filePath(QLatin1String(name));
-        QString error;
-        QVERIFY2(m_main->exportAnnotations(path, &error), qPrintable(error));
+        writeAndWait([&] { return m_main->exportAnnotations(path); }, path);
         QFile file(path);
         QVERIFY(file.open(QIODevice::ReadOnly));
         const QByteArray text = file.readAll();
@@ -458,12 +475,11 @@ void TstAnnotationsDock::exportThenImportRoundTrips()
 
     // A write that fails (no such folder) says so and leaves nothing behind.
     const QString nowhere = m_dir.filePath(QStringLiteral("missing/out.geojson"));
-    QString error;
-    QVERIFY(!m_main->exportAnnotations(nowhere, &error));
-    QVERIFY2(error.contains(QStringLiteral("out.geojson")), qPrintable(error));
+    writeAndWait([&] { return m_main->exportAnnotations(nowhere); }, nowhere, false);
     QVERIFY(!QFileInfo::exists(nowhere));
     QMessageBox *box = errorBox(m_main.get());
     QVERIFY(box);
+    QVERIFY2(box->text().contains(QStringLiteral("out.geojson")), qPrintable(box->text()));
     box->close();
     // The name picks the format; a name without one of the two suffixes takes the filter's.
     QCOMPARE(AnnotationFiles::exportName(QStringLiteral("/a/b"), AnnotationFiles::asapFilter()), QStringLiteral("/a/b.xml"));
@@ -482,8 +498,8 @@ void TstAnnotationsDock::savedBesideTheSlideComesBack()
     QAction *save = action(m_main.get(), "saveAnnotationsAction");
     QVERIFY(save && save->isEnabled());
     QCOMPARE(save->shortcut(), QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_S));
-    save->trigger();
     const QString beside = m_second + QStringLiteral(".annotations.geojson");
+    writeAndWait([&] { save->trigger(); return true; }, beside);
     QVERIFY(QFileInfo(beside).isFile());
     QVERIFY(m_main->statusBar()->currentMessage().contains(QStringLiteral("Saved 5 annotations")));
 
@@ -542,6 +558,81 @@ void TstAnnotationsDock::malformedFileShowsErrorAndKeepsTheStore()
     QVERIFY(box->text().contains(QStringLiteral("absent.geojson")));
     box->close();
     QCOMPARE(store->snapshot(), before);
+}
+
+void TstAnnotationsDock::appendOrReplaceIsAsked()
+{
+    showMain(m_sample);
+    // An empty store: nothing to ask, the file replaces nothing.
+    QSignalSpy finished(m_main.get(), &MainWindow::annotationImportFinished);
+    QVERIFY(m_main->chooseModeAndImport(m_good));
+    QVERIFY(finished.wait(kWaitMs));
+    const auto store = m_main->annotationStore();
+    QCOMPARE(store->snapshot()->size(), size_t(5));
+
+    // Now the question, answered by a click on one of its buttons once it shows.
+    const auto answer = [](const QString &button) {
+        auto *timer = new QTimer;
+        timer->setInterval(20);
+        QObject::connect(timer, &QTimer::timeout, timer, [timer, button] {
+            auto *box = qobject_cast<QMessageBox *>(QApplication::activeModalWidget());
+            if (!box || box->objectName() != QLatin1String("annotationImportModeBox"))
+                return;
+            for (QAbstractButton *b : box->buttons()) {
+                if (b->text().remove(QLatin1Char('&')) == button) {
+                    b->click();
+                    timer->deleteLater();
+                    return;
+                }
+            }
+        });
+        timer->start();
+    };
+    answer(QStringLiteral("Cancel"));
+    QVERIFY(!m_main->chooseModeAndImport(m_good));
+    QCOMPARE(store->snapshot()->size(), size_t(5));
+    answer(QStringLiteral("Append"));
+    QVERIFY(m_main->chooseModeAndImport(m_good));
+    QVERIFY(finished.wait(kWaitMs));
+    QCOMPARE(store->snapshot()->size(), size_t(10));
+    answer(QStringLiteral("Replace"));
+    QVERIFY(m_main->chooseModeAndImport(m_good));
+    QVERIFY(finished.wait(kWaitMs));
+    QCOMPARE(store->snapshot()->size(), size_t(5));
+}
+
+void TstAnnotationsDock::cancelledImportChangesNothing()
+{
+    showMain(m_sample);
+    importAndWait(m_good, Mode::Replace);
+    const auto store = m_main->annotationStore();
+    const auto before = store->snapshot();
+
+    // A file large enough that parsing it takes far longer than a click.
+    iris::AnnotationDocument big;
+    for (int i = 0; i < 60000; ++i) {
+        const double x = (i % 300) * 20, y = (i / 300) * 20;
+        big.objects.push_back(polygon(uint64_t(i + 1), "Cell", {{x, y}, {x + 10, y}, {x, y + 10}}));
+    }
+    const QString path = m_dir.filePath(QStringLiteral("big.geojson"));
+    QVERIFY(writeText(path, iris::writeGeoJson(big)));
+
+    QSignalSpy finished(m_main.get(), &MainWindow::annotationImportFinished);
+    QVERIFY(m_main->importAnnotations(path, Mode::Replace));
+    auto *progress = m_main->findChild<QProgressDialog *>(QStringLiteral("annotationImportProgress"));
+    QVERIFY(progress);
+    QVERIFY(!m_main->importAnnotations(m_good, Mode::Replace)); // one import at a time
+    auto *cancel = progress->findChild<QPushButton *>();
+    QVERIFY(cancel);
+    cancel->click();
+    QVERIFY(finished.wait(kWaitMs));
+    QCOMPARE(finished.size(), 1);
+    QVERIFY(!finished.first().at(1).toBool());
+    QVERIFY(finished.first().at(2).toBool()); // cancelled
+    QCOMPARE(store->snapshot(), before);
+    QVERIFY(m_main->statusBar()->currentMessage().contains(QStringLiteral("cancelled")));
+    QVERIFY(!errorBox(m_main.get()));
+    QTRY_VERIFY(!m_main->findChild<QProgressDialog *>(QStringLiteral("annotationImportProgress")));
 }
 
 void TstAnnotationsDock::noSlideNoAnnotationActions()

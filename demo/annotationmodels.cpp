@@ -342,6 +342,24 @@ const iris::StoredAnnotation *AnnotationObjectModel::objectAt(int row) const
     return m_snapshot->find((*m_ids)[size_t(row)]);
 }
 
+int AnnotationObjectModel::rowOfId(quint64 id)
+{
+    if (!m_ids || id == 0)
+        return -1;
+    const auto it = std::find(m_ids->begin(), m_ids->end(), id);
+    if (it == m_ids->end())
+        return -1;
+    const int row = int(it - m_ids->begin());
+    if (row >= m_fetched) {
+        // Up to the end of the batch holding it, in one insertion.
+        const int to = int(std::min<qsizetype>((row / kFetchBatch + 1) * qsizetype(kFetchBatch), objectCount()));
+        beginInsertRows({}, m_fetched, to - 1);
+        m_fetched = to;
+        endInsertRows();
+    }
+    return row;
+}
+
 int AnnotationObjectModel::rowCount(const QModelIndex &parent) const
 {
     return parent.isValid() ? 0 : m_fetched;

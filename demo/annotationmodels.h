@@ -105,6 +105,8 @@ public:
     // Every object of the snapshot (rowCount() counts those fetched so far).
     qsizetype objectCount() const;
     const iris::StoredAnnotation *objectAt(int row) const;
+    // The row of the object with that id, fetching rows up to it; -1 when there is none.
+    int rowOfId(quint64 id);
 
     int rowCount(const QModelIndex &parent = {}) const override;
     int columnCount(const QModelIndex &parent = {}) const override;

@@ -54,8 +54,10 @@ AnnotationsDock::AnnotationsDock(IrisSlideView *view, QWidget *parent)
     m_showAll->setChecked(m_view->annotationsVisible());
     layout->addWidget(m_showAll);
     connect(m_showAll, &QCheckBox::toggled, m_view, &IrisSlideView::setAnnotationsVisible);
-    connect(m_view, &IrisSlideView::annotationsChanged, this,
-            [this] { m_showAll->setChecked(m_view->annotationsVisible()); });
+    connect(m_view, &IrisSlideView::annotationsChanged, this, [this] {
+        m_showAll->setChecked(m_view->annotationsVisible());
+        followViewSelection();
+    });
 
     setUpTable(m_classTable);
     m_classTable->setModel(m_classes);
@@ -74,7 +76,7 @@ AnnotationsDock::AnnotationsDock(IrisSlideView *view, QWidget *parent)
     connect(m_objectTable->selectionModel(), &QItemSelectionModel::currentRowChanged, this,
             [this](const QModelIndex &current) {
                 const iris::StoredAnnotation *a = m_objects->objectAt(current.row());
-                if (m_view)
+                if (m_view && !m_following)
                     m_view->setSelectedAnnotation(a ? a->object.id : 0);
             });
     connect(m_objectTable, &QTableView::doubleClicked, this,
@@ -167,12 +169,34 @@ void AnnotationsDock::applySummary(quint64 serial, AnnotationSummary summary)
     m_lastIds = summary.ids;
     m_classes->setSummary(summary);
     m_objects->setSummary(summary);
+    followViewSelection(); // a reset of the list forgets its current row
     updateHeadline();
     Q_EMIT refreshed();
     if (m_again) {
         m_again = false;
         startSummary();
     }
+}
+
+void AnnotationsDock::followViewSelection()
+{
+    if (!m_view)
+        return;
+    const quint64 id = m_view->selectedAnnotation();
+    const iris::StoredAnnotation *current = m_objects->objectAt(m_objectTable->currentIndex().row());
+    if ((current ? current->object.id : 0) == id)
+        return;
+    m_following = true;
+    const int row = m_objects->rowOfId(id); // a linear search: 10^6 ids take about a millisecond
+    if (row < 0) {
+        m_objectTable->selectionModel()->clear();
+    } else {
+        const QModelIndex index = m_objects->index(row, AnnotationObjectModel::NameColumn);
+        m_objectTable->selectionModel()->setCurrentIndex(
+            index, QItemSelectionModel::ClearAndSelect | QItemSelectionModel::Rows);
+        m_objectTable->scrollTo(index);
+    }
+    m_following = false;
 }
 
 void AnnotationsDock::updateHeadline()

@@ -1,7 +1,8 @@
 // Iris View demo — the Annotations dock: the open slide's annotation classes (colour swatch,
 // name and visibility, object count, total area) above the list of its objects (name or kind,
-// class, area). Selecting an object selects it in the view; double-clicking one centres the
-// view on it; a swatch opens a colour dialog.
+// class, area). Selecting an object selects it in the view (and an object selected in the
+// view becomes the list's current row); double-clicking one centres the view on it; a swatch
+// opens a colour dialog.
 //
 // Updates: the store calls back on whichever thread wrote it (AnnotationStore::onChange); the
 // dock posts one queued call per burst to the GUI thread, waits kRefreshMs more on a
@@ -60,6 +61,8 @@ private:
     void startSummary();
     void applySummary(quint64 serial, AnnotationSummary summary);
     void updateHeadline();
+    // The list's current row follows the view's selected object (set from elsewhere).
+    void followViewSelection();
 
     QPointer<IrisSlideView> m_view; // the main window's; it may go first when the window closes
     QLabel *m_headline;
@@ -84,6 +87,7 @@ private:
     quint64 m_serial = 0;       // bumped per summary started and per store set
     bool m_running = false;
     bool m_again = false;       // a change came while a summary ran
+    bool m_following = false;   // the list is being moved to the view's selection
     quint64 m_shownGeneration = 0;
     std::shared_ptr<const std::vector<quint64>> m_lastIds; // the object list's rows
     iris::AnnotationSubscription m_subscription; // last: ends the callbacks first

@@ -362,6 +362,19 @@ void TstAnnotationsDock::importFillsTheDock()
     QTest::mouseDClick(table->viewport(), Qt::LeftButton, {}, table->visualRect(at).center());
     QTRY_VERIFY(std::hypot(view->centre().x() - 3200, view->centre().y() - 2100) < 1e-6);
 
+    // A selection made in the view moves the list's current row, also across a new summary
+    // that resets the list (an object added).
+    const auto currentId = [&] { return table->currentIndex().data(AnnotationObjectModel::IdRole).toULongLong(); };
+    view->setSelectedAnnotation(1);
+    QCOMPARE(currentId(), quint64(1));
+    QVERIFY(store->add(boxed(0, iris::AnnotationKind::Rectangle, "Tumor", {10, 10, 20, 20})).ok());
+    waitForDock();
+    QCOMPARE(objects->objectCount(), 6);
+    QCOMPARE(view->selectedAnnotation(), quint64(1));
+    QCOMPARE(currentId(), quint64(1));
+    view->setSelectedAnnotation(0);
+    QVERIFY(!table->selectionModel()->hasSelection());
+
     // The dock's check box shows and hides them all.
     auto *showAll = m_main->annotationsDock()->findChild<QCheckBox *>(QStringLiteral("showAnnotationsCheck"));
     QVERIFY(showAll && showAll->isChecked());

@@ -74,12 +74,12 @@ QString AnnotationFiles::exportName(const QString &path, const QString &selected
     return path + (selectedFilter == asapFilter() ? QStringLiteral(".xml") : QStringLiteral(".geojson"));
 }
 
-QString AnnotationFiles::write(const iris::AnnotationSnapshot &snapshot, const QString &path,
-                               iris::AnnotationFormat format)
+QString AnnotationFiles::write(
+    const iris::AnnotationSnapshot &snapshot, const QString &path, iris::AnnotationFormat format)
 {
     const iris::AnnotationDocument document = iris::documentOf(snapshot);
-    const std::string text =
-        format == iris::AnnotationFormat::AsapXml ? iris::writeAsapXml(document) : iris::writeGeoJson(document);
+    const std::string text
+        = format == iris::AnnotationFormat::AsapXml ? iris::writeAsapXml(document) : iris::writeGeoJson(document);
     QSaveFile file(path);
     const QString name = QDir::toNativeSeparators(path);
     if (!file.open(QIODevice::WriteOnly))

@@ -20,7 +20,7 @@ QString besidePath(const QString &slidePath);
 QString whyNotBeside(const QString &slidePath);
 
 QString geoJsonFilter(); // "QuPath GeoJSON (*.geojson *.json)"
-QString asapFilter();    // "ASAP XML (*.xml)"
+QString asapFilter(); // "ASAP XML (*.xml)"
 QStringList importFilters(); // both, then both in one, then all files
 QStringList exportFilters(); // GeoJSON, ASAP
 

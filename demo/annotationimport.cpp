@@ -10,14 +10,14 @@ constexpr int kShowAfterMs = 400;
 constexpr int kSteps = 1000;
 } // namespace
 
-AnnotationImport::AnnotationImport(std::shared_ptr<iris::AnnotationStore> store, const QString &path, Mode mode,
-                                   QWidget *dialogParent)
+AnnotationImport::AnnotationImport(
+    std::shared_ptr<iris::AnnotationStore> store, const QString &path, Mode mode, QWidget *dialogParent)
     : m_path(path)
     , m_mode(mode)
     , m_store(std::move(store))
 {
-    m_progress = new QProgressDialog(tr("Importing annotations from %1…").arg(QFileInfo(path).fileName()),
-                                     tr("Cancel"), 0, kSteps, dialogParent);
+    m_progress = new QProgressDialog(
+        tr("Importing annotations from %1…").arg(QFileInfo(path).fileName()), tr("Cancel"), 0, kSteps, dialogParent);
     m_progress->setObjectName(QStringLiteral("annotationImportProgress"));
     m_progress->setWindowTitle(tr("Import Annotations"));
     m_progress->setWindowModality(Qt::WindowModal);
@@ -44,8 +44,8 @@ AnnotationImport::AnnotationImport(std::shared_ptr<iris::AnnotationStore> store,
             this, [this, status, message, objects] { done(status, message, qsizetype(objects)); },
             Qt::QueuedConnection);
     };
-    m_loader = std::make_unique<iris::AnnotationLoader>(*m_store, QFile::encodeName(path).toStdString(),
-                                                        std::move(callbacks), mode);
+    m_loader = std::make_unique<iris::AnnotationLoader>(
+        *m_store, QFile::encodeName(path).toStdString(), std::move(callbacks), mode);
 }
 
 AnnotationImport::~AnnotationImport()

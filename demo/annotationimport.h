@@ -18,14 +18,15 @@ class QProgressDialog;
 class QWidget;
 QT_END_NAMESPACE
 
-class AnnotationImport : public QObject {
+class AnnotationImport : public QObject
+{
     Q_OBJECT
 public:
     using Mode = iris::AnnotationLoader::Mode;
     // Starts at once. The progress dialog (window-modal over `dialogParent`) shows after a
     // moment, so a small file does not flash one.
-    AnnotationImport(std::shared_ptr<iris::AnnotationStore> store, const QString &path, Mode mode,
-                     QWidget *dialogParent);
+    AnnotationImport(
+        std::shared_ptr<iris::AnnotationStore> store, const QString &path, Mode mode, QWidget *dialogParent);
     // Cancels and waits for the loader's thread.
     ~AnnotationImport() override;
 

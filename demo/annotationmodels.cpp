@@ -26,9 +26,7 @@ QString objectTitle(const iris::AnnotationObject &o)
     QString kind = QString::fromLatin1(iris::annotationKindName(o.kind));
     if (!kind.isEmpty())
         kind[0] = kind[0].toUpper();
-    return o.type == iris::AnnotationType::Detection
-               ? AnnotationObjectModel::tr("%1 (detection)").arg(kind)
-               : kind;
+    return o.type == iris::AnnotationType::Detection ? AnnotationObjectModel::tr("%1 (detection)").arg(kind) : kind;
 }
 
 } // namespace
@@ -89,8 +87,7 @@ QString AnnotationMeasure::formatArea(double pixels2, double mppX, double mppY)
 // ---- The summary ------------------------------------------------------------------------------
 
 AnnotationSummary summarise(std::shared_ptr<const iris::AnnotationSnapshot> snapshot,
-                            std::shared_ptr<const std::vector<quint64>> previous,
-                            const std::atomic<bool> *cancelled)
+    std::shared_ptr<const std::vector<quint64>> previous, const std::atomic<bool> *cancelled)
 {
     AnnotationSummary out;
     out.snapshot = std::move(snapshot);
@@ -127,8 +124,7 @@ AnnotationSummary summarise(std::shared_ptr<const iris::AnnotationSnapshot> snap
 
 AnnotationClassModel::AnnotationClassModel(QObject *parent)
     : QAbstractTableModel(parent)
-{
-}
+{ }
 
 void AnnotationClassModel::setStore(std::shared_ptr<iris::AnnotationStore> store, double mppX, double mppY)
 {
@@ -162,7 +158,7 @@ void AnnotationClassModel::setSummary(const AnnotationSummary &summary)
 
     const bool sameNames = rows.size() == m_rows.size()
         && std::equal(rows.begin(), rows.end(), m_rows.begin(),
-                      [](const Row &a, const Row &b) { return a.cls.name == b.cls.name; });
+            [](const Row &a, const Row &b) { return a.cls.name == b.cls.name; });
     if (sameNames) {
         m_rows = std::move(rows);
         if (!m_rows.empty())
@@ -275,7 +271,7 @@ bool AnnotationClassModel::setData(const QModelIndex &index, const QVariant &val
         return false;
     Row &row = m_rows[size_t(index.row())];
     if (index.column() == NameColumn && role == Qt::CheckStateRole) {
-        const bool visible = value.value<Qt::CheckState>() == Qt::Checked;
+        const bool visible = value.toInt() == Qt::Checked; // a delegate sends the state as an int
         row.cls.visible = visible;
         m_store->setClassVisible(row.cls.name, visible);
         Q_EMIT dataChanged(index, index, {Qt::CheckStateRole, Qt::ToolTipRole});
@@ -297,8 +293,7 @@ bool AnnotationClassModel::setData(const QModelIndex &index, const QVariant &val
 
 AnnotationObjectModel::AnnotationObjectModel(QObject *parent)
     : QAbstractTableModel(parent)
-{
-}
+{ }
 
 void AnnotationObjectModel::setMpp(double mppX, double mppY)
 {

@@ -31,23 +31,25 @@ QString formatArea(double pixels2, double mppX, double mppY);
 } // namespace AnnotationMeasure
 
 // One pass over a snapshot (any thread).
-struct AnnotationSummary {
-    struct Totals {
+struct AnnotationSummary
+{
+    struct Totals
+    {
         qsizetype count = 0;
         double area = 0; // level-0 pixels²
     };
     std::shared_ptr<const iris::AnnotationSnapshot> snapshot;
     std::shared_ptr<const std::vector<quint64>> ids; // storage order
-    std::map<std::string, Totals> classes;           // by class name ("" = unclassified)
-    bool sameRows = false;                           // ids equal to `previous`'s
+    std::map<std::string, Totals> classes; // by class name ("" = unclassified)
+    bool sameRows = false; // ids equal to `previous`'s
 };
 // `previous` (may be null) lets the object list keep its rows, selection and scroll position
 // when an edit changed no object (a class's colour or visibility). `cancelled` is polled.
 AnnotationSummary summarise(std::shared_ptr<const iris::AnnotationSnapshot> snapshot,
-                            std::shared_ptr<const std::vector<quint64>> previous,
-                            const std::atomic<bool> *cancelled = nullptr);
+    std::shared_ptr<const std::vector<quint64>> previous, const std::atomic<bool> *cancelled = nullptr);
 
-class AnnotationClassModel : public QAbstractTableModel {
+class AnnotationClassModel : public QAbstractTableModel
+{
     Q_OBJECT
 public:
     enum Column { ColourColumn, NameColumn, CountColumn, AreaColumn, ColumnCount };
@@ -77,7 +79,8 @@ public:
     static QString displayName(const std::string &className);
 
 private:
-    struct Row {
+    struct Row
+    {
         iris::AnnotationClass cls;
         AnnotationSummary::Totals totals;
     };
@@ -86,11 +89,12 @@ private:
     std::vector<Row> m_rows;
 };
 
-class AnnotationObjectModel : public QAbstractTableModel {
+class AnnotationObjectModel : public QAbstractTableModel
+{
     Q_OBJECT
 public:
     enum Column { NameColumn, ClassColumn, AreaColumn, ColumnCount };
-    static constexpr int IdRole = Qt::UserRole + 1;   // quint64
+    static constexpr int IdRole = Qt::UserRole + 1; // quint64
     static constexpr int AreaRole = Qt::UserRole + 2; // pixels², double
     static constexpr int kFetchBatch = 1000;
 

@@ -74,13 +74,13 @@ AnnotationsDock::AnnotationsDock(IrisSlideView *view, QWidget *parent)
     m_objectTable->setModel(m_objects);
     m_objectTable->horizontalHeader()->setSectionResizeMode(AnnotationObjectModel::NameColumn, QHeaderView::Stretch);
     connect(m_objectTable->selectionModel(), &QItemSelectionModel::currentRowChanged, this,
-            [this](const QModelIndex &current) {
-                const iris::StoredAnnotation *a = m_objects->objectAt(current.row());
-                if (m_view && !m_following)
-                    m_view->setSelectedAnnotation(a ? a->object.id : 0);
-            });
-    connect(m_objectTable, &QTableView::doubleClicked, this,
-            [this](const QModelIndex &index) { centreOn(index.row()); });
+        [this](const QModelIndex &current) {
+            const iris::StoredAnnotation *a = m_objects->objectAt(current.row());
+            if (m_view && !m_following)
+                m_view->setSelectedAnnotation(a ? a->object.id : 0);
+        });
+    connect(
+        m_objectTable, &QTableView::doubleClicked, this, [this](const QModelIndex &index) { centreOn(index.row()); });
 
     auto *split = new QSplitter(Qt::Vertical);
     split->addWidget(m_classTable);
@@ -210,7 +210,8 @@ void AnnotationsDock::updateHeadline()
         m_headline->setText(tr("No annotations. File › Import Annotations… reads QuPath GeoJSON or ASAP XML."));
         return;
     }
-    m_headline->setText(tr("%1 objects in %2 classes").arg(QLocale().toString(qlonglong(objects))).arg(m_classes->rowCount()));
+    m_headline->setText(
+        tr("%1 objects in %2 classes").arg(QLocale().toString(qlonglong(objects))).arg(m_classes->rowCount()));
 }
 
 void AnnotationsDock::chooseClassColour(int row)
@@ -218,9 +219,10 @@ void AnnotationsDock::chooseClassColour(int row)
     const QModelIndex index = m_classes->index(row, AnnotationClassModel::ColourColumn);
     if (!index.isValid())
         return;
-    const QString name = m_classes->data(index.siblingAtColumn(AnnotationClassModel::NameColumn), Qt::DisplayRole).toString();
-    const QColor chosen = QColorDialog::getColor(index.data(Qt::EditRole).value<QColor>(), this,
-                                                 tr("Colour of %1").arg(name), QColorDialog::ShowAlphaChannel);
+    const QString name
+        = m_classes->data(index.siblingAtColumn(AnnotationClassModel::NameColumn), Qt::DisplayRole).toString();
+    const QColor chosen = QColorDialog::getColor(
+        index.data(Qt::EditRole).value<QColor>(), this, tr("Colour of %1").arg(name), QColorDialog::ShowAlphaChannel);
     if (chosen.isValid())
         m_classes->setData(index, chosen, Qt::EditRole);
 }

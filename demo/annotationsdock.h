@@ -30,7 +30,8 @@ class QTableView;
 QT_END_NAMESPACE
 class IrisSlideView;
 
-class AnnotationsDock : public QDockWidget {
+class AnnotationsDock : public QDockWidget
+{
     Q_OBJECT
 public:
     static constexpr int kRefreshMs = 100;
@@ -57,7 +58,7 @@ Q_SIGNALS:
     void refreshed();
 
 private:
-    void storeChanged();  // GUI thread, once per burst of publications
+    void storeChanged(); // GUI thread, once per burst of publications
     void startSummary();
     void applySummary(quint64 serial, AnnotationSummary summary);
     void updateHeadline();
@@ -84,10 +85,10 @@ private:
     // worker never posts to a dock that is gone.
     QThreadPool m_pool;
     std::shared_ptr<std::atomic<bool>> m_cancel; // of the summary running
-    quint64 m_serial = 0;       // bumped per summary started and per store set
+    quint64 m_serial = 0; // bumped per summary started and per store set
     bool m_running = false;
-    bool m_again = false;       // a change came while a summary ran
-    bool m_following = false;   // the list is being moved to the view's selection
+    bool m_again = false; // a change came while a summary ran
+    bool m_following = false; // the list is being moved to the view's selection
     quint64 m_shownGeneration = 0;
     std::shared_ptr<const std::vector<quint64>> m_lastIds; // the object list's rows
     iris::AnnotationSubscription m_subscription; // last: ends the callbacks first

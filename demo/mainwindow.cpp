@@ -552,8 +552,8 @@ void MainWindow::showImportAnnotationsDialog()
     const QString slide = m_view->slidePath();
     const QString near = RecentFiles::isUrl(slide) ? QDir::homePath() : QFileInfo(slide).absolutePath();
     const QString dir = settings.value(QStringLiteral("annotations/lastFolder"), near).toString();
-    const QString path = QFileDialog::getOpenFileName(this, tr("Import Annotations"), dir,
-                                                      AnnotationFiles::importFilters().join(QStringLiteral(";;")));
+    const QString path = QFileDialog::getOpenFileName(
+        this, tr("Import Annotations"), dir, AnnotationFiles::importFilters().join(QStringLiteral(";;")));
     if (path.isEmpty())
         return;
     settings.setValue(QStringLiteral("annotations/lastFolder"), QFileInfo(path).absolutePath());
@@ -568,7 +568,7 @@ bool MainWindow::chooseModeAndImport(const QString &path)
     const qsizetype held = qsizetype(m_annotations->snapshot()->size());
     if (held > 0) {
         QMessageBox ask(QMessageBox::Question, tr("Import Annotations"),
-                        tr("The slide has %1 already.").arg(annotationCount(held)), QMessageBox::NoButton, this);
+            tr("The slide has %1 already.").arg(annotationCount(held)), QMessageBox::NoButton, this);
         ask.setObjectName(QStringLiteral("annotationImportModeBox"));
         ask.setInformativeText(tr("Add those of %1 to them, or replace them?").arg(QFileInfo(path).fileName()));
         QPushButton *append = ask.addButton(tr("&Append"), QMessageBox::AcceptRole);
@@ -603,13 +603,13 @@ void MainWindow::startImport(const QString &path, iris::AnnotationLoader::Mode m
     m_import = import;
     statusBar()->showMessage(tr("Reading annotations from %1…").arg(QDir::toNativeSeparators(path)));
     connect(import, &AnnotationImport::finished, this,
-            [this, import, automatic](bool ok, bool cancelled, qsizetype objects, const QString &message) {
-                onImportFinished(import, automatic, ok, cancelled, objects, message);
-            });
+        [this, import, automatic](bool ok, bool cancelled, qsizetype objects, const QString &message) {
+            onImportFinished(import, automatic, ok, cancelled, objects, message);
+        });
 }
 
-void MainWindow::onImportFinished(AnnotationImport *import, bool automatic, bool ok, bool cancelled, qsizetype objects,
-                                  const QString &message)
+void MainWindow::onImportFinished(
+    AnnotationImport *import, bool automatic, bool ok, bool cancelled, qsizetype objects, const QString &message)
 {
     const QString path = import->path();
     const QString name = QDir::toNativeSeparators(path);
@@ -619,13 +619,13 @@ void MainWindow::onImportFinished(AnnotationImport *import, bool automatic, bool
     if (ok) {
         statusBar()->showMessage(automatic ? tr("Restored %1 from %2").arg(annotationCount(objects), name)
                                            : tr("Imported %1 from %2").arg(annotationCount(objects), name),
-                                 kMessageMs);
+            kMessageMs);
     } else if (cancelled) {
         statusBar()->showMessage(tr("Import of %1 cancelled; the annotations are as they were.").arg(name), kMessageMs);
     } else {
         statusBar()->showMessage(tr("Cannot import %1: %2").arg(name, message), kMessageMs);
         showAnnotationError(tr("Cannot import annotations"),
-                            tr("%1 could not be imported; the annotations are as they were.").arg(name), message);
+            tr("%1 could not be imported; the annotations are as they were.").arg(name), message);
     }
     Q_EMIT annotationImportFinished(path, ok, cancelled, message);
 }
@@ -647,7 +647,7 @@ void MainWindow::showExportAnnotationsDialog()
     }
     QString filter = AnnotationFiles::geoJsonFilter();
     QString path = QFileDialog::getSaveFileName(this, tr("Export Annotations"), suggested,
-                                                AnnotationFiles::exportFilters().join(QStringLiteral(";;")), &filter);
+        AnnotationFiles::exportFilters().join(QStringLiteral(";;")), &filter);
     if (path.isEmpty())
         return;
     path = AnnotationFiles::exportName(path, filter);
@@ -660,7 +660,7 @@ bool MainWindow::exportAnnotations(const QString &path)
     if (!m_annotations)
         return false;
     startWrite(path, AnnotationFiles::formatOfName(path).value_or(iris::AnnotationFormat::GeoJson),
-               tr("Cannot export annotations"));
+        tr("Cannot export annotations"));
     return true;
 }
 
@@ -676,7 +676,7 @@ bool MainWindow::saveAnnotationsBesideSlide()
         return false;
     }
     startWrite(AnnotationFiles::besidePath(slide), iris::AnnotationFormat::GeoJson,
-               tr("Cannot save annotations beside the slide"));
+        tr("Cannot save annotations beside the slide"));
     return true;
 }
 
@@ -700,8 +700,8 @@ void MainWindow::onWritten(const QString &path, qsizetype objects, const QString
 {
     m_writing->setVisible(--m_writes > 0);
     if (error.isEmpty()) {
-        statusBar()->showMessage(tr("Saved %1 to %2").arg(annotationCount(objects), QDir::toNativeSeparators(path)),
-                                 kMessageMs);
+        statusBar()->showMessage(
+            tr("Saved %1 to %2").arg(annotationCount(objects), QDir::toNativeSeparators(path)), kMessageMs);
     } else {
         statusBar()->showMessage(error, kMessageMs);
         showAnnotationError(failureTitle, error);

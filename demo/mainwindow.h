@@ -115,8 +115,8 @@ private:
     void startImport(const QString &path, iris::AnnotationLoader::Mode mode, bool automatic);
     void startWrite(const QString &path, iris::AnnotationFormat format, const QString &failureTitle);
     void onWritten(const QString &path, qsizetype objects, const QString &failureTitle, const QString &error);
-    void onImportFinished(AnnotationImport *import, bool automatic, bool ok, bool cancelled, qsizetype objects,
-                          const QString &message);
+    void onImportFinished(
+        AnnotationImport *import, bool automatic, bool ok, bool cancelled, qsizetype objects, const QString &message);
     // A message box that does not block (open(), deleted on close): the outcome of work that
     // ended on its own, and a test can read and close it.
     void showAnnotationError(const QString &title, const QString &text, const QString &details = QString());
@@ -128,8 +128,8 @@ private:
     AnnotationsDock *m_annotationsDock;
     std::shared_ptr<iris::AnnotationStore> m_annotations;
     QPointer<AnnotationImport> m_import; // at most one at a time
-    QProgressBar *m_writing;             // busy while a write runs
-    int m_writes = 0;                    // writes started and not yet reported
+    QProgressBar *m_writing; // busy while a write runs
+    int m_writes = 0; // writes started and not yet reported
     ViewStatus *m_status;
     SampleSlide *m_sample;
     RecentFiles *m_recent = nullptr;

@@ -62,17 +62,14 @@ namespace {
 
 constexpr int kWaitMs = 20000;
 
-QAction *action(const QWidget *window, const char *name)
-{
-    auto *found = window->findChild<QAction *>(QLatin1String(name));
-    if (!found)
-        qWarning("no action %s", name);
+QAction* action(const QWidget* window, const char* name) {
+    auto* found = window->findChild<QAction*>(QLatin1String(name));
+    if (!found) qWarning("no action %s", name);
     return found;
 }
 
 iris::AnnotationObject polygon(uint64_t id, std::string cls, std::vector<iris::Point2> outer,
-                               std::vector<std::vector<iris::Point2>> holes = {})
-{
+                               std::vector<std::vector<iris::Point2>> holes = {}) {
     iris::AnnotationObject o;
     o.id = id;
     o.kind = iris::AnnotationKind::Polygon;
@@ -81,8 +78,7 @@ iris::AnnotationObject polygon(uint64_t id, std::string cls, std::vector<iris::P
     return o;
 }
 
-iris::AnnotationObject boxed(uint64_t id, iris::AnnotationKind kind, std::string cls, iris::Box2 box)
-{
+iris::AnnotationObject boxed(uint64_t id, iris::AnnotationKind kind, std::string cls, iris::Box2 box) {
     iris::AnnotationObject o;
     o.id = id;
     o.kind = kind;
@@ -95,8 +91,7 @@ iris::AnnotationObject boxed(uint64_t id, iris::AnnotationKind kind, std::string
 //   Tumor:  a 400² square less a 100² hole (150 000 px²) and a 300 × 200 rectangle (60 000)
 //   Stroma: an ellipse in a 400 × 200 box (π·200·100) and a detected triangle (5 000)
 //   —:      a point (no area)
-iris::AnnotationDocument testDocument()
-{
+iris::AnnotationDocument testDocument() {
     iris::AnnotationDocument doc;
     iris::AnnotationObject outline = polygon(1, "Tumor", {{1000, 1000}, {1400, 1000}, {1400, 1400}, {1000, 1400}},
                                              {{{1100, 1100}, {1200, 1100}, {1200, 1200}, {1100, 1200}}});
@@ -121,31 +116,26 @@ iris::AnnotationDocument testDocument()
 constexpr double kTumorArea = 400.0 * 400 - 100 * 100 + 300 * 200;
 const double kStromaArea = std::numbers::pi * 200 * 100 + 5000;
 
-bool writeText(const QString &path, const std::string &text)
-{
+bool writeText(const QString& path, const std::string& text) {
     QFile file(path);
     return file.open(QIODevice::WriteOnly) && file.write(text.data(), qint64(text.size())) == qint64(text.size());
 }
 
 // Objects by id and classes by name: the store keeps objects in its own order.
-iris::AnnotationDocument sorted(iris::AnnotationDocument doc)
-{
-    std::sort(doc.objects.begin(), doc.objects.end(), [](const auto &a, const auto &b) { return a.id < b.id; });
-    std::sort(doc.classes.begin(), doc.classes.end(), [](const auto &a, const auto &b) { return a.name < b.name; });
+iris::AnnotationDocument sorted(iris::AnnotationDocument doc) {
+    std::sort(doc.objects.begin(), doc.objects.end(), [](const auto& a, const auto& b) { return a.id < b.id; });
+    std::sort(doc.classes.begin(), doc.classes.end(), [](const auto& a, const auto& b) { return a.name < b.name; });
     return doc;
 }
 
-bool sameDocument(const iris::AnnotationDocument &a, const iris::AnnotationDocument &b)
-{
+bool sameDocument(const iris::AnnotationDocument& a, const iris::AnnotationDocument& b) {
     const iris::AnnotationDocument x = sorted(a), y = sorted(b);
     return x.objects == y.objects && x.classes == y.classes;
 }
 
-QMessageBox *errorBox(const QWidget *window)
-{
-    for (QMessageBox *box : window->findChildren<QMessageBox *>(QStringLiteral("annotationErrorBox"))) {
-        if (box->isVisible())
-            return box;
+QMessageBox* errorBox(const QWidget* window) {
+    for (QMessageBox* box : window->findChildren<QMessageBox*>(QStringLiteral("annotationErrorBox"))) {
+        if (box->isVisible()) return box;
     }
     return nullptr;
 }
@@ -172,14 +162,14 @@ private Q_SLOTS:
     void noSlideNoAnnotationActions();
 
 private:
-    void showMain(const QString &path);
+    void showMain(const QString& path);
     // Imports `path` and waits for the outcome; the dock is then brought up to date.
-    void importAndWait(const QString &path, Mode mode, bool expectOk = true);
+    void importAndWait(const QString& path, Mode mode, bool expectOk = true);
     // Waits for the write that `start` begins (an export or a save beside the slide).
-    void writeAndWait(const std::function<bool()> &start, const QString &path, bool expectOk = true);
+    void writeAndWait(const std::function<bool()>& start, const QString& path, bool expectOk = true);
     // Waits until the dock shows the store's newest snapshot.
     void waitForDock();
-    void checkValidation(const IrisSlideView *view);
+    void checkValidation(const IrisSlideView* view);
 
     QTemporaryDir m_dir;
     QString m_sample;
@@ -188,8 +178,7 @@ private:
     std::unique_ptr<MainWindow> m_main;
 };
 
-void TstAnnotationsDock::initTestCase()
-{
+void TstAnnotationsDock::initTestCase() {
     QCOMPARE(QGuiApplication::platformName(), QStringLiteral("xcb"));
     QVERIFY2(!qEnvironmentVariableIsEmpty("XDG_CONFIG_HOME"), "the test's settings need a folder of their own");
     QApplication::setOrganizationName(QStringLiteral("IrisView"));
@@ -208,30 +197,23 @@ void TstAnnotationsDock::initTestCase()
     QVERIFY(writeText(m_good, iris::writeGeoJson(testDocument())));
 }
 
-void TstAnnotationsDock::cleanup()
-{
-    if (m_main)
-        checkValidation(m_main->view());
+void TstAnnotationsDock::cleanup() {
+    if (m_main) checkValidation(m_main->view());
     m_main.reset();
     QSettings().clear();
-    for (const QString &slide : {m_sample, m_second})
-        QFile::remove(AnnotationFiles::besidePath(slide));
+    for (const QString& slide : {m_sample, m_second}) QFile::remove(AnnotationFiles::besidePath(slide));
 }
 
-void TstAnnotationsDock::cleanupTestCase()
-{
-    QCOMPARE(IrisWidget::EngineHost::liveEngineCount(), 0);
+void TstAnnotationsDock::cleanupTestCase() { QCOMPARE(IrisWidget::EngineHost::liveEngineCount(), 0); }
+
+void TstAnnotationsDock::checkValidation(const IrisSlideView* view) {
+    QVERIFY2(
+        view->validationMessageCount() == 0,
+        qPrintable(
+            QStringLiteral("%1 Vulkan validation messages (see the log above)").arg(view->validationMessageCount())));
 }
 
-void TstAnnotationsDock::checkValidation(const IrisSlideView *view)
-{
-    QVERIFY2(view->validationMessageCount() == 0,
-             qPrintable(QStringLiteral("%1 Vulkan validation messages (see the log above)")
-                            .arg(view->validationMessageCount())));
-}
-
-void TstAnnotationsDock::showMain(const QString &path)
-{
+void TstAnnotationsDock::showMain(const QString& path) {
     m_main = std::make_unique<MainWindow>();
     m_main->resize(1100, 800);
     m_main->show();
@@ -239,14 +221,13 @@ void TstAnnotationsDock::showMain(const QString &path)
     QVERIFY(m_main->view()->isRendererAvailable());
     QTRY_VERIFY(m_main->view()->surfaceWindow()->isExposed());
     QVERIFY(m_main->openSlide(path, false));
-    AnnotationsDock *dock = m_main->annotationsDock();
+    AnnotationsDock* dock = m_main->annotationsDock();
     dock->show();
     dock->raise(); // tabbed with the associated images
     QTRY_VERIFY(dock->objectTable()->isVisible());
 }
 
-void TstAnnotationsDock::importAndWait(const QString &path, Mode mode, bool expectOk)
-{
+void TstAnnotationsDock::importAndWait(const QString& path, Mode mode, bool expectOk) {
     QSignalSpy finished(m_main.get(), &MainWindow::annotationImportFinished);
     QVERIFY(m_main->importAnnotations(path, mode));
     QVERIFY(finished.wait(kWaitMs));
@@ -256,8 +237,7 @@ void TstAnnotationsDock::importAndWait(const QString &path, Mode mode, bool expe
     waitForDock();
 }
 
-void TstAnnotationsDock::writeAndWait(const std::function<bool()> &start, const QString &path, bool expectOk)
-{
+void TstAnnotationsDock::writeAndWait(const std::function<bool()>& start, const QString& path, bool expectOk) {
     QSignalSpy written(m_main.get(), &MainWindow::annotationsWritten);
     QVERIFY(start());
     QVERIFY(written.wait(kWaitMs));
@@ -266,15 +246,13 @@ void TstAnnotationsDock::writeAndWait(const std::function<bool()> &start, const 
     QVERIFY2(written.first().at(1).toBool() == expectOk, qPrintable(written.first().at(2).toString()));
 }
 
-void TstAnnotationsDock::waitForDock()
-{
+void TstAnnotationsDock::waitForDock() {
     const auto store = m_main->annotationStore();
     QVERIFY(store);
     QTRY_COMPARE_WITH_TIMEOUT(m_main->annotationsDock()->shownGeneration(), store->snapshot()->generation(), kWaitMs);
 }
 
-void TstAnnotationsDock::areasAndTheirUnits()
-{
+void TstAnnotationsDock::areasAndTheirUnits() {
     // The shoelace in either winding, holes subtracted, several parts added.
     const std::vector<iris::Point2> square{{0, 0}, {10, 0}, {10, 10}, {0, 10}};
     std::vector<iris::Point2> reversed(square.rbegin(), square.rend());
@@ -284,8 +262,8 @@ void TstAnnotationsDock::areasAndTheirUnits()
     two.polygons.push_back({{{1e6, 1e6}, {1e6 + 3, 1e6}, {1e6 + 3, 1e6 + 2}, {1e6, 1e6 + 2}}, {}});
     QCOMPARE(AnnotationMeasure::area(two), 100.0 - 2 + 6);
     QCOMPARE(AnnotationMeasure::area(boxed(0, iris::AnnotationKind::Rectangle, "", {0, 0, 4, 5})), 20.0);
-    QVERIFY(std::abs(AnnotationMeasure::area(boxed(0, iris::AnnotationKind::Ellipse, "", {0, 0, 4, 2}))
-                     - std::numbers::pi * 2 * 1) < 1e-12);
+    QVERIFY(std::abs(AnnotationMeasure::area(boxed(0, iris::AnnotationKind::Ellipse, "", {0, 0, 4, 2})) -
+                     std::numbers::pi * 2 * 1) < 1e-12);
     iris::AnnotationObject line;
     line.kind = iris::AnnotationKind::Polyline;
     line.points = {{0, 0}, {5, 5}, {0, 5}};
@@ -298,10 +276,9 @@ void TstAnnotationsDock::areasAndTheirUnits()
     QCOMPARE(AnnotationMeasure::formatArea(1234.4, 0, 0), QStringLiteral("1234 px²"));
 }
 
-void TstAnnotationsDock::importFillsTheDock()
-{
+void TstAnnotationsDock::importFillsTheDock() {
     showMain(m_sample);
-    IrisSlideView *view = m_main->view();
+    IrisSlideView* view = m_main->view();
     const IrisSlideInfo info = view->slideInfo();
     QVERIFY(info.mppX > 0 && info.mppY > 0);
     const auto store = m_main->annotationStore();
@@ -312,22 +289,23 @@ void TstAnnotationsDock::importFillsTheDock()
     QVERIFY(m_main->statusBar()->currentMessage().contains(QStringLiteral("Imported 5 annotations")));
 
     // One row per class: counts and areas (px² in ValueRole, shown in µm²).
-    AnnotationClassModel *classes = m_main->annotationsDock()->classModel();
+    AnnotationClassModel* classes = m_main->annotationsDock()->classModel();
     QCOMPARE(classes->rowCount(), 3);
-    const auto cell = [&](const char *cls, int column, int role) {
+    const auto cell = [&](const char* cls, int column, int role) {
         return classes->index(classes->rowOf(QLatin1String(cls)), column).data(role);
     };
     QCOMPARE(cell("Tumor", AnnotationClassModel::CountColumn, AnnotationClassModel::ValueRole).toLongLong(), 2);
     QCOMPARE(cell("Stroma", AnnotationClassModel::CountColumn, AnnotationClassModel::ValueRole).toLongLong(), 2);
     QCOMPARE(cell("", AnnotationClassModel::CountColumn, AnnotationClassModel::ValueRole).toLongLong(), 1);
-    QVERIFY(std::abs(cell("Tumor", AnnotationClassModel::AreaColumn, AnnotationClassModel::ValueRole).toDouble()
-                     - kTumorArea) < 1e-6);
-    QVERIFY(std::abs(cell("Stroma", AnnotationClassModel::AreaColumn, AnnotationClassModel::ValueRole).toDouble()
-                     - kStromaArea) < 1e-6);
+    QVERIFY(std::abs(cell("Tumor", AnnotationClassModel::AreaColumn, AnnotationClassModel::ValueRole).toDouble() -
+                     kTumorArea) < 1e-6);
+    QVERIFY(std::abs(cell("Stroma", AnnotationClassModel::AreaColumn, AnnotationClassModel::ValueRole).toDouble() -
+                     kStromaArea) < 1e-6);
     QCOMPARE(cell("", AnnotationClassModel::AreaColumn, AnnotationClassModel::ValueRole).toDouble(), 0.0);
     QCOMPARE(cell("Tumor", AnnotationClassModel::AreaColumn, Qt::DisplayRole).toString(),
              AnnotationMeasure::formatArea(kTumorArea, info.mppX, info.mppY));
-    QVERIFY(cell("Tumor", AnnotationClassModel::AreaColumn, Qt::DisplayRole).toString().endsWith(QStringLiteral(" µm²")));
+    QVERIFY(
+        cell("Tumor", AnnotationClassModel::AreaColumn, Qt::DisplayRole).toString().endsWith(QStringLiteral(" µm²")));
     QCOMPARE(cell("Tumor", AnnotationClassModel::NameColumn, Qt::DisplayRole).toString(), QStringLiteral("Tumor"));
     QCOMPARE(cell("", AnnotationClassModel::NameColumn, Qt::DisplayRole).toString(), QStringLiteral("Unclassified"));
     QCOMPARE(cell("Tumor", AnnotationClassModel::ColourColumn, Qt::DecorationRole).value<QColor>(), QColor(200, 0, 0));
@@ -335,26 +313,25 @@ void TstAnnotationsDock::importFillsTheDock()
     QCOMPARE(classes->rowOf(QString()), 2); // unclassified last
 
     // The object list: every object, with its name or kind and its area.
-    AnnotationObjectModel *objects = m_main->annotationsDock()->objectModel();
+    AnnotationObjectModel* objects = m_main->annotationsDock()->objectModel();
     QCOMPARE(objects->objectCount(), 5);
     QCOMPARE(objects->rowCount(), 5);
     int ellipse = -1, outline = -1;
     for (int row = 0; row < objects->rowCount(); ++row) {
         const quint64 id = objects->index(row, 0).data(AnnotationObjectModel::IdRole).toULongLong();
-        if (id == 3)
-            ellipse = row;
-        if (id == 1)
-            outline = row;
+        if (id == 3) ellipse = row;
+        if (id == 1) outline = row;
     }
     QVERIFY(ellipse >= 0 && outline >= 0);
-    QCOMPARE(objects->index(outline, AnnotationObjectModel::NameColumn).data().toString(), QStringLiteral("Tumour outline"));
+    QCOMPARE(objects->index(outline, AnnotationObjectModel::NameColumn).data().toString(),
+             QStringLiteral("Tumour outline"));
     QCOMPARE(objects->index(ellipse, AnnotationObjectModel::NameColumn).data().toString(), QStringLiteral("Ellipse"));
     QCOMPARE(objects->index(ellipse, AnnotationObjectModel::ClassColumn).data().toString(), QStringLiteral("Stroma"));
     QCOMPARE(objects->index(outline, AnnotationObjectModel::AreaColumn).data().toString(),
              AnnotationMeasure::formatArea(150000, info.mppX, info.mppY));
 
     // A click selects in the view; a double-click centres the view on the object.
-    QTableView *table = m_main->annotationsDock()->objectTable();
+    QTableView* table = m_main->annotationsDock()->objectTable();
     const QModelIndex at = objects->index(ellipse, AnnotationObjectModel::NameColumn);
     table->scrollTo(at);
     QTest::mouseClick(table->viewport(), Qt::LeftButton, {}, table->visualRect(at).center());
@@ -376,7 +353,7 @@ void TstAnnotationsDock::importFillsTheDock()
     QVERIFY(!table->selectionModel()->hasSelection());
 
     // The dock's check box shows and hides them all.
-    auto *showAll = m_main->annotationsDock()->findChild<QCheckBox *>(QStringLiteral("showAnnotationsCheck"));
+    auto* showAll = m_main->annotationsDock()->findChild<QCheckBox*>(QStringLiteral("showAnnotationsCheck"));
     QVERIFY(showAll && showAll->isChecked());
     showAll->click();
     QVERIFY(!view->annotationsVisible());
@@ -384,12 +361,11 @@ void TstAnnotationsDock::importFillsTheDock()
     QVERIFY(showAll->isChecked());
 }
 
-void TstAnnotationsDock::classVisibilityAndColourGoToTheStore()
-{
+void TstAnnotationsDock::classVisibilityAndColourGoToTheStore() {
     showMain(m_sample);
     importAndWait(m_good, Mode::Replace);
     const auto store = m_main->annotationStore();
-    AnnotationClassModel *classes = m_main->annotationsDock()->classModel();
+    AnnotationClassModel* classes = m_main->annotationsDock()->classModel();
     const int tumor = classes->rowOf(QStringLiteral("Tumor"));
     QVERIFY(tumor >= 0);
     const QModelIndex check = classes->index(tumor, AnnotationClassModel::NameColumn);
@@ -404,6 +380,14 @@ void TstAnnotationsDock::classVisibilityAndColourGoToTheStore()
     QCOMPARE(check.data(Qt::CheckStateRole).value<Qt::CheckState>(), Qt::Unchecked);
     QVERIFY(classes->setData(check, Qt::Checked, Qt::CheckStateRole));
     QVERIFY(store->snapshot()->classInfo("Tumor").visible);
+    // Through the table's own check box: Space on the current cell, as a user would.
+    QTableView *table = m_main->annotationsDock()->classTable();
+    table->setFocus();
+    table->setCurrentIndex(check);
+    QTest::keyClick(table, Qt::Key_Space);
+    QVERIFY(!store->snapshot()->classInfo("Tumor").visible);
+    QTest::keyClick(table, Qt::Key_Space);
+    QVERIFY(store->snapshot()->classInfo("Tumor").visible);
 
     const QModelIndex swatch = classes->index(tumor, AnnotationClassModel::ColourColumn);
     QVERIFY(classes->setData(swatch, QColor(10, 20, 30, 200), Qt::EditRole));
@@ -412,11 +396,10 @@ void TstAnnotationsDock::classVisibilityAndColourGoToTheStore()
     QCOMPARE(swatch.data(Qt::DecorationRole).value<QColor>(), QColor(10, 20, 30, 200));
 }
 
-void TstAnnotationsDock::editsFromAnotherThreadAndLazyRows()
-{
+void TstAnnotationsDock::editsFromAnotherThreadAndLazyRows() {
     showMain(m_sample);
     const auto store = m_main->annotationStore();
-    AnnotationsDock *dock = m_main->annotationsDock();
+    AnnotationsDock* dock = m_main->annotationsDock();
     QSignalSpy refreshed(dock, &AnnotationsDock::refreshed);
 
     // A batch from a worker thread, then single additions one after another: the dock
@@ -438,33 +421,38 @@ void TstAnnotationsDock::editsFromAnotherThreadAndLazyRows()
     waitForDock();
     QVERIFY2(refreshed.size() < kSingles / 2, qPrintable(QStringLiteral("%1 refreshes").arg(refreshed.size())));
 
-    AnnotationClassModel *classes = dock->classModel();
+    AnnotationClassModel* classes = dock->classModel();
     QCOMPARE(classes->index(classes->rowOf(QStringLiteral("Cell")), AnnotationClassModel::CountColumn)
-                 .data(AnnotationClassModel::ValueRole).toLongLong(), kBatch);
+                 .data(AnnotationClassModel::ValueRole)
+                 .toLongLong(),
+             kBatch);
     QCOMPARE(classes->index(classes->rowOf(QStringLiteral("Cell")), AnnotationClassModel::AreaColumn)
-                 .data(AnnotationClassModel::ValueRole).toDouble(), 200.0 * kBatch);
+                 .data(AnnotationClassModel::ValueRole)
+                 .toDouble(),
+             200.0 * kBatch);
     QCOMPARE(classes->index(classes->rowOf(QStringLiteral("Other")), AnnotationClassModel::CountColumn)
-                 .data(AnnotationClassModel::ValueRole).toLongLong(), kSingles);
+                 .data(AnnotationClassModel::ValueRole)
+                 .toLongLong(),
+             kSingles);
 
     // The list holds a batch of rows, more as it scrolls to the end.
-    AnnotationObjectModel *objects = dock->objectModel();
+    AnnotationObjectModel* objects = dock->objectModel();
     QCOMPARE(objects->objectCount(), kBatch + kSingles);
     QCOMPARE(objects->rowCount(), AnnotationObjectModel::kFetchBatch);
-    QTableView *table = dock->objectTable();
+    QTableView* table = dock->objectTable();
     table->scrollToBottom();
     QTRY_VERIFY(objects->rowCount() >= 2 * AnnotationObjectModel::kFetchBatch);
     QVERIFY(objects->rowCount() < objects->objectCount());
 }
 
-void TstAnnotationsDock::exportThenImportRoundTrips()
-{
+void TstAnnotationsDock::exportThenImportRoundTrips() {
     showMain(m_sample);
     importAndWait(m_good, Mode::Replace);
     const auto store = m_main->annotationStore();
     const iris::AnnotationDocument before = iris::documentOf(*store->snapshot());
     QVERIFY(sorted(before).objects == sorted(testDocument()).objects);
 
-    for (const char *name : {"out.geojson", "out.xml"}) {
+    for (const char* name : {"out.geojson", "out.xml"}) {
         const QString path = m_dir.filePath(QLatin1String(name));
         writeAndWait([&] { return m_main->exportAnnotations(path); }, path);
         QFile file(path);
@@ -482,37 +470,44 @@ void TstAnnotationsDock::exportThenImportRoundTrips()
     // Append: the file's objects beside those held, with fresh ids.
     importAndWait(m_good, Mode::Append);
     QCOMPARE(store->snapshot()->size(), size_t(10));
-    AnnotationClassModel *classes = m_main->annotationsDock()->classModel();
+    AnnotationClassModel* classes = m_main->annotationsDock()->classModel();
     QCOMPARE(classes->index(classes->rowOf(QStringLiteral("Tumor")), AnnotationClassModel::CountColumn)
-                 .data(AnnotationClassModel::ValueRole).toLongLong(), 4);
+                 .data(AnnotationClassModel::ValueRole)
+                 .toLongLong(),
+             4);
 
     // A write that fails (no such folder) says so and leaves nothing behind.
     const QString nowhere = m_dir.filePath(QStringLiteral("missing/out.geojson"));
     writeAndWait([&] { return m_main->exportAnnotations(nowhere); }, nowhere, false);
     QVERIFY(!QFileInfo::exists(nowhere));
-    QMessageBox *box = errorBox(m_main.get());
+    QMessageBox* box = errorBox(m_main.get());
     QVERIFY(box);
     QVERIFY2(box->text().contains(QStringLiteral("out.geojson")), qPrintable(box->text()));
     box->close();
     // The name picks the format; a name without one of the two suffixes takes the filter's.
-    QCOMPARE(AnnotationFiles::exportName(QStringLiteral("/a/b"), AnnotationFiles::asapFilter()), QStringLiteral("/a/b.xml"));
+    QCOMPARE(AnnotationFiles::exportName(QStringLiteral("/a/b"), AnnotationFiles::asapFilter()),
+             QStringLiteral("/a/b.xml"));
     QCOMPARE(AnnotationFiles::exportName(QStringLiteral("/a/b"), AnnotationFiles::geoJsonFilter()),
              QStringLiteral("/a/b.geojson"));
     QCOMPARE(AnnotationFiles::exportName(QStringLiteral("/a/b.xml"), AnnotationFiles::geoJsonFilter()),
              QStringLiteral("/a/b.xml"));
 }
 
-void TstAnnotationsDock::savedBesideTheSlideComesBack()
-{
+void TstAnnotationsDock::savedBesideTheSlideComesBack() {
     showMain(m_second);
     const auto first = m_main->annotationStore();
     importAndWait(m_good, Mode::Replace);
     const iris::AnnotationDocument saved = iris::documentOf(*first->snapshot());
-    QAction *save = action(m_main.get(), "saveAnnotationsAction");
+    QAction* save = action(m_main.get(), "saveAnnotationsAction");
     QVERIFY(save && save->isEnabled());
     QCOMPARE(save->shortcut(), QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_S));
     const QString beside = m_second + QStringLiteral(".annotations.geojson");
-    writeAndWait([&] { save->trigger(); return true; }, beside);
+    writeAndWait(
+        [&] {
+            save->trigger();
+            return true;
+        },
+        beside);
     QVERIFY(QFileInfo(beside).isFile());
     QVERIFY(m_main->statusBar()->currentMessage().contains(QStringLiteral("Saved 5 annotations")));
 
@@ -540,22 +535,23 @@ void TstAnnotationsDock::savedBesideTheSlideComesBack()
     QCOMPARE(m_main->annotationsDock()->objectModel()->objectCount(), 5);
 }
 
-void TstAnnotationsDock::malformedFileShowsErrorAndKeepsTheStore()
-{
+void TstAnnotationsDock::malformedFileShowsErrorAndKeepsTheStore() {
     showMain(m_sample);
     importAndWait(m_good, Mode::Replace);
     const auto store = m_main->annotationStore();
     const auto before = store->snapshot();
 
     const QString bad = m_dir.filePath(QStringLiteral("broken.geojson"));
-    QVERIFY(writeText(bad, "{\"type\": \"FeatureCollection\",\n"
-                           " \"features\": [\n"
-                           "  {\"type\": \"Feature\", \"geometry\": {\"type\": \"Point\", \"coordinates\": [1, 2]}, \"properties\": {]}\n"
-                           " ]}\n"));
+    QVERIFY(writeText(
+        bad,
+        "{\"type\": \"FeatureCollection\",\n"
+        " \"features\": [\n"
+        "  {\"type\": \"Feature\", \"geometry\": {\"type\": \"Point\", \"coordinates\": [1, 2]}, \"properties\": {]}\n"
+        " ]}\n"));
     for (const Mode mode : {Mode::Replace, Mode::Append}) {
         importAndWait(bad, mode, false);
         QCOMPARE(store->snapshot(), before); // not even a new publication
-        QMessageBox *box = nullptr;
+        QMessageBox* box = nullptr;
         QTRY_VERIFY((box = errorBox(m_main.get())) != nullptr);
         QVERIFY2(box->text().contains(QStringLiteral("broken.geojson")), qPrintable(box->text()));
         QVERIFY2(box->informativeText().contains(QStringLiteral("line 3")), qPrintable(box->informativeText()));
@@ -566,15 +562,14 @@ void TstAnnotationsDock::malformedFileShowsErrorAndKeepsTheStore()
 
     // A file that is not there says so, too.
     importAndWait(m_dir.filePath(QStringLiteral("absent.geojson")), Mode::Replace, false);
-    QMessageBox *box = nullptr;
+    QMessageBox* box = nullptr;
     QTRY_VERIFY((box = errorBox(m_main.get())) != nullptr);
     QVERIFY(box->text().contains(QStringLiteral("absent.geojson")));
     box->close();
     QCOMPARE(store->snapshot(), before);
 }
 
-void TstAnnotationsDock::appendOrReplaceIsAsked()
-{
+void TstAnnotationsDock::appendOrReplaceIsAsked() {
     showMain(m_sample);
     // An empty store: nothing to ask, the file replaces nothing.
     QSignalSpy finished(m_main.get(), &MainWindow::annotationImportFinished);
@@ -584,14 +579,13 @@ void TstAnnotationsDock::appendOrReplaceIsAsked()
     QCOMPARE(store->snapshot()->size(), size_t(5));
 
     // Now the question, answered by a click on one of its buttons once it shows.
-    const auto answer = [](const QString &button) {
-        auto *timer = new QTimer;
+    const auto answer = [](const QString& button) {
+        auto* timer = new QTimer;
         timer->setInterval(20);
         QObject::connect(timer, &QTimer::timeout, timer, [timer, button] {
-            auto *box = qobject_cast<QMessageBox *>(QApplication::activeModalWidget());
-            if (!box || box->objectName() != QLatin1String("annotationImportModeBox"))
-                return;
-            for (QAbstractButton *b : box->buttons()) {
+            auto* box = qobject_cast<QMessageBox*>(QApplication::activeModalWidget());
+            if (!box || box->objectName() != QLatin1String("annotationImportModeBox")) return;
+            for (QAbstractButton* b : box->buttons()) {
                 if (b->text().remove(QLatin1Char('&')) == button) {
                     b->click();
                     timer->deleteLater();
@@ -614,8 +608,7 @@ void TstAnnotationsDock::appendOrReplaceIsAsked()
     QCOMPARE(store->snapshot()->size(), size_t(5));
 }
 
-void TstAnnotationsDock::cancelledImportChangesNothing()
-{
+void TstAnnotationsDock::cancelledImportChangesNothing() {
     showMain(m_sample);
     importAndWait(m_good, Mode::Replace);
     const auto store = m_main->annotationStore();
@@ -632,10 +625,10 @@ void TstAnnotationsDock::cancelledImportChangesNothing()
 
     QSignalSpy finished(m_main.get(), &MainWindow::annotationImportFinished);
     QVERIFY(m_main->importAnnotations(path, Mode::Replace));
-    auto *progress = m_main->findChild<QProgressDialog *>(QStringLiteral("annotationImportProgress"));
+    auto* progress = m_main->findChild<QProgressDialog*>(QStringLiteral("annotationImportProgress"));
     QVERIFY(progress);
     QVERIFY(!m_main->importAnnotations(m_good, Mode::Replace)); // one import at a time
-    auto *cancel = progress->findChild<QPushButton *>();
+    auto* cancel = progress->findChild<QPushButton*>();
     QVERIFY(cancel);
     cancel->click();
     QVERIFY(finished.wait(kWaitMs));
@@ -645,25 +638,22 @@ void TstAnnotationsDock::cancelledImportChangesNothing()
     QCOMPARE(store->snapshot(), before);
     QVERIFY(m_main->statusBar()->currentMessage().contains(QStringLiteral("cancelled")));
     QVERIFY(!errorBox(m_main.get()));
-    QTRY_VERIFY(!m_main->findChild<QProgressDialog *>(QStringLiteral("annotationImportProgress")));
+    QTRY_VERIFY(!m_main->findChild<QProgressDialog*>(QStringLiteral("annotationImportProgress")));
 }
 
-void TstAnnotationsDock::noSlideNoAnnotationActions()
-{
+void TstAnnotationsDock::noSlideNoAnnotationActions() {
     showMain(m_sample);
-    const char *names[] = {"importAnnotationsAction", "exportAnnotationsAction", "saveAnnotationsAction"};
-    for (const char *name : names)
-        QVERIFY(action(m_main.get(), name)->isEnabled());
+    const char* names[] = {"importAnnotationsAction", "exportAnnotationsAction", "saveAnnotationsAction"};
+    for (const char* name : names) QVERIFY(action(m_main.get(), name)->isEnabled());
     m_main->view()->closeSlide();
-    for (const char *name : names)
-        QVERIFY2(!action(m_main.get(), name)->isEnabled(), name);
+    for (const char* name : names) QVERIFY2(!action(m_main.get(), name)->isEnabled(), name);
     QVERIFY(!m_main->annotationStore());
     QVERIFY(!m_main->view()->annotations());
     QVERIFY(!m_main->importAnnotations(m_good, Mode::Replace));
     QCOMPARE(m_main->annotationsDock()->objectModel()->objectCount(), 0);
     // The View menu shows and hides the dock.
     bool listed = false;
-    for (const QAction *menu : m_main->menuBar()->actions()) {
+    for (const QAction* menu : m_main->menuBar()->actions()) {
         if (menu->menu() && menu->menu()->actions().contains(m_main->annotationsDock()->toggleViewAction()))
             listed = true;
     }
@@ -677,7 +667,8 @@ void TstAnnotationsDock::noSlideNoAnnotationActions()
         const QString locked = m_dir.filePath(QStringLiteral("locked"));
         QVERIFY(QDir().mkpath(locked));
         QVERIFY(QFile::setPermissions(locked, QFile::ReadOwner | QFile::ExeOwner));
-        QVERIFY(AnnotationFiles::whyNotBeside(locked + QStringLiteral("/slide.svs")).contains(QStringLiteral("read-only")));
+        QVERIFY(
+            AnnotationFiles::whyNotBeside(locked + QStringLiteral("/slide.svs")).contains(QStringLiteral("read-only")));
         QFile::setPermissions(locked, QFile::ReadOwner | QFile::WriteOwner | QFile::ExeOwner);
     }
 }

@@ -64,6 +64,12 @@ AnnotationsDock::AnnotationsDock(IrisSlideView *view, QWidget *parent)
     m_classTable->horizontalHeader()->setSectionResizeMode(AnnotationClassModel::ColourColumn, QHeaderView::Fixed);
     m_classTable->horizontalHeader()->resizeSection(AnnotationClassModel::ColourColumn, 28);
     m_classTable->horizontalHeader()->setSectionResizeMode(AnnotationClassModel::NameColumn, QHeaderView::Stretch);
+    // A few classes: their figures sized to fit (the object list, which may be long, is not).
+    for (int column : {AnnotationClassModel::CountColumn, AnnotationClassModel::AreaColumn})
+        m_classTable->horizontalHeader()->setSectionResizeMode(column, QHeaderView::ResizeToContents);
+    // Room for four classes before it scrolls.
+    m_classTable->setMinimumHeight(m_classTable->horizontalHeader()->sizeHint().height()
+        + 4 * m_classTable->verticalHeader()->defaultSectionSize() + 2 * m_classTable->frameWidth());
     // A click on the swatch chooses the class's colour; the check box is the item's own.
     connect(m_classTable, &QTableView::clicked, this, [this](const QModelIndex &index) {
         if (index.column() == AnnotationClassModel::ColourColumn)
@@ -85,8 +91,9 @@ AnnotationsDock::AnnotationsDock(IrisSlideView *view, QWidget *parent)
     auto *split = new QSplitter(Qt::Vertical);
     split->addWidget(m_classTable);
     split->addWidget(m_objectTable);
+    split->setChildrenCollapsible(false);
     split->setStretchFactor(0, 1);
-    split->setStretchFactor(1, 3);
+    split->setStretchFactor(1, 2);
     layout->addWidget(split, 1);
     setWidget(body);
     updateHeadline();

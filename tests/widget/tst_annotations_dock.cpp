@@ -36,6 +36,7 @@
 #include <QtTest/QTest>
 #include <QtWidgets/QApplication>
 #include <QtWidgets/QCheckBox>
+#include <QtWidgets/QColorDialog>
 #include <QtWidgets/QMenu>
 #include <QtWidgets/QMenuBar>
 #include <QtWidgets/QMessageBox>
@@ -381,7 +382,7 @@ void TstAnnotationsDock::classVisibilityAndColourGoToTheStore() {
     QVERIFY(classes->setData(check, Qt::Checked, Qt::CheckStateRole));
     QVERIFY(store->snapshot()->classInfo("Tumor").visible);
     // Through the table's own check box: Space on the current cell, as a user would.
-    QTableView *table = m_main->annotationsDock()->classTable();
+    QTableView* table = m_main->annotationsDock()->classTable();
     table->setFocus();
     table->setCurrentIndex(check);
     QTest::keyClick(table, Qt::Key_Space);
@@ -394,6 +395,24 @@ void TstAnnotationsDock::classVisibilityAndColourGoToTheStore() {
     QCOMPARE(store->snapshot()->classInfo("Tumor").color, (iris::Rgba8{10, 20, 30, 200}));
     waitForDock();
     QCOMPARE(swatch.data(Qt::DecorationRole).value<QColor>(), QColor(10, 20, 30, 200));
+
+    // A click on the swatch opens the colour dialog; its choice goes to the store.
+    auto* chooser = new QTimer(this);
+    chooser->setInterval(20);
+    connect(chooser, &QTimer::timeout, chooser, [chooser] {
+        for (QWidget* w : QApplication::topLevelWidgets()) {
+            if (auto* dialog = qobject_cast<QColorDialog*>(w)) {
+                dialog->setCurrentColor(QColor(40, 50, 60));
+                dialog->accept();
+                chooser->deleteLater();
+                return;
+            }
+        }
+    });
+    chooser->start();
+    table->scrollTo(swatch);
+    QTest::mouseClick(table->viewport(), Qt::LeftButton, {}, table->visualRect(swatch).center());
+    QCOMPARE(store->snapshot()->classInfo("Tumor").color, (iris::Rgba8{40, 50, 60, 255}));
 }
 
 void TstAnnotationsDock::editsFromAnotherThreadAndLazyRows() {

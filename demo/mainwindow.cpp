@@ -2,6 +2,7 @@
 
 #include <QtCore/QDir>
 #include <QtCore/QFileInfo>
+#include <QtCore/QLocale>
 #include <QtCore/QMimeData>
 #include <QtCore/QSettings>
 #include <QtGui/QAction>
@@ -13,11 +14,15 @@
 #include <QtWidgets/QMenuBar>
 #include <QtWidgets/QMessageBox>
 #include <QtWidgets/QProgressBar>
+#include <QtWidgets/QPushButton>
 #include <QtWidgets/QStatusBar>
 
 #include <iris/IrisSlideView.h>
 #include <iris/version.h>
 
+#include "annotationfiles.h"
+#include "annotationimport.h"
+#include "annotationsdock.h"
 #include "associatedimagesdock.h"
 #include "comparewindow.h"
 #include "exportdialog.h"
@@ -32,6 +37,13 @@
 namespace {
 constexpr int kMessageMs = 8000;
 const double kPresets[] = {5, 10, 20, 40};
+
+// "1 annotation", "12,345 annotations" (the demo ships no translations, so no %n plurals).
+QString annotationCount(qsizetype n)
+{
+    return n == 1 ? MainWindow::tr("1 annotation")
+                  : MainWindow::tr("%1 annotations").arg(QLocale().toString(qlonglong(n)));
+}
 } // namespace
 
 MainWindow::MainWindow(QWidget *parent)
@@ -39,6 +51,8 @@ MainWindow::MainWindow(QWidget *parent)
     , m_view(new IrisSlideView)
     , m_properties(new SlidePropertiesDock(this))
     , m_images(new AssociatedImagesDock(this))
+    , m_annotationsDock(new AnnotationsDock(m_view, this))
+    , m_writing(new QProgressBar)
     , m_status(nullptr)
     , m_sample(new SampleSlide(this))
     , m_busy(new QProgressBar)
@@ -49,11 +63,20 @@ MainWindow::MainWindow(QWidget *parent)
     setCentralWidget(m_view);
     addDockWidget(Qt::RightDockWidgetArea, m_properties);
     addDockWidget(Qt::RightDockWidgetArea, m_images);
+    addDockWidget(Qt::RightDockWidgetArea, m_annotationsDock);
+    tabifyDockWidget(m_images, m_annotationsDock);
+    m_images->raise();
 
     m_busy->setRange(0, 0); // busy: iris-sample reports no progress through a pipe
     m_busy->setMaximumWidth(120);
     m_busy->hide();
     statusBar()->addWidget(m_busy);
+    m_writing->setRange(0, 0);
+    m_writing->setMaximumWidth(120);
+    m_writing->setObjectName(QStringLiteral("annotationWriteBusy"));
+    m_writing->hide();
+    statusBar()->addWidget(m_writing);
+    m_writer.setMaxThreadCount(1);
     m_status = new ViewStatus(m_view, statusBar());
 
     createActions();
@@ -95,7 +118,10 @@ MainWindow::MainWindow(QWidget *parent)
     updateActions();
 }
 
-MainWindow::~MainWindow() = default;
+MainWindow::~MainWindow()
+{
+    m_writer.waitForDone();
+}
 
 void MainWindow::createActions()
 {
@@ -120,6 +146,23 @@ void MainWindow::createActions()
 
     m_exportAction = new QAction(tr("&Export as .iris…"), this);
     connect(m_exportAction, &QAction::triggered, this, &MainWindow::exportAsIris);
+
+    m_importAnnotationsAction = new QAction(tr("&Import Annotations…"), this);
+    m_importAnnotationsAction->setObjectName(QStringLiteral("importAnnotationsAction"));
+    m_importAnnotationsAction->setStatusTip(tr("Read QuPath GeoJSON or ASAP XML annotations onto the open slide"));
+    connect(m_importAnnotationsAction, &QAction::triggered, this, &MainWindow::showImportAnnotationsDialog);
+
+    m_exportAnnotationsAction = new QAction(tr("E&xport Annotations…"), this);
+    m_exportAnnotationsAction->setObjectName(QStringLiteral("exportAnnotationsAction"));
+    m_exportAnnotationsAction->setStatusTip(tr("Write the open slide's annotations as QuPath GeoJSON or ASAP XML"));
+    connect(m_exportAnnotationsAction, &QAction::triggered, this, &MainWindow::showExportAnnotationsDialog);
+
+    m_saveAnnotationsAction = new QAction(tr("&Save Annotations Beside Slide"), this);
+    m_saveAnnotationsAction->setObjectName(QStringLiteral("saveAnnotationsAction"));
+    m_saveAnnotationsAction->setShortcut(Qt::CTRL | Qt::SHIFT | Qt::Key_S);
+    m_saveAnnotationsAction->setStatusTip(
+        tr("Write the annotations to <slide>.annotations.geojson, read back when the slide opens again"));
+    connect(m_saveAnnotationsAction, &QAction::triggered, this, [this] { saveAnnotationsBesideSlide(); });
 
     m_quitAction = new QAction(tr("&Quit"), this);
     m_quitAction->setShortcut(QKeySequence::Quit);
@@ -198,6 +241,10 @@ void MainWindow::createMenus()
     file->addSeparator();
     file->addAction(m_closeAction);
     file->addAction(m_exportAction);
+    file->addSeparator();
+    file->addAction(m_importAnnotationsAction);
+    file->addAction(m_exportAnnotationsAction);
+    file->addAction(m_saveAnnotationsAction);
     file->addSeparator();
     file->addAction(m_quitAction);
 
@@ -281,6 +328,7 @@ void MainWindow::createMenus()
     view->addSeparator();
     view->addAction(m_properties->toggleViewAction());
     view->addAction(m_images->toggleViewAction());
+    view->addAction(m_annotationsDock->toggleViewAction());
 
     QMenu *help = menuBar()->addMenu(tr("&Help"));
     help->addAction(tr("&About Iris View"), this, [this] {
@@ -422,6 +470,7 @@ void MainWindow::onSlideOpened(const IrisSlideInfo &info)
 {
     setWindowTitle(tr("%1 — Iris View").arg(QFileInfo(info.path).fileName()));
     m_properties->showSlide(info);
+    attachAnnotations(info);
     // The colour row and the associated images follow: the view announces colorManagementChanged.
     updateActions();
 }
@@ -447,6 +496,7 @@ void MainWindow::onSlideClosed()
     setWindowTitle(tr("Iris View"));
     m_properties->clear();
     m_images->clear();
+    detachAnnotations();
     updateActions();
 }
 
@@ -463,11 +513,209 @@ void MainWindow::updateActions()
     const bool magnifications = has && m_view->objectivePower() > 0;
     m_closeAction->setEnabled(has);
     m_exportAction->setEnabled(has);
+    for (QAction *action : {m_importAnnotationsAction, m_exportAnnotationsAction, m_saveAnnotationsAction})
+        action->setEnabled(has && m_annotations);
     m_fitAction->setEnabled(has);
     m_zoomInAction->setEnabled(has);
     m_zoomOutAction->setEnabled(has);
     for (QAction *action : std::as_const(m_presetActions))
         action->setEnabled(magnifications);
+}
+
+void MainWindow::attachAnnotations(const IrisSlideInfo &info)
+{
+    delete m_import.data(); // an import into the last slide's store: cancelled and joined
+    m_annotations = std::make_shared<iris::AnnotationStore>();
+    m_view->setAnnotations(m_annotations);
+    m_annotationsDock->setStore(m_annotations, info.mppX, info.mppY);
+    const QString slide = m_view->slidePath();
+    if (RecentFiles::isUrl(slide))
+        return;
+    const QString beside = AnnotationFiles::besidePath(slide);
+    if (QFileInfo(beside).isFile())
+        startImport(beside, iris::AnnotationLoader::Mode::Replace, true);
+}
+
+void MainWindow::detachAnnotations()
+{
+    delete m_import.data();
+    m_annotations.reset();
+    m_view->setAnnotations(nullptr);
+    m_annotationsDock->setStore(nullptr, 0, 0);
+}
+
+void MainWindow::showImportAnnotationsDialog()
+{
+    if (!m_annotations)
+        return;
+    QSettings settings;
+    const QString slide = m_view->slidePath();
+    const QString near = RecentFiles::isUrl(slide) ? QDir::homePath() : QFileInfo(slide).absolutePath();
+    const QString dir = settings.value(QStringLiteral("annotations/lastFolder"), near).toString();
+    const QString path = QFileDialog::getOpenFileName(
+        this, tr("Import Annotations"), dir, AnnotationFiles::importFilters().join(QStringLiteral(";;")));
+    if (path.isEmpty())
+        return;
+    settings.setValue(QStringLiteral("annotations/lastFolder"), QFileInfo(path).absolutePath());
+    chooseModeAndImport(path);
+}
+
+bool MainWindow::chooseModeAndImport(const QString &path)
+{
+    if (!m_annotations)
+        return false;
+    auto mode = iris::AnnotationLoader::Mode::Replace;
+    const qsizetype held = qsizetype(m_annotations->snapshot()->size());
+    if (held > 0) {
+        QMessageBox ask(QMessageBox::Question, tr("Import Annotations"),
+            tr("The slide has %1 already.").arg(annotationCount(held)), QMessageBox::NoButton, this);
+        ask.setObjectName(QStringLiteral("annotationImportModeBox"));
+        ask.setInformativeText(tr("Add those of %1 to them, or replace them?").arg(QFileInfo(path).fileName()));
+        QPushButton *append = ask.addButton(tr("&Append"), QMessageBox::AcceptRole);
+        QPushButton *replace = ask.addButton(tr("&Replace"), QMessageBox::DestructiveRole);
+        ask.addButton(QMessageBox::Cancel);
+        ask.setDefaultButton(append);
+        ask.exec();
+        if (ask.clickedButton() == append)
+            mode = iris::AnnotationLoader::Mode::Append;
+        else if (ask.clickedButton() != replace)
+            return false;
+    }
+    return importAnnotations(path, mode);
+}
+
+bool MainWindow::importAnnotations(const QString &path, iris::AnnotationLoader::Mode mode)
+{
+    if (!m_annotations)
+        return false;
+    if (m_import) {
+        statusBar()->showMessage(tr("Annotations are being imported already; wait for that to finish."), kMessageMs);
+        return false;
+    }
+    startImport(path, mode, false);
+    return true;
+}
+
+void MainWindow::startImport(const QString &path, iris::AnnotationLoader::Mode mode, bool automatic)
+{
+    auto *import = new AnnotationImport(m_annotations, path, mode, this);
+    import->setParent(this); // its destructor cancels and joins the loader's thread
+    m_import = import;
+    statusBar()->showMessage(tr("Reading annotations from %1…").arg(QDir::toNativeSeparators(path)));
+    connect(import, &AnnotationImport::finished, this,
+        [this, import, automatic](bool ok, bool cancelled, qsizetype objects, const QString &message) {
+            onImportFinished(import, automatic, ok, cancelled, objects, message);
+        });
+}
+
+void MainWindow::onImportFinished(
+    AnnotationImport *import, bool automatic, bool ok, bool cancelled, qsizetype objects, const QString &message)
+{
+    const QString path = import->path();
+    const QString name = QDir::toNativeSeparators(path);
+    if (m_import == import)
+        m_import = nullptr;
+    import->deleteLater();
+    if (ok) {
+        statusBar()->showMessage(automatic ? tr("Restored %1 from %2").arg(annotationCount(objects), name)
+                                           : tr("Imported %1 from %2").arg(annotationCount(objects), name),
+            kMessageMs);
+    } else if (cancelled) {
+        statusBar()->showMessage(tr("Import of %1 cancelled; the annotations are as they were.").arg(name), kMessageMs);
+    } else {
+        statusBar()->showMessage(tr("Cannot import %1: %2").arg(name, message), kMessageMs);
+        showAnnotationError(tr("Cannot import annotations"),
+            tr("%1 could not be imported; the annotations are as they were.").arg(name), message);
+    }
+    Q_EMIT annotationImportFinished(path, ok, cancelled, message);
+}
+
+void MainWindow::showExportAnnotationsDialog()
+{
+    if (!m_annotations)
+        return;
+    QSettings settings;
+    const QString slide = m_view->slidePath();
+    QString suggested;
+    if (RecentFiles::isUrl(slide)) {
+        suggested = settings.value(QStringLiteral("annotations/lastFolder"), QDir::homePath()).toString()
+            + QStringLiteral("/annotations.geojson");
+    } else {
+        const QFileInfo info(slide);
+        suggested = settings.value(QStringLiteral("annotations/lastFolder"), info.absolutePath()).toString()
+            + QLatin1Char('/') + info.completeBaseName() + QStringLiteral(".geojson");
+    }
+    QString filter = AnnotationFiles::geoJsonFilter();
+    QString path = QFileDialog::getSaveFileName(this, tr("Export Annotations"), suggested,
+        AnnotationFiles::exportFilters().join(QStringLiteral(";;")), &filter);
+    if (path.isEmpty())
+        return;
+    path = AnnotationFiles::exportName(path, filter);
+    settings.setValue(QStringLiteral("annotations/lastFolder"), QFileInfo(path).absolutePath());
+    exportAnnotations(path);
+}
+
+bool MainWindow::exportAnnotations(const QString &path)
+{
+    if (!m_annotations)
+        return false;
+    startWrite(path, AnnotationFiles::formatOfName(path).value_or(iris::AnnotationFormat::GeoJson),
+        tr("Cannot export annotations"));
+    return true;
+}
+
+bool MainWindow::saveAnnotationsBesideSlide()
+{
+    if (!m_annotations)
+        return false;
+    const QString slide = m_view->slidePath();
+    const QString why = AnnotationFiles::whyNotBeside(slide);
+    if (!why.isEmpty()) {
+        statusBar()->showMessage(why, kMessageMs);
+        showAnnotationError(tr("Cannot save annotations beside the slide"), why);
+        return false;
+    }
+    startWrite(AnnotationFiles::besidePath(slide), iris::AnnotationFormat::GeoJson,
+        tr("Cannot save annotations beside the slide"));
+    return true;
+}
+
+void MainWindow::startWrite(const QString &path, iris::AnnotationFormat format, const QString &failureTitle)
+{
+    // The snapshot as it is now: edits made while it is written are not in the file.
+    auto snapshot = m_annotations->snapshot();
+    const qsizetype objects = qsizetype(snapshot->size());
+    ++m_writes;
+    m_writing->show();
+    statusBar()->showMessage(tr("Writing %1 to %2…").arg(annotationCount(objects), QDir::toNativeSeparators(path)));
+    m_writer.start([this, snapshot = std::move(snapshot), path, format, failureTitle, objects] {
+        const QString error = AnnotationFiles::write(*snapshot, path, format);
+        QMetaObject::invokeMethod(
+            this, [this, path, objects, failureTitle, error] { onWritten(path, objects, failureTitle, error); },
+            Qt::QueuedConnection);
+    });
+}
+
+void MainWindow::onWritten(const QString &path, qsizetype objects, const QString &failureTitle, const QString &error)
+{
+    m_writing->setVisible(--m_writes > 0);
+    if (error.isEmpty()) {
+        statusBar()->showMessage(
+            tr("Saved %1 to %2").arg(annotationCount(objects), QDir::toNativeSeparators(path)), kMessageMs);
+    } else {
+        statusBar()->showMessage(error, kMessageMs);
+        showAnnotationError(failureTitle, error);
+    }
+    Q_EMIT annotationsWritten(path, error.isEmpty(), error);
+}
+
+void MainWindow::showAnnotationError(const QString &title, const QString &text, const QString &details)
+{
+    auto *box = new QMessageBox(QMessageBox::Warning, title, text, QMessageBox::Ok, this);
+    box->setObjectName(QStringLiteral("annotationErrorBox"));
+    box->setInformativeText(details);
+    box->setAttribute(Qt::WA_DeleteOnClose);
+    box->open();
 }
 
 QString MainWindow::droppedSlide(const QMimeData *mime)

@@ -774,6 +774,9 @@ void quietDcmtk() {
 
 // What a local instance's frames are read through: the parsed file and its pixel items.
 struct DicomSource::File {
+    // The file as opened: DCMTK reopens it by this name to load pixel data (declared first, so
+    // it closes after DCMTK is done with it).
+    std::unique_ptr<PinnedFile> pinned;
     std::unique_ptr<DcmFileFormat> file;
     // Encapsulated: the fragments of frame f are items[firstItem[f] .. firstItem[f + 1]).
     std::vector<DcmPixelItem*> items;
@@ -878,8 +881,9 @@ Expected<Parsed> parseFile(const std::string& path) {
     p.file = std::make_unique<DicomSource::File>();
     const std::string name = "DICOM file '" + fileNameOf(path) + "'";
     p.file->file = std::make_unique<DcmFileFormat>();
-    const OFCondition c =
-        p.file->file->loadFile(OFFilename(path.c_str()), EXS_Unknown, EGL_noChange, kMaxReadLength, ERM_fileOnly);
+    p.file->pinned = std::make_unique<PinnedFile>(path);
+    const OFCondition c = p.file->file->loadFile(OFFilename(p.file->pinned->name().c_str()), EXS_Unknown, EGL_noChange,
+                                                 kMaxReadLength, ERM_fileOnly);
     if (c.bad()) {
         return Result(Status::CorruptData, "Cannot open " + name + ": DCMTK cannot parse it (" + c.text() + ")");
     }

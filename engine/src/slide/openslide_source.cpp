@@ -90,9 +90,16 @@ Result tileByteCountsFit(const std::string& path, const std::string& name) {
 
 Expected<std::unique_ptr<SlideSource>> OpenSlideSource::open(const std::string& path) {
     const std::string name = std::filesystem::path(path).filename().string();
-    if (Result r = tileByteCountsFit(path, name); !r.ok()) return r;
-    const char* vendor = openslide_detect_vendor(path.c_str());
-    openslide_t* osr = openslide_open(path.c_str());
+    // TIFF-based formats (Aperio, generic TIFF, Hamamatsu NDPI, Philips, Ventana, Leica, Trestle)
+    // are found by their contents: they are opened through the pinned name, so that tiles are
+    // read from this file even after it is deleted or replaced. Formats found by their names
+    // (MIRAX's .mrxs with its folder, Hamamatsu's .vms) keep the path.
+    auto pinned = std::make_unique<PinnedFile>(path);
+    if (!pinned->isTiff()) pinned.reset();
+    const std::string opened = pinned ? pinned->name() : path;
+    if (Result r = tileByteCountsFit(opened, name); !r.ok()) return r;
+    const char* vendor = openslide_detect_vendor(opened.c_str());
+    openslide_t* osr = openslide_open(opened.c_str());
     if (!osr) {
         return Result(Status::UnsupportedFormat,
                       "Cannot open '" + name + "': not a slide format OpenSlide " +
@@ -163,7 +170,7 @@ Expected<std::unique_ptr<SlideSource>> OpenSlideSource::open(const std::string& 
         for (; *names; ++names) info.associatedImages.emplace_back(*names);
     }
     fillLevelPhysics(info);
-    return std::unique_ptr<SlideSource>(new OpenSlideSource(osr, std::move(info)));
+    return std::unique_ptr<SlideSource>(new OpenSlideSource(osr, std::move(info), std::move(pinned)));
 }
 
 OpenSlideSource::~OpenSlideSource() {

@@ -19,9 +19,13 @@ public:
     Expected<Image> readAssociatedImage(const std::string& name) override;
 
 private:
-    OpenSlideSource(openslide_t* osr, SlideInfo info) : osr_(osr), info_(std::move(info)) {}
+    OpenSlideSource(openslide_t* osr, SlideInfo info, std::unique_ptr<PinnedFile> pinned)
+        : pinned_(std::move(pinned)), osr_(osr), info_(std::move(info)) {}
     Result checkError(const char* what) const;
 
+    // A TIFF-based slide as opened (OpenSlide opens more handles by name as threads read);
+    // null for formats OpenSlide finds by their names (MIRAX, VMS).
+    std::unique_ptr<PinnedFile> pinned_;
     openslide_t* osr_; // thread-safe per OpenSlide's documentation
     SlideInfo info_;
 };

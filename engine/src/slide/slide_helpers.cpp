@@ -2,6 +2,9 @@
 // table in slide_source.cpp so that one reader can be built on its own (tests/fuzz).
 #include <cstring>
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include "slide/slide_source.h"
 
 namespace iris {
@@ -48,6 +51,21 @@ void padTileEdges(uint8_t* rgba, int validWidth, int validHeight) {
     }
     for (int y = validHeight; y < kTileSize; ++y)
         std::memcpy(rgba + y * stride, rgba + (validHeight - 1) * stride, stride);
+}
+
+PinnedFile::PinnedFile(const std::string& path) : name_(path) {
+    fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd_ < 0) return; // the library's own open will say why
+    unsigned char head[4] = {0, 0, 0, 0};
+    if (::pread(fd_, head, 4, 0) == 4)
+        tiff_ = (head[0] == 'I' && head[1] == 'I' && (head[2] == 42 || head[2] == 43) && head[3] == 0) ||
+                (head[0] == 'M' && head[1] == 'M' && head[2] == 0 && (head[3] == 42 || head[3] == 43));
+    const std::string proc = "/proc/self/fd/" + std::to_string(fd_);
+    if (::access(proc.c_str(), R_OK) == 0) name_ = proc;
+}
+
+PinnedFile::~PinnedFile() {
+    if (fd_ >= 0) ::close(fd_);
 }
 
 } // namespace iris

@@ -95,4 +95,27 @@ void padTileEdges(uint8_t* rgba, int validWidth, int validHeight);
 // Fills a tile with the visible "could not be decoded" placeholder (grey with red diagonals).
 void fillFailedTilePlaceholder(uint8_t* rgba);
 
+// A file held open for the life of a source, and a name for it that libraries which reopen
+// files by name can use — DCMTK loads deferred pixel data by reopening the file, OpenSlide
+// opens more TIFF handles as threads need them: /proc/self/fd/N, which keeps naming the file
+// that was opened after it is deleted or replaced (a scanner re-exporting a slide, a share
+// cleaned up), as the readers that keep their own descriptor already do. Where that name cannot
+// be opened (no /proc) it is the path itself, and the library sees what the path names then.
+class PinnedFile {
+public:
+    explicit PinnedFile(const std::string& path);
+    ~PinnedFile();
+    PinnedFile(const PinnedFile&) = delete;
+    PinnedFile& operator=(const PinnedFile&) = delete;
+    // The name to hand the library.
+    const std::string& name() const { return name_; }
+    // Whether the file's first bytes are a TIFF or BigTIFF header.
+    bool isTiff() const { return tiff_; }
+
+private:
+    int fd_ = -1;
+    bool tiff_ = false;
+    std::string name_;
+};
+
 } // namespace iris

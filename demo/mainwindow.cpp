@@ -129,6 +129,12 @@ void MainWindow::createActions()
     m_openAction->setShortcut(QKeySequence::Open);
     connect(m_openAction, &QAction::triggered, this, &MainWindow::showOpenDialog);
 
+    m_openFolderAction = new QAction(tr("Open DICOM &Folder…"), this);
+    m_openFolderAction->setObjectName(QStringLiteral("openFolderAction"));
+    m_openFolderAction->setShortcut(QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_O));
+    m_openFolderAction->setStatusTip(tr("Open a DICOM whole-slide image series: the folder holding its files"));
+    connect(m_openFolderAction, &QAction::triggered, this, &MainWindow::showOpenFolderDialog);
+
     // DICOMweb: studies and series found through QIDO-RS (serverbrowser.h).
     m_serverAction = new QAction(tr("Open from Ser&ver…"), this);
     m_serverAction->setObjectName(QStringLiteral("openFromServerAction"));
@@ -233,6 +239,7 @@ void MainWindow::createMenus()
 {
     QMenu *file = menuBar()->addMenu(tr("&File"));
     file->addAction(m_openAction);
+    file->addAction(m_openFolderAction);
     QMenu *recent = file->addMenu(tr("Open &Recent"));
     m_recent = new RecentFiles(recent, this);
     connect(m_recent, &RecentFiles::openRequested, this, [this](const QString &path) { openSlide(path, true); });
@@ -456,6 +463,26 @@ void MainWindow::showOpenDialog()
         return;
     settings.setValue(QStringLiteral("lastFolder"), QFileInfo(path).absolutePath());
     openSlide(path, true);
+}
+
+void MainWindow::showOpenFolderDialog()
+{
+    QSettings settings;
+    const QString dir = settings.value(QStringLiteral("lastFolder"), QDir::homePath()).toString();
+    // Window-modal and not blocking, so that the dialog is one of the window's children (tests
+    // find and answer it); Qt's own dialog where the platform has none.
+    auto *dialog = new QFileDialog(this, tr("Open DICOM Series Folder"), dir);
+    dialog->setObjectName(QStringLiteral("openFolderDialog"));
+    dialog->setFileMode(QFileDialog::Directory);
+    dialog->setOption(QFileDialog::ShowDirsOnly);
+    dialog->setAttribute(Qt::WA_DeleteOnClose);
+    connect(dialog, &QFileDialog::fileSelected, this, [this](const QString &folder) {
+        if (folder.isEmpty())
+            return;
+        QSettings().setValue(QStringLiteral("lastFolder"), QFileInfo(folder).absolutePath());
+        openSlide(folder, true);
+    });
+    dialog->open();
 }
 
 void MainWindow::exportAsIris()

@@ -52,6 +52,8 @@ public Q_SLOTS:
     bool openSlide(const QString &path, bool userInitiated = true);
     void openSample();
     void showOpenDialog();
+    // A DICOM series is a folder of files (a level or more each): chosen as a folder.
+    void showOpenFolderDialog();
     // File › Open from Server…: the QIDO-RS browser (made on first use, kept for the session).
     ServerBrowser *showServerBrowser();
     void exportAsIris();
@@ -143,6 +145,7 @@ private:
     OrientationActions *m_orientation = nullptr;
 
     QAction *m_openAction = nullptr;
+    QAction *m_openFolderAction = nullptr;
     QAction *m_sampleAction = nullptr;
     QAction *m_serverAction = nullptr;
     ServerBrowser *m_serverBrowser = nullptr;

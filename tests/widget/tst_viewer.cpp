@@ -21,6 +21,7 @@
 #include <QtTest/QSignalSpy>
 #include <QtTest/QTest>
 #include <QtWidgets/QApplication>
+#include <QtWidgets/QFileDialog>
 #include <QtWidgets/QMenu>
 #include <QtWidgets/QToolButton>
 
@@ -83,6 +84,7 @@ private Q_SLOTS:
     void compareStartsWhereTheViewWasAndLinks();
     void compareLinkToggleCrosshairAndCurrentView();
     void compareHoldsFourSlidesTwoByTwo();
+    void openDicomFolderFromTheFileMenu();
 
 private:
     // Shows the main window and opens `path` in it once its view is on screen.
@@ -155,6 +157,31 @@ void TstViewer::waitForSlides(CompareWindow *window)
             return true;
         }(),
         20000);
+}
+
+// Issue 15: File › Open DICOM Folder… opens a series given as its folder (the shared test data's
+// two-file DICOM WSI), and the folder joins the recent files.
+void TstViewer::openDicomFolderFromTheFileMenu()
+{
+    const QString boxes = testDataSlide(QStringLiteral("unsupported/dicom-boxes"));
+    if (boxes.isEmpty())
+        QSKIP("the shared test data's dicom-boxes series is not present");
+    showMain(m_sample);
+    auto *action = m_main->findChild<QAction *>(QStringLiteral("openFolderAction"));
+    QVERIFY(action);
+    QCOMPARE(action->shortcut(), QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_O));
+    action->trigger();
+    QFileDialog *dialog = nullptr;
+    QTRY_VERIFY((dialog = m_main->findChild<QFileDialog *>(QStringLiteral("openFolderDialog"))) != nullptr);
+    QCOMPARE(dialog->fileMode(), QFileDialog::Directory);
+    QSignalSpy opened(m_main->view(), &IrisSlideView::slideOpened);
+    dialog->setDirectory(QFileInfo(boxes).absolutePath());
+    dialog->selectFile(boxes);
+    QVERIFY(QMetaObject::invokeMethod(dialog, "accept")); // protected in QFileDialog, a slot of QDialog
+    QVERIFY(opened.count() > 0 || opened.wait(20000));
+    QCOMPARE(QFileInfo(m_main->view()->slidePath()).canonicalFilePath(), QFileInfo(boxes).canonicalFilePath());
+    QVERIFY(m_main->view()->hasSlide());
+    QCOMPARE(m_main->view()->slideInfo().vendor.isEmpty(), false);
 }
 
 void TstViewer::recentFilesRememberOrientation()

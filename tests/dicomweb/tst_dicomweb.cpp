@@ -8,12 +8,15 @@
 //     TLS with a CA the suite makes with openssl (trusted: works; untrusted: refused), URLs that
 //     are refused before any request;
 //   * faults, through a proxy that misbehaves on purpose (fault_proxy.h): a truncated multipart
-//     body, a wrong content type, a 404 frame (the placeholder is drawn), a slow server (views
-//     keep moving, superseded requests are dropped), the server stopped in the middle of a walk
+//     body, a wrong content type, a 404 frame (the placeholder is drawn), a slow server (one that
+//     holds every answer back: views keep moving, superseded requests are dropped), the server stopped in the middle of a walk
 //     (clear error, the engine stays usable and recovers when the server is back), a server
 //     answering 503 while views keep asking (the source backs off instead of hammering it), and an
 //     instance in a transfer syntax the engine does not decode.
-// Every wait is an engine event (waitForFrame) or bounded by a deadline; nothing sleeps a guess.
+// Every wait is an engine event (waitForFrame) or a condition polled under a generous deadline;
+// nothing sleeps a guess, and no assertion depends on how fast the machine is (the suite runs on
+// a loaded 2-core CI machine too): where a test is about timing, it checks an order of events
+// (answers held back while the views move) or a count, never a wall-clock bound.
 #include <QtTest>
 
 #include <chrono>
@@ -476,13 +479,16 @@ private slots:
         e_->close();
     }
 
-    // A slow server (every frame answered 150 ms late): the API never waits, the views move on,
-    // and what a superseded view still had queued is dropped; the last view renders exactly.
+    // A slow server, at its slowest: it answers no frame at all while the views move. The API
+    // never waits for it (the walk ends while every frame answer is still held back: had a call
+    // waited, it would have waited for the proxy's 60 s hold and seen answers), and what a
+    // superseded view still had queued is dropped; once the server answers, the last view
+    // renders exactly.
     void slowServerViewsKeepMoving() {
         std::string why;
         auto proxy = FaultProxy::start(server_->port(), &why);
         QVERIFY2(proxy, why.c_str());
-        proxy->setRule({.fault = FaultProxy::Fault::Delay, .delayMs = 150, .fromFrame = 1});
+        proxy->setRule({.fault = FaultProxy::Fault::Hold, .fromFrame = 2});
         std::string url = sampleUrl_;
         url.replace(url.find(std::to_string(server_->port())), std::to_string(server_->port()).size(),
                     std::to_string(proxy->port()));
@@ -490,29 +496,29 @@ private slots:
         const iris::View last = viewWithOrigin(5000, 3000, 1, kW, kH);
         auto expected = render(sampleJpeg_.string(), last, &why);
         QVERIFY2(expected, why.c_str());
-        QVERIFY(e_->open(url).ok());
+        QVERIFY(e_->open(url).ok()); // frame 1 of each instance passes: open succeeds
         proxy->resetCount();
         // A walk along level 0, one field after the other, without waiting for any.
         int walkTiles = 0;
-        double slowestMs = 0;
         for (int i = 0; i < 10; ++i) {
-            const auto t0 = Clock::now();
             e_->setView(viewWithOrigin(400.0 + 450 * i, 300.0 + 250 * i, 1, kW, kH));
-            slowestMs = std::max(slowestMs, std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
             walkTiles += 3 * 3; // the visible level-0 tiles of each field, at least
         }
         e_->setView(last);
+        const int answeredDuringWalk = proxy->frameAnswers();
+        proxy->setRule({}); // the server answers from now on
         auto frame = renderView(*e_.engine, last, kW, kH, std::chrono::seconds(60), &why);
         QVERIFY2(frame, why.c_str());
         const DiffStats st = compareImages(frame->image, expected->image);
         QVERIFY2(st.differing == 0,
                  saveFailureArtefacts("dicomweb.slow", frame->image, expected->image, nullptr).c_str());
-        const int requests = proxy->frameRequests();
-        qInfo("slowest setView %.2f ms; %d frame requests for a walk over %d+ tiles and the last view", slowestMs,
-              requests, walkTiles);
-        QVERIFY2(slowestMs < 100, "an API call waited on the network");
+        const int requests = proxy->frameRequests(), frames = proxy->framesAsked();
+        qInfo("%d frame answers during the walk; %d frame requests for %d frames for a walk over %d+ tiles and the "
+              "last view",
+              answeredDuringWalk, requests, frames, walkTiles);
+        QVERIFY2(answeredDuringWalk == 0, "an API call waited on the network");
         // Each field's own tiles (visible and perimeter at two levels) alone are more than this.
-        QVERIFY2(requests < walkTiles + 60, "superseded views' requests were not dropped");
+        QVERIFY2(frames < walkTiles + 60, "superseded views' requests were not dropped");
         const std::string lines = e_.endTest();
         QVERIFY2(lines.empty(), lines.c_str());
         e_->close();
@@ -586,8 +592,10 @@ private slots:
         const iris::View nudged = viewWithOrigin(3001, 1500, 1, kW, kH); // the same tiles
         auto expected = render(sampleJpeg_.string(), view, &why);
         QVERIFY2(expected, why.c_str());
-        QVERIFY(e_->open(url).ok()); // frame 1 of each instance passes: open succeeds
+        // Down before the slide is opened, so that no frame is ever answered (an answer ends
+        // the back-off): frame 1 of each instance passes, so open succeeds.
         proxy->setRule({.fault = FaultProxy::Fault::Unavailable, .fromFrame = 2});
+        QVERIFY(e_->open(url).ok());
         proxy->resetCount();
         int views = 0;
         const auto downUntil = Clock::now() + std::chrono::seconds(6);
@@ -596,6 +604,11 @@ private slots:
             (void)e_->waitForFrame(std::chrono::milliseconds(50));
         }
         const int requests = proxy->frameRequests();
+        // The failures are reported (each frame's third attempt ends about 1.3 s in; on a
+        // loaded machine the loaders may read it later: wait for it, bounded).
+        const auto reportDeadline = Clock::now() + std::chrono::seconds(30);
+        while (e_->error().ok() && Clock::now() < reportDeadline)
+            (void)e_->waitForFrame(std::chrono::milliseconds(100));
         const iris::Result err = e_->error();
         qInfo("server unavailable for 6 s: %d views, %d frame requests; %s", views, requests, describe(err).c_str());
         QCOMPARE(err.status(), iris::Status::IoError);
@@ -615,8 +628,10 @@ private slots:
         proxy->setRule({});
         e_->clearError();
         const auto back = Clock::now();
-        iris::Result drawn(iris::Status::Timeout, "no complete frame in 20 s");
-        while (Clock::now() - back < std::chrono::seconds(20)) {
+        // Bounded generously (the longest back-off is 8 s): what is checked is that it loads
+        // with no view change at all, not how fast a loaded machine gets there.
+        iris::Result drawn(iris::Status::Timeout, "no complete frame in 60 s");
+        while (Clock::now() - back < std::chrono::seconds(60)) {
             drawn = e_->waitForFrame(std::chrono::milliseconds(200));
             if (drawn.ok()) break;
             e_->clearError(); // a read that failed before the server was back: wait on
@@ -627,11 +642,11 @@ private slots:
         auto frame = e_->readFrame();
         QVERIFY(frame.ok());
         const double recoveredS = std::chrono::duration<double>(Clock::now() - back).count();
-        qInfo("the field loaded %.2f s after the server was back, with no view change", recoveredS);
+        qInfo("the field loaded %.2f s after the server was back (the longest back-off is 8 s), with no view change",
+              recoveredS);
         const DiffStats st = compareImages(frame->image, expected->image);
         QVERIFY2(st.differing == 0,
                  saveFailureArtefacts("dicomweb.backoff", frame->image, expected->image, nullptr).c_str());
-        QVERIFY2(recoveredS < 8 + 5, "the failed field waited longer than the longest back-off");
         QVERIFY2(e_->error().ok(), describe(e_->error()).c_str());
         const std::string lines = e_.endTest(TestEngine::ErrorLines::Show);
         QVERIFY2(lines.empty(), lines.c_str());

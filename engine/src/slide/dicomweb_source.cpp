@@ -349,10 +349,14 @@ void DicomWebSource::prefetch(const std::vector<TileAddress>& tiles, std::functi
     std::lock_guard lock(mutex_);
     if (abandoned_) return;
     const uint64_t batch = ++batch_;
-    // While the server is backed off a failed frame stays failed: the loaders read its failure
-    // (reported, then forgotten: the next view that needs it asks again, sent when the back-off
-    // ends). Queued again at once, it would wait unreported for the end of the back-off.
-    const bool quiet = Clock::now() < quietUntil_;
+    // While the server fails (it has not answered since a failure that may pass) a failed frame
+    // stays failed: the loaders read its failure (reported, then forgotten: the next view that
+    // needs it asks again, sent when the back-off ends). Queued again at once, it would wait
+    // unreported for the end of the back-off; and queued again by each view change before a
+    // loader read it (views change faster than a loaded machine's loaders may get to a
+    // failure; a back-off can end meanwhile), it would never be reported at all. Once the server
+    // has answered again, a failure seen while it was down is stale: the frame is asked again.
+    const bool failing = failStreak_ > 0;
     std::vector<FrameKey> order;
     for (const TileAddress& t : tiles) {
         for (const uint64_t cell : cellsOfTile(t.level, t.tx, t.ty)) {
@@ -365,7 +369,7 @@ void DicomWebSource::prefetch(const std::vector<TileAddress>& tiles, std::functi
             f.wantedBy = batch;
             if (inserted || f.state == Frame::State::Queued) {
                 order.push_back(key);
-            } else if (f.state == Frame::State::Failed && !quiet) { // needed again: try again
+            } else if (f.state == Frame::State::Failed && !failing) { // needed again: try again
                 f.state = Frame::State::Queued;
                 f.error = {};
                 f.attempts = 0;

@@ -108,7 +108,8 @@ private:
     // connection, a timeout, 408/429/5xx): until quietUntil_ no request is sent (those due are
     // sent then), so a server that is down sees a round of at most one request per connection per
     // back-off, however many frames and views ask. Each failure seen after a quiet period ended
-    // doubles the next one (failStreak_), up to kMaxQuiet; any answer resets both.
+    // doubles the next one (failStreak_), up to kMaxQuiet; any answer resets both. While
+    // failStreak_ > 0 a prefetch leaves failed frames failed, so that their failure is read.
     int failStreak_ = 0;
     net::HttpClient::Clock::time_point quietUntil_{};
 

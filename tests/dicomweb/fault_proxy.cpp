@@ -79,6 +79,38 @@ std::string header(const std::string& head, const std::string& name) {
     return {};
 }
 
+// A multipart body (boundary from `type`) with its parts' order changed: the last part dropped
+// (`drop`), or the first two swapped. Unchanged when it has fewer parts than that needs.
+std::string reshuffleParts(const std::string& type, const std::string& body, bool drop) {
+    const size_t b = type.find("boundary=");
+    if (b == std::string::npos) return body;
+    std::string boundary = type.substr(b + 9);
+    if (const size_t semi = boundary.find(';'); semi != std::string::npos) boundary.resize(semi);
+    if (boundary.size() >= 2 && boundary.front() == '"') boundary = boundary.substr(1, boundary.size() - 2);
+    const std::string delimiter = "--" + boundary;
+    // Each part from its delimiter line to the CRLF before the next delimiter.
+    std::vector<std::string> parts;
+    size_t at = body.find(delimiter);
+    const size_t first = at;
+    size_t end = std::string::npos;
+    while (at != std::string::npos) {
+        const size_t next = body.find("\r\n" + delimiter, at + delimiter.size());
+        if (next == std::string::npos) break;
+        if (body.compare(at + delimiter.size(), 2, "--") == 0) break; // the closing delimiter
+        parts.push_back(body.substr(at, next - at));
+        at = next + 2;
+        end = at;
+    }
+    if (first == std::string::npos || end == std::string::npos || parts.size() < 2) return body;
+    if (drop)
+        parts.pop_back();
+    else
+        std::swap(parts[0], parts[1]);
+    std::string out = body.substr(0, first);
+    for (const std::string& p : parts) out += p + "\r\n";
+    return out + body.substr(end);
+}
+
 } // namespace
 
 std::unique_ptr<FaultProxy> FaultProxy::start(int upstreamPort, std::string* why, const Tls* tls) {
@@ -253,6 +285,10 @@ void FaultProxy::serve(int client) {
             status = 503;
             type = "text/plain";
             body = "Service Unavailable";
+        } else if (faulty && r.fault == Fault::RefuseLists && list) {
+            status = 400;
+            type = "application/json";
+            body = "{\"HttpStatus\": 400, \"Message\": \"Bad request\"}";
         } else {
             const std::string url = "http://127.0.0.1:" + std::to_string(upstream_) + path;
             curl_slist* headers = nullptr;
@@ -275,6 +311,8 @@ void FaultProxy::serve(int client) {
             type = ct ? ct : "";
             if (faulty && r.fault == Fault::Truncate) body.resize(body.size() * 2 / 3);
             if (faulty && r.fault == Fault::WrongType) type = "text/html; charset=utf-8";
+            if (faulty && list && (r.fault == Fault::DropPart || r.fault == Fault::SwapParts))
+                body = reshuffleParts(type, body, r.fault == Fault::DropPart);
         }
         std::string answer = "HTTP/1.1 " + std::to_string(status) +
                              " Proxied\r\nContent-Length: " + std::to_string(body.size()) +

@@ -1,7 +1,8 @@
 // A small HTTP/1.1 proxy on 127.0.0.1 in front of the suite's Orthanc, with plain sockets (and
 // OpenSSL when it terminates TLS), that misbehaves on purpose for WADO-RS frame requests (…/frames/<n> and frame lists
 // …/frames/<a>,<b>,…): it holds answers back until the test lets them go (a server that does not answer yet), cuts the
-// multipart body short, gives a wrong Content-Type, or answers 404 or 503; or answers any request of a path (QIDO-RS searches) with a body of
+// multipart body short, gives a wrong Content-Type, drops or swaps parts of a frame list's answer, answers 404 or 503,
+// or refuses frame lists (400, as some servers do); or answers any request of a path (QIDO-RS searches) with a body of
 // the test's choosing. Everything else passes unchanged. It keeps connections alive like a server (one thread per
 // client connection) and fetches from upstream with libcurl. It counts the frame requests it saw, the frames they
 // asked for and the frame answers it sent, so that a test can tell how many a walk cost and whether it batched.
@@ -32,6 +33,9 @@ public:
         WrongType,   // Content-Type: text/html
         NotFound,    // HTTP 404
         Unavailable, // HTTP 503 (a server that is down behind a gateway), answered at once
+        DropPart,    // a frame list's answer loses its last part (one part fewer than frames asked for)
+        SwapParts,   // a frame list's answer has its first two parts swapped (each still names its frame)
+        RefuseLists, // HTTP 400 for every frame list; single frames pass
         Replace,     // any request whose path holds `pathContains` gets `status`, `type` and `body` (a lying server)
     };
     struct Rule {

@@ -7,6 +7,9 @@
 //   * credentials and transport: basic authentication (a wrong password is a clear 401 error),
 //     TLS with a CA the suite makes with openssl (trusted: works; untrusted: refused), URLs that
 //     are refused before any request;
+//   * frames come in frame lists (…/frames/a,b,c, many a request: counted by a proxy), and a
+//     server that lies about lists (parts missing or swapped, a broken answer) or refuses them
+//     (400, 404) still gives every tile exactly, one frame a request;
 //   * faults, through a proxy that misbehaves on purpose (fault_proxy.h): a truncated multipart
 //     body, a wrong content type, a 404 frame (the placeholder is drawn), a slow server (one that
 //     holds every answer back: views keep moving, superseded requests are dropped), the server stopped in the middle of a walk
@@ -160,6 +163,13 @@ class TestDicomWeb : public QObject {
     std::string sampleUrl_, cmu240Url_, cmuJp2kUrl_;
     TestEngine e_;
 
+    // `url` (on the suite's Orthanc) reached through `proxy` instead.
+    std::string through(const FaultProxy& proxy, std::string url) const {
+        const std::string port = ":" + std::to_string(server_->port()) + "/";
+        url.replace(url.find(port), port.size(), ":" + std::to_string(proxy.port()) + "/");
+        return url;
+    }
+
     // Renders `view` of `path` (a folder or a URL) through the suite's engine.
     std::optional<iris::Frame> render(const std::string& path, const iris::View& view, std::string* why) {
         const iris::Result r = e_->open(path);
@@ -278,20 +288,43 @@ private slots:
             };
             QCOMPARE(value(a), value(b));
         }
+        // The tiles through a proxy that passes everything on and counts the requests. (Not
+        // the metadata: the ICC profile's BulkDataURI names the server itself, which a source
+        // opened through the proxy does not fetch, another origin.)
+        auto proxy = FaultProxy::start(server_->port(), &why);
+        QVERIFY2(proxy, why.c_str());
+        web = openSource(through(*proxy, url), {}, &why);
+        QVERIFY2(web, why.c_str());
+        proxy->resetCount(); // open's own requests: frame 1 of each instance, one a request
         CHECKED(expectSameTiles(*web, *local, QTest::currentDataTag()));
+        // The hinted frames came in frame lists (…/frames/a,b,c), many a request.
+        const int requests = proxy->frameRequests(), lists = proxy->listRequests(), frames = proxy->framesAsked();
+        qInfo("%d frames in %d requests (%d of them frame lists)", frames, requests, lists);
+        QVERIFY2(lists > 0, "no frame list was asked for");
+        QVERIFY2(frames >= 4 * requests, "fewer than 4 frames a request on average: the frames were not batched");
     }
 
     // Through the Engine (prefetch batches, the loaders' held claims): frames identical to the
     // local series', at 1:1 and at a level's downsample, for each frame size.
+    // The frames come in frame lists (counted by a proxy that passes everything on).
     void engineMatchesLocal() {
+        std::string why;
+        auto proxy = FaultProxy::start(server_->port(), &why);
+        QVERIFY2(proxy, why.c_str());
         e_.beginTest();
-        CHECKED(expectSameFrame(sampleJpeg_, sampleUrl_, viewWithOrigin(1234, 987, 1, kW, kH), "sample"));
-        CHECKED(expectSameFrame(sampleJpeg_, sampleUrl_, viewWithOrigin(4000, 2500, 1, kW, kH), "sample"));
-        CHECKED(expectSameFrame(sampleJpeg_, sampleUrl_, viewWithOrigin(512, 256, 4, kW, kH), "sample"));
-        CHECKED(expectSameFrame(cmu240_, cmu240Url_, viewWithOrigin(700, 900, 1, kW, kH), "cmu-240"));
-        CHECKED(expectSameFrame(cmuJp2k_, cmuJp2kUrl_, viewWithOrigin(700, 900, 1, kW, kH), "cmu-jp2k"));
-        const std::string why = e_.endTest();
-        QVERIFY2(why.empty(), why.c_str());
+        const std::string sample = through(*proxy, sampleUrl_);
+        CHECKED(expectSameFrame(sampleJpeg_, sample, viewWithOrigin(1234, 987, 1, kW, kH), "sample"));
+        CHECKED(expectSameFrame(sampleJpeg_, sample, viewWithOrigin(4000, 2500, 1, kW, kH), "sample"));
+        CHECKED(expectSameFrame(sampleJpeg_, sample, viewWithOrigin(512, 256, 4, kW, kH), "sample"));
+        CHECKED(expectSameFrame(cmu240_, through(*proxy, cmu240Url_), viewWithOrigin(700, 900, 1, kW, kH), "cmu-240"));
+        CHECKED(
+            expectSameFrame(cmuJp2k_, through(*proxy, cmuJp2kUrl_), viewWithOrigin(700, 900, 1, kW, kH), "cmu-jp2k"));
+        const std::string lines = e_.endTest();
+        QVERIFY2(lines.empty(), lines.c_str());
+        qInfo("%d frames in %d requests (%d of them frame lists, the rest single frames: open's and small levels')",
+              proxy->framesAsked(), proxy->frameRequests(), proxy->listRequests());
+        QVERIFY2(proxy->listRequests() > 0, "no frame list was asked for");
+        e_->close();
     }
 
     // Basic authentication on a second Orthanc, reached over TLS through the suite's proxy
@@ -404,32 +437,45 @@ private slots:
 
     // Broken answers for frames 2 and later (frame 1 of each instance is read at open): each a
     // clear error for the tile that needs the frame; the tiles around it still read.
+    // Each fault twice: for a frame read alone (a read nobody hinted), and for frames hinted
+    // with their row, which go in a frame list first: the list's answer is broken too, so its
+    // frames are asked for alone, and each gets its own answer and error.
     void brokenAnswers_data() {
         QTest::addColumn<int>("fault");
         QTest::addColumn<int>("status");
         QTest::addColumn<QString>("words");
-        QTest::newRow("truncated multipart")
-            << int(FaultProxy::Fault::Truncate) << int(iris::Status::CorruptData) << "cut short";
-        QTest::newRow("wrong content type") << int(FaultProxy::Fault::WrongType) << int(iris::Status::CorruptData)
-                                            << "Content-Type 'text/html; charset=utf-8', not multipart/related";
-        QTest::newRow("404 frame") << int(FaultProxy::Fault::NotFound) << int(iris::Status::NotFound)
-                                   << "is not on the server (HTTP 404 Not Found)";
+        QTest::addColumn<bool>("hinted");
+        for (const bool hinted : {false, true}) {
+            const std::string how = hinted ? " (hinted: a frame list first)" : "";
+            QTest::newRow(("truncated multipart" + how).c_str())
+                << int(FaultProxy::Fault::Truncate) << int(iris::Status::CorruptData) << "cut short" << hinted;
+            QTest::newRow(("wrong content type" + how).c_str())
+                << int(FaultProxy::Fault::WrongType) << int(iris::Status::CorruptData)
+                << "Content-Type 'text/html; charset=utf-8', not multipart/related" << hinted;
+            QTest::newRow(("404 frame" + how).c_str()) << int(FaultProxy::Fault::NotFound)
+                                                       << int(iris::Status::NotFound)
+                                                       << "is not on the server (HTTP 404 Not Found)" << hinted;
+        }
     }
     void brokenAnswers() {
         QFETCH(int, fault);
         QFETCH(int, status);
         QFETCH(QString, words);
+        QFETCH(bool, hinted);
         std::string why;
         auto proxy = FaultProxy::start(server_->port(), &why);
         QVERIFY2(proxy, why.c_str());
         proxy->setRule({.fault = FaultProxy::Fault(fault), .fromFrame = 2});
-        std::string url = sampleUrl_;
-        url.replace(url.find(std::to_string(server_->port())), std::to_string(server_->port()).size(),
-                    std::to_string(proxy->port()));
+        const std::string url = through(*proxy, sampleUrl_);
         auto web = openSource(url, {}, &why);
         QVERIFY2(web, why.c_str());
         auto local = openSource(sampleJpeg_.string(), {}, &why);
         std::vector<uint8_t> a(kTileBytes), b(kTileBytes);
+        if (hinted) {
+            std::vector<iris::TileAddress> row;
+            for (int64_t tx = 0; tx < web->info().levels[0].tilesX; ++tx) row.push_back({0, tx, 0});
+            web->prefetch(row, [] {});
+        }
         // Level 0's tile (0, 0) is frame 1 of its first instance; (1, 0) is frame 2.
         QVERIFY(web->readTile(0, 0, 0, a.data()).ok());
         QVERIFY(local->readTile(0, 0, 0, b.data()).ok());
@@ -440,6 +486,59 @@ private slots:
         QCOMPARE(int(r.status()), status);
         QVERIFY2(r.message().find(words.toStdString()) != std::string::npos, r.message().c_str());
         QVERIFY2(r.message().find("frame 2 of DICOMweb instance") != std::string::npos, r.message().c_str());
+        if (hinted) QVERIFY2(proxy->listRequests() > 0, "the hinted row was not asked for in a frame list");
+    }
+
+    // A server that lies about frame lists, or refuses them (400 or 404 for any list, as some
+    // do), while it answers single frames right: the source never keeps a frame from a list
+    // answered wrong (parts missing or swapped: each part names its frame, Content-Location),
+    // asks for those frames alone, and after two such lists asks for single frames only. Every
+    // tile of the level still reads exactly as the local series'.
+    void brokenFrameLists_data() {
+        QTest::addColumn<int>("fault");
+        QTest::newRow("list answer cut short") << int(FaultProxy::Fault::Truncate);
+        QTest::newRow("list answer of a wrong type") << int(FaultProxy::Fault::WrongType);
+        QTest::newRow("list answer missing a part") << int(FaultProxy::Fault::DropPart);
+        QTest::newRow("list answer with parts swapped") << int(FaultProxy::Fault::SwapParts);
+        QTest::newRow("lists refused (400)") << int(FaultProxy::Fault::RefuseLists);
+        QTest::newRow("lists not found (404)") << int(FaultProxy::Fault::NotFound);
+    }
+    void brokenFrameLists() {
+        QFETCH(int, fault);
+        std::string why;
+        auto proxy = FaultProxy::start(server_->port(), &why);
+        QVERIFY2(proxy, why.c_str());
+        proxy->setRule({.fault = FaultProxy::Fault(fault), .listsOnly = true});
+        auto web = openSource(through(*proxy, sampleUrl_), {}, &why);
+        QVERIFY2(web, why.c_str());
+        auto local = openSource(sampleJpeg_.string(), {}, &why);
+        QVERIFY2(local, why.c_str());
+        proxy->resetCount();
+        std::vector<uint8_t> a(kTileBytes), b(kTileBytes);
+        // Two rows of level 0 (many frames, hinted at once: lists are asked for), then two of
+        // level 1 (lists no more).
+        for (int level = 0; level < 2; ++level) {
+            const iris::LevelInfo& L = web->info().levels[size_t(level)];
+            std::vector<iris::TileAddress> all;
+            for (int64_t ty = 0; ty < std::min<int64_t>(L.tilesY, 2); ++ty)
+                for (int64_t tx = 0; tx < L.tilesX; ++tx) all.push_back({level, tx, ty});
+            web->prefetch(all, [] {});
+            for (const iris::TileAddress& t : all) {
+                const iris::Result r = web->readTile(level, t.tx, t.ty, a.data());
+                QVERIFY2(r.ok(), describe(r).c_str());
+                QVERIFY(local->readTile(level, t.tx, t.ty, b.data()).ok());
+                QVERIFY2(a == b, qPrintable(QString("level %1 tile (%2, %3) differs").arg(level).arg(t.tx).arg(t.ty)));
+            }
+            const int requests = proxy->frameRequests(), lists = proxy->listRequests();
+            qInfo("level %d: %d frames in %d requests, %d of them lists", level, proxy->framesAsked(), requests, lists);
+            if (level == 0) {
+                QVERIFY2(lists > 0, "no frame list was asked for");
+                QVERIFY2(requests > lists, "the frames of the lists answered wrong were not asked for alone");
+            } else {
+                QCOMPARE(lists, 0); // a server that has refused lists is asked for single frames only
+            }
+            proxy->resetCount();
+        }
     }
 
     // Through the Engine: a frame the server does not have is drawn as the placeholder, the
@@ -450,9 +549,7 @@ private slots:
         QVERIFY2(proxy, why.c_str());
         // Level 0's frames 2..: at the view below every tile but (0, 0) is missing.
         proxy->setRule({.fault = FaultProxy::Fault::NotFound, .fromFrame = 2});
-        std::string url = sampleUrl_;
-        url.replace(url.find(std::to_string(server_->port())), std::to_string(server_->port()).size(),
-                    std::to_string(proxy->port()));
+        const std::string url = through(*proxy, sampleUrl_);
         e_.beginTest();
         const iris::View view = viewWithOrigin(0, 0, 1, kW, kH);
         auto local = render(sampleJpeg_.string(), view, &why);
@@ -489,9 +586,7 @@ private slots:
         auto proxy = FaultProxy::start(server_->port(), &why);
         QVERIFY2(proxy, why.c_str());
         proxy->setRule({.fault = FaultProxy::Fault::Hold, .fromFrame = 2});
-        std::string url = sampleUrl_;
-        url.replace(url.find(std::to_string(server_->port())), std::to_string(server_->port()).size(),
-                    std::to_string(proxy->port()));
+        const std::string url = through(*proxy, sampleUrl_);
         e_.beginTest();
         const iris::View last = viewWithOrigin(5000, 3000, 1, kW, kH);
         auto expected = render(sampleJpeg_.string(), last, &why);
@@ -584,9 +679,7 @@ private slots:
         std::string why;
         auto proxy = FaultProxy::start(server_->port(), &why);
         QVERIFY2(proxy, why.c_str());
-        std::string url = sampleUrl_;
-        url.replace(url.find(std::to_string(server_->port())), std::to_string(server_->port()).size(),
-                    std::to_string(proxy->port()));
+        const std::string url = through(*proxy, sampleUrl_);
         e_.beginTest();
         const iris::View view = viewWithOrigin(3000, 1500, 1, kW, kH);
         const iris::View nudged = viewWithOrigin(3001, 1500, 1, kW, kH); // the same tiles

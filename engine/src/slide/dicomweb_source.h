@@ -28,9 +28,10 @@
 //     caller) requests it first in line and waits for it, bounded by the request timeouts.
 //
 // Threading: readTile, prefetch and requestTile from any thread; answers are handled on the
-// HttpClient's thread. `mutex_` guards the frame table and the queue; `callbackMutex_` the
-// arrival callback, which runs under it so that abandon() is a barrier: once it returns the
-// callback never runs again.
+// HttpClient's thread. `mutex_` guards the frame table, the queue, the count of requests out
+// and what is known of the server (its back-off, whether it takes frame lists);
+// `callbackMutex_` the arrival callback, which runs under it so that abandon() is a barrier:
+// once it returns the callback never runs again.
 #pragma once
 
 #include <condition_variable>

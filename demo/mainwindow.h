@@ -6,6 +6,7 @@
 #include <QtWidgets/QMainWindow>
 
 #include <iris/IrisSlideInfo.h>
+#include <iris/IrisSlideView.h>
 
 #include "recentfiles.h"
 
@@ -16,7 +17,6 @@ class QProgressBar;
 QT_END_NAMESPACE
 class AssociatedImagesDock;
 class CompareWindow;
-class IrisSlideView;
 class OrientationActions;
 class RecentFiles;
 class SampleSlide;
@@ -85,6 +85,9 @@ private:
     QAction *m_sampleAction = nullptr;
     QAction *m_serverAction = nullptr;
     ServerBrowser *m_serverBrowser = nullptr;
+    // What the server browser last gave m_view (a view cannot give its secret back): handed on
+    // to the Compare window's views. Memory only, for the session.
+    IrisSlideView::NetworkCredentials m_credentials;
     QAction *m_closeAction = nullptr;
     QAction *m_exportAction = nullptr;
     QAction *m_quitAction = nullptr;

@@ -264,9 +264,8 @@ void FaultProxy::serve(int client) {
         if (faultyRule(r) && r.fault == Fault::Hold) {
             // Until the test changes the rule (or holdMs): then the new rule decides.
             std::unique_lock lock(mutex_);
-            ruleChanged_.wait_for(lock, std::chrono::milliseconds(r.holdMs), [&] {
-                return ruleSerial_ != serial || stop_.load(std::memory_order_acquire);
-            });
+            ruleChanged_.wait_for(lock, std::chrono::milliseconds(r.holdMs),
+                                  [&] { return ruleSerial_ != serial || stop_.load(std::memory_order_acquire); });
             r = rule_;
         }
         const bool faulty = faultyRule(r);

@@ -92,7 +92,7 @@ private:
     std::atomic<bool> stop_{false};
     // Relaxed: statistics read after the walk they count.
     std::atomic<int> requests_{0}, lists_{0}, frames_{0}, answers_{0};
-    mutable std::mutex mutex_; // guards rule_, ruleSerial_, clients_, threads_
+    mutable std::mutex mutex_;            // guards rule_, ruleSerial_, clients_, threads_
     std::condition_variable ruleChanged_; // a held answer waits on it (with mutex_)
     Rule rule_;
     uint64_t ruleSerial_ = 0;

@@ -12,10 +12,10 @@
 //     (400, 404) still gives every tile exactly, one frame a request;
 //   * faults, through a proxy that misbehaves on purpose (fault_proxy.h): a truncated multipart
 //     body, a wrong content type, a 404 frame (the placeholder is drawn), a slow server (one that
-//     holds every answer back: views keep moving, superseded requests are dropped), the server stopped in the middle of a walk
-//     (clear error, the engine stays usable and recovers when the server is back), a server
-//     answering 503 while views keep asking (the source backs off instead of hammering it), and an
-//     instance in a transfer syntax the engine does not decode.
+//     holds every answer back: views keep moving, superseded requests are dropped), the server stopped in the middle of
+//     a walk (clear error, the engine stays usable and recovers when the server is back), a server answering 503 while
+//     views keep asking (the source backs off instead of hammering it), and an instance in a transfer syntax the engine
+//     does not decode.
 // Every wait is an engine event (waitForFrame) or a condition polled under a generous deadline;
 // nothing sleeps a guess, and no assertion depends on how fast the machine is (the suite runs on
 // a loaded 2-core CI machine too): where a test is about timing, it checks an order of events
@@ -452,9 +452,9 @@ private slots:
             QTest::newRow(("wrong content type" + how).c_str())
                 << int(FaultProxy::Fault::WrongType) << int(iris::Status::CorruptData)
                 << "Content-Type 'text/html; charset=utf-8', not multipart/related" << hinted;
-            QTest::newRow(("404 frame" + how).c_str()) << int(FaultProxy::Fault::NotFound)
-                                                       << int(iris::Status::NotFound)
-                                                       << "is not on the server (HTTP 404 Not Found)" << hinted;
+            QTest::newRow(("404 frame" + how).c_str())
+                << int(FaultProxy::Fault::NotFound) << int(iris::Status::NotFound)
+                << "is not on the server (HTTP 404 Not Found)" << hinted;
         }
     }
     void brokenAnswers() {

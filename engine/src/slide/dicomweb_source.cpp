@@ -211,8 +211,7 @@ DicomWebSource::parseFramesAnswer(const Request& q, const net::Response& r) cons
         Payload p;
         p.transferSyntax = transferSyntaxOf(partType ? &*partType : nullptr, *message);
         if (p.transferSyntax.empty()) {
-            out.emplace_back(Result(Status::UnsupportedFormat, "the frame came as '" +
-                                                                   part.contentType.substr(0, 100) +
+            out.emplace_back(Result(Status::UnsupportedFormat, "the frame came as '" + part.contentType.substr(0, 100) +
                                                                    "' without a transfer syntax"));
         } else if (!in.transferSyntax.empty() && p.transferSyntax != in.transferSyntax) {
             out.emplace_back(Result(Status::CorruptData, "it came in transfer syntax " +
@@ -315,8 +314,7 @@ void DicomWebSource::send(std::shared_ptr<Request> q, Clock::time_point notBefor
     for (size_t i = 0; i < q->frames.size(); ++i) maxBytes += maxFrameBytes(q->instance);
     std::string url = framesUrl(q->instance, q->frames);
     client_->get(
-        std::move(url), kFrameAccept, maxBytes, [this, q](net::Response&& r) { onAnswer(q, std::move(r)); },
-        notBefore);
+        std::move(url), kFrameAccept, maxBytes, [this, q](net::Response&& r) { onAnswer(q, std::move(r)); }, notBefore);
 }
 
 void DicomWebSource::pump() {

@@ -124,10 +124,10 @@ private:
     std::mutex mutex_;
     std::condition_variable landed_; // a frame became Ready or Failed, or the source was abandoned
     std::unordered_map<FrameKey, Frame> frames_;
-    std::deque<FrameKey> queue_;   // Queued frames in request order (may hold stale keys: pump skips them)
-    size_t sent_ = 0;              // requests on the wire or waiting for a retry
+    std::deque<FrameKey> queue_; // Queued frames in request order (may hold stale keys: pump skips them)
+    size_t sent_ = 0;            // requests on the wire or waiting for a retry
     Lists lists_ = Lists::Unknown;
-    int listRefusals_ = 0; // lists refused while lists_ is Unknown
+    int listRefusals_ = 0;         // lists refused while lists_ is Unknown
     uint64_t batch_ = 0;           // the newest prefetch batch
     std::list<FrameKey> readyLru_; // Ready frames, most recently used first
     size_t readyBytes_ = 0;

@@ -88,12 +88,20 @@ void CompareWindow::createMenus()
     connect(m_crosshairAction, &QAction::toggled, m_group, &IrisViewGroup::setCrosshairsEnabled);
 }
 
+void CompareWindow::setNetworkCredentials(const IrisSlideView::NetworkCredentials &credentials)
+{
+    m_credentials = credentials;
+    for (ComparePane *pane : std::as_const(m_panes))
+        pane->view()->setNetworkCredentials(credentials); // for the slides they open from now on
+}
+
 bool CompareWindow::addSlide(const QString &path, const Pose *start)
 {
     if (count() >= kMaxSlides)
         return false;
     auto *pane = new ComparePane;
     IrisSlideView *view = pane->view();
+    view->setNetworkCredentials(m_credentials);
     m_panes << pane;
     m_group->addView(view);
     connect(pane, &ComparePane::linkToggled, this, [this, view](bool on) { m_group->setLinked(view, on); });

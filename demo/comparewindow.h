@@ -10,12 +10,13 @@
 #include <QtCore/QPointF>
 #include <QtWidgets/QMainWindow>
 
+#include <iris/IrisSlideView.h>
+
 QT_BEGIN_NAMESPACE
 class QAction;
 class QGridLayout;
 QT_END_NAMESPACE
 class ComparePane;
-class IrisSlideView;
 class IrisViewGroup;
 class OrientationActions;
 
@@ -35,6 +36,11 @@ public:
 
     explicit CompareWindow(QWidget *parent = nullptr);
     ~CompareWindow() override;
+
+    // Credentials and TLS for the DICOMweb series the views open: given to every view, and to
+    // each one added later (the main window passes its own view's, which a view cannot give
+    // back, so that a protected series it shows opens here too). Memory only, never logged.
+    void setNetworkCredentials(const IrisSlideView::NetworkCredentials &credentials);
 
     // Adds a view showing `path` (opened once the view is on screen), linked; with a pose,
     // it starts there and the others follow. False when there are kMaxSlides already.
@@ -67,6 +73,7 @@ private:
     ComparePane *m_current = nullptr;
     ComparePane *m_startPane = nullptr; // the pane that starts at m_start
     Pose m_start;
+    IrisSlideView::NetworkCredentials m_credentials;
     OrientationActions *m_orientation;
     QAction *m_addAction = nullptr;
     QAction *m_fitAction = nullptr;

@@ -359,6 +359,7 @@ ServerBrowser *MainWindow::showServerBrowser()
         m_serverBrowser = new ServerBrowser(this);
         connect(m_serverBrowser, &ServerBrowser::openRequested, this,
                 [this](const QString &url, const IrisSlideView::NetworkCredentials &credentials) {
+                    m_credentials = credentials;
                     m_view->setNetworkCredentials(credentials);
                     if (openSlide(url, true))
                         m_serverBrowser->hide();
@@ -434,6 +435,7 @@ CompareWindow *MainWindow::compare(const QStringList &others)
 {
     auto *window = new CompareWindow(this);
     window->setAttribute(Qt::WA_DeleteOnClose);
+    window->setNetworkCredentials(m_credentials); // a protected series the main view shows opens there too
     if (m_view->hasSlide()) {
         const CompareWindow::Pose here{m_view->centre(), m_view->downsample(), m_view->rotation(),
                                        m_view->isFlippedHorizontally(), m_view->isFlippedVertically()};

@@ -15,6 +15,7 @@
 #include <QtWidgets/QMainWindow>
 
 #include <iris/IrisSlideInfo.h>
+#include <iris/IrisSlideView.h>
 #include <iris/annotations.h>
 
 #include "recentfiles.h"
@@ -28,7 +29,6 @@ class AnnotationImport;
 class AnnotationsDock;
 class AssociatedImagesDock;
 class CompareWindow;
-class IrisSlideView;
 class OrientationActions;
 class RecentFiles;
 class SampleSlide;
@@ -149,6 +149,9 @@ private:
     QAction *m_sampleAction = nullptr;
     QAction *m_serverAction = nullptr;
     ServerBrowser *m_serverBrowser = nullptr;
+    // What the server browser last gave m_view (a view cannot give its secret back): handed on
+    // to the Compare window's views. Memory only, for the session.
+    IrisSlideView::NetworkCredentials m_credentials;
     QAction *m_closeAction = nullptr;
     QAction *m_exportAction = nullptr;
     QAction *m_importAnnotationsAction = nullptr;

@@ -10,6 +10,7 @@
 #include <sys/time.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cerrno>
 #include <chrono>
@@ -78,6 +79,38 @@ std::string header(const std::string& head, const std::string& name) {
     return {};
 }
 
+// A multipart body (boundary from `type`) with its parts' order changed: the last part dropped
+// (`drop`), or the first two swapped. Unchanged when it has fewer parts than that needs.
+std::string reshuffleParts(const std::string& type, const std::string& body, bool drop) {
+    const size_t b = type.find("boundary=");
+    if (b == std::string::npos) return body;
+    std::string boundary = type.substr(b + 9);
+    if (const size_t semi = boundary.find(';'); semi != std::string::npos) boundary.resize(semi);
+    if (boundary.size() >= 2 && boundary.front() == '"') boundary = boundary.substr(1, boundary.size() - 2);
+    const std::string delimiter = "--" + boundary;
+    // Each part from its delimiter line to the CRLF before the next delimiter.
+    std::vector<std::string> parts;
+    size_t at = body.find(delimiter);
+    const size_t first = at;
+    size_t end = std::string::npos;
+    while (at != std::string::npos) {
+        const size_t next = body.find("\r\n" + delimiter, at + delimiter.size());
+        if (next == std::string::npos) break;
+        if (body.compare(at + delimiter.size(), 2, "--") == 0) break; // the closing delimiter
+        parts.push_back(body.substr(at, next - at));
+        at = next + 2;
+        end = at;
+    }
+    if (first == std::string::npos || end == std::string::npos || parts.size() < 2) return body;
+    if (drop)
+        parts.pop_back();
+    else
+        std::swap(parts[0], parts[1]);
+    std::string out = body.substr(0, first);
+    for (const std::string& p : parts) out += p + "\r\n";
+    return out + body.substr(end);
+}
+
 } // namespace
 
 std::unique_ptr<FaultProxy> FaultProxy::start(int upstreamPort, std::string* why, const Tls* tls) {
@@ -111,7 +144,11 @@ std::unique_ptr<FaultProxy> FaultProxy::start(int upstreamPort, std::string* why
 }
 
 FaultProxy::~FaultProxy() {
-    stop_.store(true, std::memory_order_release);
+    {
+        std::lock_guard lock(mutex_); // a held answer checks stop_ under it: no lost wake-up
+        stop_.store(true, std::memory_order_release);
+    }
+    ruleChanged_.notify_all();
     if (acceptor_.joinable()) acceptor_.join();
     if (listen_ >= 0) ::close(listen_);
     std::vector<std::thread> threads;
@@ -125,8 +162,12 @@ FaultProxy::~FaultProxy() {
 }
 
 void FaultProxy::setRule(const Rule& rule) {
-    std::lock_guard lock(mutex_);
-    rule_ = rule;
+    {
+        std::lock_guard lock(mutex_);
+        rule_ = rule;
+        ++ruleSerial_;
+    }
+    ruleChanged_.notify_all();
 }
 
 FaultProxy::Rule FaultProxy::rule() const {
@@ -191,17 +232,44 @@ void FaultProxy::serve(int client) {
         const size_t sp1 = head.find(' '), sp2 = head.find(' ', sp1 + 1);
         if (sp1 == std::string::npos || sp2 == std::string::npos) break;
         const std::string path = head.substr(sp1 + 1, sp2 - sp1 - 1);
-        const size_t framesAt = path.find("/frames/");
-        const int frame = framesAt == std::string::npos ? 0 : std::atoi(path.c_str() + framesAt + 8);
-        if (frame > 0) frames_.fetch_add(1, std::memory_order_relaxed);
-        const Rule r = rule();
-        const bool faulty = r.fault != Fault::None && frame > 0 && frame >= r.fromFrame;
-
-        if (faulty && r.fault == Fault::Delay) {
-            const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(r.delayMs);
-            while (std::chrono::steady_clock::now() < until && !stop_.load(std::memory_order_acquire))
-                std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        // …/frames/<n> or a list …/frames/<a>,<b>,…: the frames asked for.
+        std::vector<int> frames;
+        if (const size_t at = path.find("/frames/"); at != std::string::npos) {
+            for (size_t i = at + 8; i < path.size();) {
+                const int n = std::atoi(path.c_str() + i);
+                if (n <= 0) break;
+                frames.push_back(n);
+                i = path.find(',', i);
+                if (i == std::string::npos) break;
+                ++i;
+            }
         }
+        const bool list = frames.size() > 1;
+        if (!frames.empty()) {
+            requests_.fetch_add(1, std::memory_order_relaxed);
+            frames_.fetch_add(int(frames.size()), std::memory_order_relaxed);
+            if (list) lists_.fetch_add(1, std::memory_order_relaxed);
+        }
+        uint64_t serial = 0;
+        Rule r;
+        {
+            std::lock_guard lock(mutex_);
+            r = rule_;
+            serial = ruleSerial_;
+        }
+        const auto faultyRule = [&frames, list](const Rule& rule) {
+            return rule.fault != Fault::None && !frames.empty() && (list || !rule.listsOnly) &&
+                   *std::max_element(frames.begin(), frames.end()) >= rule.fromFrame;
+        };
+        if (faultyRule(r) && r.fault == Fault::Hold) {
+            // Until the test changes the rule (or holdMs): then the new rule decides.
+            std::unique_lock lock(mutex_);
+            ruleChanged_.wait_for(lock, std::chrono::milliseconds(r.holdMs),
+                                  [&] { return ruleSerial_ != serial || stop_.load(std::memory_order_acquire); });
+            r = rule_;
+        }
+        const bool faulty = faultyRule(r);
+
         long status = 0;
         std::string type, body;
         if (r.fault == Fault::Replace && !r.pathContains.empty() && path.find(r.pathContains) != std::string::npos) {
@@ -216,6 +284,10 @@ void FaultProxy::serve(int client) {
             status = 503;
             type = "text/plain";
             body = "Service Unavailable";
+        } else if (faulty && r.fault == Fault::RefuseLists && list) {
+            status = 400;
+            type = "application/json";
+            body = "{\"HttpStatus\": 400, \"Message\": \"Bad request\"}";
         } else {
             const std::string url = "http://127.0.0.1:" + std::to_string(upstream_) + path;
             curl_slist* headers = nullptr;
@@ -238,6 +310,8 @@ void FaultProxy::serve(int client) {
             type = ct ? ct : "";
             if (faulty && r.fault == Fault::Truncate) body.resize(body.size() * 2 / 3);
             if (faulty && r.fault == Fault::WrongType) type = "text/html; charset=utf-8";
+            if (faulty && list && (r.fault == Fault::DropPart || r.fault == Fault::SwapParts))
+                body = reshuffleParts(type, body, r.fault == Fault::DropPart);
         }
         std::string answer = "HTTP/1.1 " + std::to_string(status) +
                              " Proxied\r\nContent-Length: " + std::to_string(body.size()) +
@@ -245,6 +319,7 @@ void FaultProxy::serve(int client) {
         if (!type.empty()) answer += "Content-Type: " + type + "\r\n";
         answer += "\r\n";
         if (!conn.write(answer + body)) break;
+        if (!frames.empty()) answers_.fetch_add(1, std::memory_order_relaxed);
     }
     curl_easy_cleanup(up);
     if (conn.ssl) SSL_free(conn.ssl);

@@ -7,13 +7,19 @@
 //   * credentials and transport: basic authentication (a wrong password is a clear 401 error),
 //     TLS with a CA the suite makes with openssl (trusted: works; untrusted: refused), URLs that
 //     are refused before any request;
+//   * frames come in frame lists (…/frames/a,b,c, many a request: counted by a proxy), and a
+//     server that lies about lists (parts missing or swapped, a broken answer) or refuses them
+//     (400, 404) still gives every tile exactly, one frame a request;
 //   * faults, through a proxy that misbehaves on purpose (fault_proxy.h): a truncated multipart
-//     body, a wrong content type, a 404 frame (the placeholder is drawn), a slow server (views
-//     keep moving, superseded requests are dropped), the server stopped in the middle of a walk
-//     (clear error, the engine stays usable and recovers when the server is back), a server
-//     answering 503 while views keep asking (the source backs off instead of hammering it), and an
-//     instance in a transfer syntax the engine does not decode.
-// Every wait is an engine event (waitForFrame) or bounded by a deadline; nothing sleeps a guess.
+//     body, a wrong content type, a 404 frame (the placeholder is drawn), a slow server (one that
+//     holds every answer back: views keep moving, superseded requests are dropped), the server stopped in the middle of
+//     a walk (clear error, the engine stays usable and recovers when the server is back), a server answering 503 while
+//     views keep asking (the source backs off instead of hammering it), and an instance in a transfer syntax the engine
+//     does not decode.
+// Every wait is an engine event (waitForFrame) or a condition polled under a generous deadline;
+// nothing sleeps a guess, and no assertion depends on how fast the machine is (the suite runs on
+// a loaded 2-core CI machine too): where a test is about timing, it checks an order of events
+// (answers held back while the views move) or a count, never a wall-clock bound.
 #include <QtTest>
 
 #include <chrono>
@@ -157,6 +163,13 @@ class TestDicomWeb : public QObject {
     std::string sampleUrl_, cmu240Url_, cmuJp2kUrl_;
     TestEngine e_;
 
+    // `url` (on the suite's Orthanc) reached through `proxy` instead.
+    std::string through(const FaultProxy& proxy, std::string url) const {
+        const std::string port = ":" + std::to_string(server_->port()) + "/";
+        url.replace(url.find(port), port.size(), ":" + std::to_string(proxy.port()) + "/");
+        return url;
+    }
+
     // Renders `view` of `path` (a folder or a URL) through the suite's engine.
     std::optional<iris::Frame> render(const std::string& path, const iris::View& view, std::string* why) {
         const iris::Result r = e_->open(path);
@@ -275,20 +288,43 @@ private slots:
             };
             QCOMPARE(value(a), value(b));
         }
+        // The tiles through a proxy that passes everything on and counts the requests. (Not
+        // the metadata: the ICC profile's BulkDataURI names the server itself, which a source
+        // opened through the proxy does not fetch, another origin.)
+        auto proxy = FaultProxy::start(server_->port(), &why);
+        QVERIFY2(proxy, why.c_str());
+        web = openSource(through(*proxy, url), {}, &why);
+        QVERIFY2(web, why.c_str());
+        proxy->resetCount(); // open's own requests: frame 1 of each instance, one a request
         CHECKED(expectSameTiles(*web, *local, QTest::currentDataTag()));
+        // The hinted frames came in frame lists (…/frames/a,b,c), many a request.
+        const int requests = proxy->frameRequests(), lists = proxy->listRequests(), frames = proxy->framesAsked();
+        qInfo("%d frames in %d requests (%d of them frame lists)", frames, requests, lists);
+        QVERIFY2(lists > 0, "no frame list was asked for");
+        QVERIFY2(frames >= 4 * requests, "fewer than 4 frames a request on average: the frames were not batched");
     }
 
     // Through the Engine (prefetch batches, the loaders' held claims): frames identical to the
     // local series', at 1:1 and at a level's downsample, for each frame size.
+    // The frames come in frame lists (counted by a proxy that passes everything on).
     void engineMatchesLocal() {
+        std::string why;
+        auto proxy = FaultProxy::start(server_->port(), &why);
+        QVERIFY2(proxy, why.c_str());
         e_.beginTest();
-        CHECKED(expectSameFrame(sampleJpeg_, sampleUrl_, viewWithOrigin(1234, 987, 1, kW, kH), "sample"));
-        CHECKED(expectSameFrame(sampleJpeg_, sampleUrl_, viewWithOrigin(4000, 2500, 1, kW, kH), "sample"));
-        CHECKED(expectSameFrame(sampleJpeg_, sampleUrl_, viewWithOrigin(512, 256, 4, kW, kH), "sample"));
-        CHECKED(expectSameFrame(cmu240_, cmu240Url_, viewWithOrigin(700, 900, 1, kW, kH), "cmu-240"));
-        CHECKED(expectSameFrame(cmuJp2k_, cmuJp2kUrl_, viewWithOrigin(700, 900, 1, kW, kH), "cmu-jp2k"));
-        const std::string why = e_.endTest();
-        QVERIFY2(why.empty(), why.c_str());
+        const std::string sample = through(*proxy, sampleUrl_);
+        CHECKED(expectSameFrame(sampleJpeg_, sample, viewWithOrigin(1234, 987, 1, kW, kH), "sample"));
+        CHECKED(expectSameFrame(sampleJpeg_, sample, viewWithOrigin(4000, 2500, 1, kW, kH), "sample"));
+        CHECKED(expectSameFrame(sampleJpeg_, sample, viewWithOrigin(512, 256, 4, kW, kH), "sample"));
+        CHECKED(expectSameFrame(cmu240_, through(*proxy, cmu240Url_), viewWithOrigin(700, 900, 1, kW, kH), "cmu-240"));
+        CHECKED(
+            expectSameFrame(cmuJp2k_, through(*proxy, cmuJp2kUrl_), viewWithOrigin(700, 900, 1, kW, kH), "cmu-jp2k"));
+        const std::string lines = e_.endTest();
+        QVERIFY2(lines.empty(), lines.c_str());
+        qInfo("%d frames in %d requests (%d of them frame lists, the rest single frames: open's and small levels')",
+              proxy->framesAsked(), proxy->frameRequests(), proxy->listRequests());
+        QVERIFY2(proxy->listRequests() > 0, "no frame list was asked for");
+        e_->close();
     }
 
     // Basic authentication on a second Orthanc, reached over TLS through the suite's proxy
@@ -401,32 +437,45 @@ private slots:
 
     // Broken answers for frames 2 and later (frame 1 of each instance is read at open): each a
     // clear error for the tile that needs the frame; the tiles around it still read.
+    // Each fault twice: for a frame read alone (a read nobody hinted), and for frames hinted
+    // with their row, which go in a frame list first: the list's answer is broken too, so its
+    // frames are asked for alone, and each gets its own answer and error.
     void brokenAnswers_data() {
         QTest::addColumn<int>("fault");
         QTest::addColumn<int>("status");
         QTest::addColumn<QString>("words");
-        QTest::newRow("truncated multipart")
-            << int(FaultProxy::Fault::Truncate) << int(iris::Status::CorruptData) << "cut short";
-        QTest::newRow("wrong content type") << int(FaultProxy::Fault::WrongType) << int(iris::Status::CorruptData)
-                                            << "Content-Type 'text/html; charset=utf-8', not multipart/related";
-        QTest::newRow("404 frame") << int(FaultProxy::Fault::NotFound) << int(iris::Status::NotFound)
-                                   << "is not on the server (HTTP 404 Not Found)";
+        QTest::addColumn<bool>("hinted");
+        for (const bool hinted : {false, true}) {
+            const std::string how = hinted ? " (hinted: a frame list first)" : "";
+            QTest::newRow(("truncated multipart" + how).c_str())
+                << int(FaultProxy::Fault::Truncate) << int(iris::Status::CorruptData) << "cut short" << hinted;
+            QTest::newRow(("wrong content type" + how).c_str())
+                << int(FaultProxy::Fault::WrongType) << int(iris::Status::CorruptData)
+                << "Content-Type 'text/html; charset=utf-8', not multipart/related" << hinted;
+            QTest::newRow(("404 frame" + how).c_str())
+                << int(FaultProxy::Fault::NotFound) << int(iris::Status::NotFound)
+                << "is not on the server (HTTP 404 Not Found)" << hinted;
+        }
     }
     void brokenAnswers() {
         QFETCH(int, fault);
         QFETCH(int, status);
         QFETCH(QString, words);
+        QFETCH(bool, hinted);
         std::string why;
         auto proxy = FaultProxy::start(server_->port(), &why);
         QVERIFY2(proxy, why.c_str());
         proxy->setRule({.fault = FaultProxy::Fault(fault), .fromFrame = 2});
-        std::string url = sampleUrl_;
-        url.replace(url.find(std::to_string(server_->port())), std::to_string(server_->port()).size(),
-                    std::to_string(proxy->port()));
+        const std::string url = through(*proxy, sampleUrl_);
         auto web = openSource(url, {}, &why);
         QVERIFY2(web, why.c_str());
         auto local = openSource(sampleJpeg_.string(), {}, &why);
         std::vector<uint8_t> a(kTileBytes), b(kTileBytes);
+        if (hinted) {
+            std::vector<iris::TileAddress> row;
+            for (int64_t tx = 0; tx < web->info().levels[0].tilesX; ++tx) row.push_back({0, tx, 0});
+            web->prefetch(row, [] {});
+        }
         // Level 0's tile (0, 0) is frame 1 of its first instance; (1, 0) is frame 2.
         QVERIFY(web->readTile(0, 0, 0, a.data()).ok());
         QVERIFY(local->readTile(0, 0, 0, b.data()).ok());
@@ -437,6 +486,59 @@ private slots:
         QCOMPARE(int(r.status()), status);
         QVERIFY2(r.message().find(words.toStdString()) != std::string::npos, r.message().c_str());
         QVERIFY2(r.message().find("frame 2 of DICOMweb instance") != std::string::npos, r.message().c_str());
+        if (hinted) QVERIFY2(proxy->listRequests() > 0, "the hinted row was not asked for in a frame list");
+    }
+
+    // A server that lies about frame lists, or refuses them (400 or 404 for any list, as some
+    // do), while it answers single frames right: the source never keeps a frame from a list
+    // answered wrong (parts missing or swapped: each part names its frame, Content-Location),
+    // asks for those frames alone, and after two such lists asks for single frames only. Every
+    // tile of the level still reads exactly as the local series'.
+    void brokenFrameLists_data() {
+        QTest::addColumn<int>("fault");
+        QTest::newRow("list answer cut short") << int(FaultProxy::Fault::Truncate);
+        QTest::newRow("list answer of a wrong type") << int(FaultProxy::Fault::WrongType);
+        QTest::newRow("list answer missing a part") << int(FaultProxy::Fault::DropPart);
+        QTest::newRow("list answer with parts swapped") << int(FaultProxy::Fault::SwapParts);
+        QTest::newRow("lists refused (400)") << int(FaultProxy::Fault::RefuseLists);
+        QTest::newRow("lists not found (404)") << int(FaultProxy::Fault::NotFound);
+    }
+    void brokenFrameLists() {
+        QFETCH(int, fault);
+        std::string why;
+        auto proxy = FaultProxy::start(server_->port(), &why);
+        QVERIFY2(proxy, why.c_str());
+        proxy->setRule({.fault = FaultProxy::Fault(fault), .listsOnly = true});
+        auto web = openSource(through(*proxy, sampleUrl_), {}, &why);
+        QVERIFY2(web, why.c_str());
+        auto local = openSource(sampleJpeg_.string(), {}, &why);
+        QVERIFY2(local, why.c_str());
+        proxy->resetCount();
+        std::vector<uint8_t> a(kTileBytes), b(kTileBytes);
+        // Two rows of level 0 (many frames, hinted at once: lists are asked for), then two of
+        // level 1 (lists no more).
+        for (int level = 0; level < 2; ++level) {
+            const iris::LevelInfo& L = web->info().levels[size_t(level)];
+            std::vector<iris::TileAddress> all;
+            for (int64_t ty = 0; ty < std::min<int64_t>(L.tilesY, 2); ++ty)
+                for (int64_t tx = 0; tx < L.tilesX; ++tx) all.push_back({level, tx, ty});
+            web->prefetch(all, [] {});
+            for (const iris::TileAddress& t : all) {
+                const iris::Result r = web->readTile(level, t.tx, t.ty, a.data());
+                QVERIFY2(r.ok(), describe(r).c_str());
+                QVERIFY(local->readTile(level, t.tx, t.ty, b.data()).ok());
+                QVERIFY2(a == b, qPrintable(QString("level %1 tile (%2, %3) differs").arg(level).arg(t.tx).arg(t.ty)));
+            }
+            const int requests = proxy->frameRequests(), lists = proxy->listRequests();
+            qInfo("level %d: %d frames in %d requests, %d of them lists", level, proxy->framesAsked(), requests, lists);
+            if (level == 0) {
+                QVERIFY2(lists > 0, "no frame list was asked for");
+                QVERIFY2(requests > lists, "the frames of the lists answered wrong were not asked for alone");
+            } else {
+                QCOMPARE(lists, 0); // a server that has refused lists is asked for single frames only
+            }
+            proxy->resetCount();
+        }
     }
 
     // Through the Engine: a frame the server does not have is drawn as the placeholder, the
@@ -447,9 +549,7 @@ private slots:
         QVERIFY2(proxy, why.c_str());
         // Level 0's frames 2..: at the view below every tile but (0, 0) is missing.
         proxy->setRule({.fault = FaultProxy::Fault::NotFound, .fromFrame = 2});
-        std::string url = sampleUrl_;
-        url.replace(url.find(std::to_string(server_->port())), std::to_string(server_->port()).size(),
-                    std::to_string(proxy->port()));
+        const std::string url = through(*proxy, sampleUrl_);
         e_.beginTest();
         const iris::View view = viewWithOrigin(0, 0, 1, kW, kH);
         auto local = render(sampleJpeg_.string(), view, &why);
@@ -476,43 +576,44 @@ private slots:
         e_->close();
     }
 
-    // A slow server (every frame answered 150 ms late): the API never waits, the views move on,
-    // and what a superseded view still had queued is dropped; the last view renders exactly.
+    // A slow server, at its slowest: it answers no frame at all while the views move. The API
+    // never waits for it (the walk ends while every frame answer is still held back: had a call
+    // waited, it would have waited for the proxy's 60 s hold and seen answers), and what a
+    // superseded view still had queued is dropped; once the server answers, the last view
+    // renders exactly.
     void slowServerViewsKeepMoving() {
         std::string why;
         auto proxy = FaultProxy::start(server_->port(), &why);
         QVERIFY2(proxy, why.c_str());
-        proxy->setRule({.fault = FaultProxy::Fault::Delay, .delayMs = 150, .fromFrame = 1});
-        std::string url = sampleUrl_;
-        url.replace(url.find(std::to_string(server_->port())), std::to_string(server_->port()).size(),
-                    std::to_string(proxy->port()));
+        proxy->setRule({.fault = FaultProxy::Fault::Hold, .fromFrame = 2});
+        const std::string url = through(*proxy, sampleUrl_);
         e_.beginTest();
         const iris::View last = viewWithOrigin(5000, 3000, 1, kW, kH);
         auto expected = render(sampleJpeg_.string(), last, &why);
         QVERIFY2(expected, why.c_str());
-        QVERIFY(e_->open(url).ok());
+        QVERIFY(e_->open(url).ok()); // frame 1 of each instance passes: open succeeds
         proxy->resetCount();
         // A walk along level 0, one field after the other, without waiting for any.
         int walkTiles = 0;
-        double slowestMs = 0;
         for (int i = 0; i < 10; ++i) {
-            const auto t0 = Clock::now();
             e_->setView(viewWithOrigin(400.0 + 450 * i, 300.0 + 250 * i, 1, kW, kH));
-            slowestMs = std::max(slowestMs, std::chrono::duration<double, std::milli>(Clock::now() - t0).count());
             walkTiles += 3 * 3; // the visible level-0 tiles of each field, at least
         }
         e_->setView(last);
+        const int answeredDuringWalk = proxy->frameAnswers();
+        proxy->setRule({}); // the server answers from now on
         auto frame = renderView(*e_.engine, last, kW, kH, std::chrono::seconds(60), &why);
         QVERIFY2(frame, why.c_str());
         const DiffStats st = compareImages(frame->image, expected->image);
         QVERIFY2(st.differing == 0,
                  saveFailureArtefacts("dicomweb.slow", frame->image, expected->image, nullptr).c_str());
-        const int requests = proxy->frameRequests();
-        qInfo("slowest setView %.2f ms; %d frame requests for a walk over %d+ tiles and the last view", slowestMs,
-              requests, walkTiles);
-        QVERIFY2(slowestMs < 100, "an API call waited on the network");
+        const int requests = proxy->frameRequests(), frames = proxy->framesAsked();
+        qInfo("%d frame answers during the walk; %d frame requests for %d frames for a walk over %d+ tiles and the "
+              "last view",
+              answeredDuringWalk, requests, frames, walkTiles);
+        QVERIFY2(answeredDuringWalk == 0, "an API call waited on the network");
         // Each field's own tiles (visible and perimeter at two levels) alone are more than this.
-        QVERIFY2(requests < walkTiles + 60, "superseded views' requests were not dropped");
+        QVERIFY2(frames < walkTiles + 60, "superseded views' requests were not dropped");
         const std::string lines = e_.endTest();
         QVERIFY2(lines.empty(), lines.c_str());
         e_->close();
@@ -578,16 +679,16 @@ private slots:
         std::string why;
         auto proxy = FaultProxy::start(server_->port(), &why);
         QVERIFY2(proxy, why.c_str());
-        std::string url = sampleUrl_;
-        url.replace(url.find(std::to_string(server_->port())), std::to_string(server_->port()).size(),
-                    std::to_string(proxy->port()));
+        const std::string url = through(*proxy, sampleUrl_);
         e_.beginTest();
         const iris::View view = viewWithOrigin(3000, 1500, 1, kW, kH);
         const iris::View nudged = viewWithOrigin(3001, 1500, 1, kW, kH); // the same tiles
         auto expected = render(sampleJpeg_.string(), view, &why);
         QVERIFY2(expected, why.c_str());
-        QVERIFY(e_->open(url).ok()); // frame 1 of each instance passes: open succeeds
+        // Down before the slide is opened, so that no frame is ever answered (an answer ends
+        // the back-off): frame 1 of each instance passes, so open succeeds.
         proxy->setRule({.fault = FaultProxy::Fault::Unavailable, .fromFrame = 2});
+        QVERIFY(e_->open(url).ok());
         proxy->resetCount();
         int views = 0;
         const auto downUntil = Clock::now() + std::chrono::seconds(6);
@@ -596,6 +697,11 @@ private slots:
             (void)e_->waitForFrame(std::chrono::milliseconds(50));
         }
         const int requests = proxy->frameRequests();
+        // The failures are reported (each frame's third attempt ends about 1.3 s in; on a
+        // loaded machine the loaders may read it later: wait for it, bounded).
+        const auto reportDeadline = Clock::now() + std::chrono::seconds(30);
+        while (e_->error().ok() && Clock::now() < reportDeadline)
+            (void)e_->waitForFrame(std::chrono::milliseconds(100));
         const iris::Result err = e_->error();
         qInfo("server unavailable for 6 s: %d views, %d frame requests; %s", views, requests, describe(err).c_str());
         QCOMPARE(err.status(), iris::Status::IoError);
@@ -615,8 +721,10 @@ private slots:
         proxy->setRule({});
         e_->clearError();
         const auto back = Clock::now();
-        iris::Result drawn(iris::Status::Timeout, "no complete frame in 20 s");
-        while (Clock::now() - back < std::chrono::seconds(20)) {
+        // Bounded generously (the longest back-off is 8 s): what is checked is that it loads
+        // with no view change at all, not how fast a loaded machine gets there.
+        iris::Result drawn(iris::Status::Timeout, "no complete frame in 60 s");
+        while (Clock::now() - back < std::chrono::seconds(60)) {
             drawn = e_->waitForFrame(std::chrono::milliseconds(200));
             if (drawn.ok()) break;
             e_->clearError(); // a read that failed before the server was back: wait on
@@ -627,11 +735,11 @@ private slots:
         auto frame = e_->readFrame();
         QVERIFY(frame.ok());
         const double recoveredS = std::chrono::duration<double>(Clock::now() - back).count();
-        qInfo("the field loaded %.2f s after the server was back, with no view change", recoveredS);
+        qInfo("the field loaded %.2f s after the server was back (the longest back-off is 8 s), with no view change",
+              recoveredS);
         const DiffStats st = compareImages(frame->image, expected->image);
         QVERIFY2(st.differing == 0,
                  saveFailureArtefacts("dicomweb.backoff", frame->image, expected->image, nullptr).c_str());
-        QVERIFY2(recoveredS < 8 + 5, "the failed field waited longer than the longest back-off");
         QVERIFY2(e_->error().ok(), describe(e_->error()).c_str());
         const std::string lines = e_.endTest(TestEngine::ErrorLines::Show);
         QVERIFY2(lines.empty(), lines.c_str());

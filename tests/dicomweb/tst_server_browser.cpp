@@ -6,7 +6,9 @@
 //     patient name, the study's series (SM in bold);
 //   * Open hands the credentials to the view and opens the series URL: the slide opens and a
 //     frame is presented; the recent-files list holds the URL exactly, and nothing in the
-//     settings holds the password.
+//     settings holds the password;
+//   * View › Compare shows the protected series too (the Compare window's views get the main
+//     view's credentials).
 // Every wait is a signal (QSignalSpy, QTRY_*) with a bounded timeout; nothing sleeps a guess.
 #include <memory>
 
@@ -23,6 +25,8 @@
 
 #include <iris/IrisSlideView.h>
 
+#include "comparepane.h"
+#include "comparewindow.h"
 #include "enginehost_p.h"
 #include "mainwindow.h"
 #include "orthanc_server.h"
@@ -208,6 +212,22 @@ private Q_SLOTS:
         QVERIFY(view->hasNetworkCredentials());
         QTRY_VERIFY_WITH_TIMEOUT(frames.count() > 0, kTimeoutMs);
         QTRY_VERIFY_WITH_TIMEOUT(!browser->isVisible(), kTimeoutMs);
+
+        // View › Compare: the protected series opens in the Compare window's view too (its
+        // views get the main view's credentials; without them Orthanc answers 401).
+        {
+            CompareWindow *compare = m_main->compare({});
+            QVERIFY(compare);
+            QCOMPARE(compare->count(), 1);
+            QVERIFY(compare->view(0)->hasNetworkCredentials());
+            // Opened (or failed) once its view is on screen.
+            QTRY_VERIFY_WITH_TIMEOUT(compare->pane(0)->pendingPath().isEmpty(), kTimeoutMs);
+            QVERIFY2(compare->view(0)->hasSlide(), "the Compare window could not open the protected series");
+            QCOMPARE(compare->view(0)->slidePath(), expected);
+            QSignalSpy compareFrames(compare->view(0), &IrisSlideView::framePresented);
+            QTRY_VERIFY_WITH_TIMEOUT(compareFrames.count() > 0, kTimeoutMs);
+            compare->close(); // deleted on close
+        }
 
         // The recent list keeps the URL as it is; no setting holds the password.
         QSettings settings;

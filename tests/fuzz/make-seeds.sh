@@ -165,7 +165,8 @@ fi
 
 # --- the DICOMweb source's parsers (multipart, dicom_json) -------------------------------
 # Written here: a frame answer as Orthanc sends one (the first line is the message's
-# Content-Type, the body follows), with one and with two parts, quoted and bare boundaries;
+# Content-Type, the body follows), with one and with two parts, quoted and bare boundaries, and
+# the answer to a frame list whose parts name their frames (Content-Location);
 # and a WADO-RS metadata answer of a two-level TILED_FULL series with a label, series 1.2.3.4.
 crlf() { sed 's/$/\r/'; }
 {
@@ -179,6 +180,14 @@ crlf() { sed 's/$/\r/'; }
     echo 'frame'; echo '--a b'; echo 'Content-Type: image/jpeg'; echo; echo 'second'; echo '--a b--'
     echo 'epilogue'; } | crlf
 } > "$out/multipart/two-parts.bin"
+{ # a frame list's answer (…/frames/3,1): each part names its frame, as Orthanc's do
+  echo 'multipart/related; type="image/jpeg; transfer-syntax=1.2.840.10008.1.2.4.50"; boundary=f1'
+  { echo '--f1'; echo 'Content-Location: http://h/dicom-web/studies/1/series/2/instances/3/frames/3'
+    echo 'Content-Type: image/jpeg; transfer-syntax=1.2.840.10008.1.2.4.50'; echo; echo 'THIRD'
+    echo '--f1'; echo 'Content-Location: http://h/dicom-web/studies/1/series/2/instances/3/frames/1'
+    echo 'Content-Type: image/jpeg; transfer-syntax=1.2.840.10008.1.2.4.50'; echo; echo 'FIRST'
+    echo '--f1--'; } | crlf
+} > "$out/multipart/frame-list.bin"
 instance() { # SOP instance, image type, total W, total H, frames
   cat <<JSON
 {"00080016":{"vr":"UI","Value":["1.2.840.10008.5.1.4.1.1.77.1.6"]},

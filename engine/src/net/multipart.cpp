@@ -231,4 +231,31 @@ Expected<std::vector<Part>> parseMultipart(std::string_view contentType, const u
     }
 }
 
+uint32_t locatedFrame(std::string_view location) {
+    constexpr std::string_view kFrames = "/frames/";
+    const size_t at = location.rfind(kFrames);
+    if (at == std::string_view::npos) return 0;
+    const std::string_view digits = location.substr(at + kFrames.size());
+    uint32_t n = 0;
+    const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), n);
+    if (ec != std::errc() || end != digits.data() + digits.size() || digits.empty() || digits.front() == '+') return 0;
+    return n;
+}
+
+Result checkFrameParts(const std::vector<Part>& parts, const std::vector<uint32_t>& frames) {
+    if (parts.size() != frames.size()) {
+        return bad("the answer holds " + std::to_string(parts.size()) + " part" + (parts.size() == 1 ? "" : "s") +
+                   (frames.size() == 1 ? ", not the one frame asked for"
+                                       : " for the " + std::to_string(frames.size()) + " frames asked for"));
+    }
+    for (size_t i = 0; i < parts.size(); ++i) {
+        const uint32_t named = locatedFrame(parts[i].contentLocation);
+        if (named != 0 && named != frames[i]) {
+            return bad("part " + std::to_string(i + 1) + " of the answer is frame " + std::to_string(named) +
+                       " (its Content-Location), where frame " + std::to_string(frames[i]) + " was asked for");
+        }
+    }
+    return {};
+}
+
 } // namespace iris::net

@@ -42,4 +42,15 @@ struct Part {
 // A part's own Content-Length, where given, must be followed by the delimiter exactly.
 Expected<std::vector<Part>> parseMultipart(std::string_view contentType, const uint8_t* body, size_t size);
 
+// The frame number a part's Content-Location names (…/frames/<n>, n ≥ 1), or 0 when it names
+// none (no Content-Location, or one of another form, such as the request's frame list).
+uint32_t locatedFrame(std::string_view contentLocation);
+
+// Whether the parts of a WADO-RS frames answer hold the frames asked for (`frames`, numbered
+// from 1, in the order of the request's list …/frames/<a>,<b>,…): one part per frame, in that
+// order (PS3.18 8.7.3.5.2), and a part whose Content-Location names a frame names its own. A
+// server that sends more or fewer parts, or parts in another order, would put frames in the
+// wrong tiles: CorruptData naming the defect instead.
+Result checkFrameParts(const std::vector<Part>& parts, const std::vector<uint32_t>& frames);
+
 } // namespace iris::net

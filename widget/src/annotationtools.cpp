@@ -19,8 +19,7 @@ using iris::AnnotationObject;
 using iris::Point2;
 
 AnnotationTools::AnnotationTools(IrisSlideView *view)
-    : QObject(nullptr)
-    , m_view(view)
+    : m_view(view)
 {
 }
 
@@ -291,7 +290,7 @@ bool AnnotationTools::mouseDoubleClick(const QMouseEvent *event)
     if (!active() || event->button() != Qt::LeftButton)
         return false;
     if (m_gesture == Gesture::Polygon)
-        finishPolygon();
+        finishShape();
     return true; // no zoom while a tool is in effect
 }
 
@@ -382,11 +381,6 @@ void AnnotationTools::finishShape()
     commit(std::move(*o));
 }
 
-void AnnotationTools::finishPolygon()
-{
-    finishShape();
-}
-
 void AnnotationTools::commit(AnnotationObject object)
 {
     const quint64 previewId = m_previewId;
@@ -412,8 +406,7 @@ void AnnotationTools::cancel()
         break;
     case Gesture::Shape:
     case Gesture::Polygon:
-        dropPreview();
-        break;
+        break; // the preview goes below
     case Gesture::Move:
     case Gesture::Vertex:
         if (m_dragStarted && !m_locked && m_store)
@@ -468,7 +461,7 @@ bool AnnotationTools::keyPress(const QKeyEvent *event)
     case Qt::Key_Return:
     case Qt::Key_Enter:
         if (m_gesture == Gesture::Polygon) {
-            finishPolygon();
+            finishShape();
             return true;
         }
         return false;

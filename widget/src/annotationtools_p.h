@@ -28,7 +28,6 @@
 #include <memory>
 #include <vector>
 
-#include <QtCore/QObject>
 #include <QtCore/QPointF>
 #include <QtCore/QString>
 #include <QtGui/QUndoStack>
@@ -46,13 +45,14 @@ QT_END_NAMESPACE
 
 namespace IrisWidget {
 
-class AnnotationTools final : public QObject, public AnnotationEditSink {
-    Q_OBJECT
+class AnnotationTools final : public AnnotationEditSink {
 public:
     using Tool = IrisSlideView::AnnotationTool;
 
     explicit AnnotationTools(IrisSlideView *view);
     ~AnnotationTools() override;
+    AnnotationTools(const AnnotationTools &) = delete;
+    AnnotationTools &operator=(const AnnotationTools &) = delete;
 
     QUndoStack *undoStack() { return &m_stack; }
     Tool tool() const { return m_tool; }
@@ -107,8 +107,7 @@ private:
     std::optional<iris::AnnotationObject> shapeNow(bool final) const;
     void showPreview();
     void dropPreview();
-    void finishShape();
-    void finishPolygon();
+    void finishShape(); // the object, or nothing when the gesture made too little
     void commit(iris::AnnotationObject object);
     void switchTool(Tool tool);
 

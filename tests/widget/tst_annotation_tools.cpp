@@ -17,6 +17,7 @@
 #include <numbers>
 
 #include <QtCore/QFileInfo>
+#include <QtCore/QRegularExpression>
 #include <QtGui/QUndoStack>
 #include <QtGui/QWindow>
 #include <QtTest/QSignalSpy>
@@ -109,6 +110,9 @@ private Q_SLOTS:
     void rightButtonPansUnderATool();
     void quPathKeysSwitchTools();
     void measurements();
+    void dragsReportOnceAndEscPutsBack();
+    void anotherStoreOrClosingDropsThePreview();
+    void editsElsewhereDropStaleCommands();
 
 private:
     void drag(QPoint from, QPoint to, Qt::KeyboardModifiers modifiers = {}, int steps = 8,
@@ -693,6 +697,108 @@ void TstAnnotationTools::measurements()
              QStringLiteral("perimeter 40.0 px, area 100 px\u00b2"));
     QCOMPARE(QString::fromStdString(IrisWidget::measurementText(sq, 100, 100)),
              QStringLiteral("perimeter 4.00 mm, area 1.00 mm\u00b2"));
+}
+
+// A Select drag updates the store as it goes, without a signal; Esc mid-drag puts the object
+// back, with nothing on the stack.
+void TstAnnotationTools::dragsReportOnceAndEscPutsBack()
+{
+    IrisSlideView *view = m_w->view;
+    const QPointF a = slide(QPoint(150, 120)), b = slide(QPoint(300, 240));
+    AnnotationObject e;
+    e.kind = AnnotationKind::Ellipse;
+    e.box = {a.x(), a.y(), b.x(), b.y()};
+    QVERIFY(m_store->add(e).ok());
+    const auto before = objectsOf(*m_store);
+    QSignalSpy changed(view, &IrisSlideView::annotationChanged);
+    view->setAnnotationTool(IrisSlideView::Select);
+    const QPoint from(225, 180), to(300, 260);
+    QTest::mousePress(m_w->surface(), Qt::LeftButton, {}, from, kSlowClickMs);
+    for (int i = 1; i <= 8; ++i)
+        QTest::mouseMove(m_w->surface(), from + (to - from) * i / 8, 16);
+    QVERIFY(objectsOf(*m_store) != before); // moved, live
+    QCOMPARE(changed.count(), 0);
+    QTest::keyClick(m_w->surface(), Qt::Key_Escape);
+    QVERIFY(objectsOf(*m_store) == before);
+    QTest::mouseRelease(m_w->surface(), Qt::LeftButton, {}, to, 16);
+    QVERIFY(objectsOf(*m_store) == before);
+    QCOMPARE(changed.count(), 0);
+    QCOMPARE(view->annotationUndoStack()->count(), 0);
+    // The ellipse's right side, by its handle: one change, the left side where it was.
+    drag(view->mapFromSlide(QPointF(b.x(), (a.y() + b.y()) / 2)).toPoint(), QPoint(340, 180));
+    const auto after = objectsOf(*m_store);
+    QCOMPARE(changed.count(), 1);
+    QCOMPARE(after[0].box.minX, before[0].box.minX);
+    QCOMPARE(after[0].box.minY, before[0].box.minY);
+    QVERIFY(std::abs(after[0].box.maxX - slide(QPoint(340, 180)).x()) < 1);
+    undoRedoRestores(before, after);
+}
+
+// A preview never outlives its gesture: another store (the old one loses it, the undo stack is
+// cleared), a closed slide, the view destroyed.
+void TstAnnotationTools::anotherStoreOrClosingDropsThePreview()
+{
+    IrisSlideView *view = m_w->view;
+    view->setAnnotationTool(IrisSlideView::Rectangle);
+    drag(QPoint(100, 100), QPoint(200, 200));
+    QCOMPARE(view->annotationUndoStack()->count(), 1);
+    const auto drawn = objectsOf(*m_store);
+    const auto startDrawing = [&] {
+        QTest::mousePress(m_w->surface(), Qt::LeftButton, {}, QPoint(250, 100), kSlowClickMs);
+        QTest::mouseMove(m_w->surface(), QPoint(350, 200), 16);
+    };
+    startDrawing();
+    QCOMPARE(m_store->snapshot()->size(), size_t(2));
+    auto other = std::make_shared<iris::AnnotationStore>();
+    view->setAnnotations(other);
+    QVERIFY(objectsOf(*m_store) == drawn);
+    QCOMPARE(view->annotationUndoStack()->count(), 0);
+    QTest::mouseRelease(m_w->surface(), Qt::LeftButton, {}, QPoint(350, 200), 16);
+    QCOMPARE(other->snapshot()->size(), size_t(0));
+    QVERIFY(objectsOf(*m_store) == drawn);
+
+    view->setAnnotations(m_store);
+    startDrawing();
+    QCOMPARE(m_store->snapshot()->size(), size_t(2));
+    view->closeSlide();
+    QVERIFY(objectsOf(*m_store) == drawn);
+    QTest::mouseRelease(m_w->surface(), Qt::LeftButton, {}, QPoint(350, 200), 16);
+    QVERIFY(objectsOf(*m_store) == drawn);
+
+    QVERIFY(view->openSlide(m_sample));
+    view->setView(QPointF(2400, 1700), 2.0, 0);
+    startDrawing();
+    QCOMPARE(m_store->snapshot()->size(), size_t(2));
+    QVERIFY(m_w->frames->waitForCompleteFrame());
+    QCOMPARE(view->validationMessageCount(), quint64(0));
+    m_w.reset();
+    QVERIFY(objectsOf(*m_store) == drawn);
+}
+
+// The host edits the store behind the tools' back: a command whose object is gone is dropped
+// (logged), the others still undo.
+void TstAnnotationTools::editsElsewhereDropStaleCommands()
+{
+    IrisSlideView *view = m_w->view;
+    QSignalSpy removed(view, &IrisSlideView::annotationRemoved);
+    view->setAnnotationTool(IrisSlideView::Rectangle);
+    drag(QPoint(100, 100), QPoint(200, 200));
+    drag(QPoint(250, 100), QPoint(350, 200));
+    const auto both = objectsOf(*m_store);
+    QCOMPARE(both.size(), size_t(2));
+    QVERIFY(m_store->remove(both[1].id).ok()); // the host's own edit
+    QUndoStack *stack = view->annotationUndoStack();
+    QCOMPARE(stack->count(), 2);
+    QTest::ignoreMessage(QtWarningMsg, QRegularExpression(QStringLiteral("annotation %1 removal .* failed").arg(both[1].id)));
+    stack->undo();
+    QCOMPARE(stack->count(), 1);
+    QCOMPARE(removed.count(), 0);
+    QVERIFY(objectsOf(*m_store) == std::vector<AnnotationObject>{both[0]});
+    stack->undo();
+    QCOMPARE(removed.count(), 1);
+    QCOMPARE(m_store->snapshot()->size(), size_t(0));
+    stack->redo();
+    QVERIFY(objectsOf(*m_store) == std::vector<AnnotationObject>{both[0]});
 }
 
 IRIS_WIDGET_TEST_MAIN(TstAnnotationTools)

@@ -15,6 +15,7 @@
 #include <cmath>
 #include <memory>
 #include <numbers>
+#include <thread>
 
 #include <QtCore/QFileInfo>
 #include <QtCore/QRegularExpression>
@@ -680,6 +681,17 @@ void TstAnnotationTools::measurements()
     QCOMPARE(view->annotationMeasurement(), expected);
     QCOMPARE(measured.count(), 1);
     QCOMPARE(measured[0][0].toString(), expected);
+    // An edit made elsewhere (another thread) reaches the readout.
+    AnnotationObject wider = m_store->snapshot()->find(*id)->object;
+    wider.box.maxX += 400; // 800 × 200 px
+    bool updated = false;
+    std::thread([&] { updated = m_store->update(wider).ok(); }).join();
+    QVERIFY(updated);
+    const QString widened = QStringLiteral("perimeter %1 \u00b5m, area %2 \u00b5m\u00b2")
+                                .arg(fmt(2 * (800 * info.mppX + 200 * info.mppY)), fmt(800 * info.mppX * 200 * info.mppY));
+    QTRY_COMPARE_WITH_TIMEOUT(view->annotationMeasurement(), widened, 5000);
+    QTRY_COMPARE_WITH_TIMEOUT(measured.count(), 2, 5000);
+    QCOMPARE(measured[1][0].toString(), widened);
     // While a shape is drawn, the readout is the shape's.
     view->setAnnotationTool(IrisSlideView::Ellipse);
     QTest::mousePress(m_w->surface(), Qt::LeftButton, {}, QPoint(100, 100), kSlowClickMs);

@@ -518,6 +518,28 @@ bool AnnotationTools::keyPress(const QKeyEvent *event)
 
 // --- readouts ----------------------------------------------------------------------------------
 
+void AnnotationTools::watchStore(const std::shared_ptr<iris::AnnotationStore> &store)
+{
+    m_watch.reset(); // waits for a call in progress
+    if (!store)
+        return;
+    // The view outlives every call: ~IrisSlideView ends the subscription (waiting for a call in
+    // progress) before anything else.
+    IrisSlideView *view = m_view;
+    std::shared_ptr<std::atomic<bool>> posted = m_refreshPosted;
+    m_watch = store->onChange([view, posted, this] {
+        // The writer's thread, its lock held: only post. acq_rel: pairs with the GUI thread's
+        // store(false) below, so a publication after that store posts again.
+        if (posted->exchange(true, std::memory_order_acq_rel))
+            return;
+        // Queued to the view: Qt drops it if the view is gone before it runs (the tools die with it).
+        QMetaObject::invokeMethod(view, [this, posted] {
+            posted->store(false, std::memory_order_release);
+            updateMeasurement();
+        }, Qt::QueuedConnection);
+    });
+}
+
 QString AnnotationTools::measurement(quint64 id) const
 {
     const auto snap = snapshot();

@@ -25,6 +25,7 @@
 // store refuses (its object gone) is dropped (annotationcommands_p.h).
 #pragma once
 
+#include <atomic>
 #include <memory>
 #include <vector>
 
@@ -76,6 +77,9 @@ public:
     // back to where it was; no command, no signal.
     void cancel();
     bool isEditing() const { return m_gesture != Gesture::None; }
+
+    // The view's store was replaced (null: none): the readout follows its edits from now on.
+    void watchStore(const std::shared_ptr<iris::AnnotationStore> &store);
 
     QString measurement(quint64 id) const;
     // The shape in progress, else the selected object ("" for none); emits
@@ -134,6 +138,10 @@ private:
     bool m_dragStarted = false;
     bool m_locked = false;
     QString m_lastMeasurement;
+    // Edits of the store from anywhere (another thread, the host) refresh the readout: one
+    // queued call per burst, the flag set by the store's writer and cleared on the GUI thread.
+    iris::AnnotationSubscription m_watch;
+    std::shared_ptr<std::atomic<bool>> m_refreshPosted = std::make_shared<std::atomic<bool>>(false);
     quint64 m_added = 0; // set by objectAdded: the command's redo reached the store
 };
 

@@ -32,7 +32,8 @@ IrisSlideView::IrisSlideView(QWidget *parent)
 IrisSlideView::~IrisSlideView()
 {
     Q_D(IrisSlideView);
-    d->tools.cancel(); // a preview leaves the host's store
+    d->tools.watchStore(nullptr); // no more calls from the store's writers
+    d->tools.cancel();            // a preview leaves the host's store
     d->teardown();
 }
 
@@ -356,6 +357,7 @@ void IrisSlideView::setAnnotations(std::shared_ptr<iris::AnnotationStore> store)
         return;
     d->tools.cancel();                  // from the old store
     d->tools.undoStack()->clear();      // its commands edit the old store
+    d->tools.watchStore(store);
     d->settings.annotations = std::move(store);
     d->host.applyAnnotations(d->settings);
     Q_EMIT annotationsChanged();

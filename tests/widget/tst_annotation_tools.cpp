@@ -420,6 +420,15 @@ void TstAnnotationTools::selectMovesAndDeletes()
     // Back to the start.
     view->annotationUndoStack()->undo();
     QVERIFY(objectsOf(*m_store) == original);
+
+    // A drag on empty slide pans, as in Navigate; the object stays where it is in the slide.
+    const QPointF c0 = view->centre();
+    const double scale = view->downsample() * m_w->surface()->devicePixelRatio();
+    drag(QPoint(400, 300), QPoint(340, 260));
+    const QPointF expected = c0 - QPointF(-60, -40) * scale;
+    QVERIFY2(std::hypot(view->centre().x() - expected.x(), view->centre().y() - expected.y()) < 1e-6,
+             qPrintable(text(view->centre()) + text(expected)));
+    QVERIFY(objectsOf(*m_store) == original);
 }
 
 void TstAnnotationTools::handlesMoveOneVertex()

@@ -48,40 +48,31 @@ constexpr int kSlowClickMs = 1000;
 
 struct ViewWindow {
     std::unique_ptr<QWidget> window = std::make_unique<QWidget>();
-    IrisSlideView *view = new IrisSlideView;
+    IrisSlideView* view = new IrisSlideView;
     std::unique_ptr<FrameWatcher> frames = std::make_unique<FrameWatcher>(view);
 
-    ViewWindow()
-    {
-        auto *layout = new QVBoxLayout(window.get());
+    ViewWindow() {
+        auto* layout = new QVBoxLayout(window.get());
         layout->setContentsMargins(0, 0, 0, 0);
         layout->addWidget(view);
         window->resize(kViewSize);
     }
     ~ViewWindow() { frames.reset(); }
-    QWindow *surface() const { return view->surfaceWindow(); }
+    QWindow* surface() const { return view->surfaceWindow(); }
 };
 
-bool near(Point2 a, QPointF b, double tolerance = 1.0)
-{
+bool near(Point2 a, QPointF b, double tolerance = 1.0) {
     return std::abs(a.x - b.x()) <= tolerance && std::abs(a.y - b.y()) <= tolerance;
 }
 
-QString text(Point2 p)
-{
-    return QStringLiteral("(%1, %2)").arg(p.x, 0, 'f', 3).arg(p.y, 0, 'f', 3);
-}
+QString text(Point2 p) { return QStringLiteral("(%1, %2)").arg(p.x, 0, 'f', 3).arg(p.y, 0, 'f', 3); }
 
-QString text(QPointF p)
-{
-    return text(Point2{p.x(), p.y()});
-}
+QString text(QPointF p) { return text(Point2{p.x(), p.y()}); }
 
-std::vector<AnnotationObject> objectsOf(const iris::AnnotationStore &store)
-{
+std::vector<AnnotationObject> objectsOf(const iris::AnnotationStore& store) {
     std::vector<AnnotationObject> out;
-    store.snapshot()->forEach([&](const iris::StoredAnnotation &a) { out.push_back(a.object); });
-    std::sort(out.begin(), out.end(), [](const auto &a, const auto &b) { return a.id < b.id; });
+    store.snapshot()->forEach([&](const iris::StoredAnnotation& a) { out.push_back(a.object); });
+    std::sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.id < b.id; });
     return out;
 }
 
@@ -120,23 +111,21 @@ private:
               Qt::MouseButton button = Qt::LeftButton);
     void click(QPoint at);
     QPointF slide(QPoint p) const { return m_w->view->mapToSlide(QPointF(p)); }
-    void undoRedoRestores(const std::vector<AnnotationObject> &before, const std::vector<AnnotationObject> &after);
+    void undoRedoRestores(const std::vector<AnnotationObject>& before, const std::vector<AnnotationObject>& after);
 
     QString m_sample;
     std::unique_ptr<ViewWindow> m_w;
     std::shared_ptr<iris::AnnotationStore> m_store;
 };
 
-void TstAnnotationTools::initTestCase()
-{
+void TstAnnotationTools::initTestCase() {
     QCOMPARE(QGuiApplication::platformName(), QStringLiteral("xcb"));
     IrisSlideView::setVulkanValidation(true);
     m_sample = sampleSlide();
     QVERIFY2(QFileInfo::exists(m_sample), qPrintable(m_sample));
 }
 
-void TstAnnotationTools::init()
-{
+void TstAnnotationTools::init() {
     m_w = std::make_unique<ViewWindow>();
     m_w->window->show();
     QVERIFY(QTest::qWaitForWindowExposed(m_w->window.get()));
@@ -153,8 +142,7 @@ void TstAnnotationTools::init()
     QTRY_VERIFY(m_w->view->overlayRect(IrisSlideView::Overview).isEmpty()); // the next frame's layout
 }
 
-void TstAnnotationTools::cleanup()
-{
+void TstAnnotationTools::cleanup() {
     if (m_w) {
         QVERIFY(m_w->frames->waitForCompleteFrame());
         QCOMPARE(m_w->view->validationMessageCount(), quint64(0));
@@ -165,26 +153,22 @@ void TstAnnotationTools::cleanup()
 }
 
 void TstAnnotationTools::drag(QPoint from, QPoint to, Qt::KeyboardModifiers modifiers, int steps,
-                              Qt::MouseButton button)
-{
+                              Qt::MouseButton button) {
     QTest::mousePress(m_w->surface(), button, modifiers, from, kSlowClickMs);
-    for (int i = 1; i <= steps; ++i)
-        QTest::mouseMove(m_w->surface(), from + (to - from) * i / steps, 16);
+    for (int i = 1; i <= steps; ++i) QTest::mouseMove(m_w->surface(), from + (to - from) * i / steps, 16);
     QTest::mouseRelease(m_w->surface(), button, modifiers, to, 16);
 }
 
-void TstAnnotationTools::click(QPoint at)
-{
+void TstAnnotationTools::click(QPoint at) {
     QTest::mouseMove(m_w->surface(), at, 16);
     QTest::mousePress(m_w->surface(), Qt::LeftButton, {}, at, kSlowClickMs);
     QTest::mouseRelease(m_w->surface(), Qt::LeftButton, {}, at, 16);
 }
 
 // Undo gives `before` back exactly, redo `after`; through the stack and the view's keys.
-void TstAnnotationTools::undoRedoRestores(const std::vector<AnnotationObject> &before,
-                                          const std::vector<AnnotationObject> &after)
-{
-    QUndoStack *stack = m_w->view->annotationUndoStack();
+void TstAnnotationTools::undoRedoRestores(const std::vector<AnnotationObject>& before,
+                                          const std::vector<AnnotationObject>& after) {
+    QUndoStack* stack = m_w->view->annotationUndoStack();
     QVERIFY(objectsOf(*m_store) == after);
     stack->undo();
     QVERIFY(objectsOf(*m_store) == before);
@@ -198,15 +182,14 @@ void TstAnnotationTools::undoRedoRestores(const std::vector<AnnotationObject> &b
 
 // --- tests -----------------------------------------------------------------------------------
 
-void TstAnnotationTools::propertiesAndDefaults()
-{
+void TstAnnotationTools::propertiesAndDefaults() {
     IrisSlideView view;
     QCOMPARE(view.annotationTool(), IrisSlideView::Navigate);
     QVERIFY(view.annotationToolsEnabled());
     QVERIFY(view.annotationUndoStack() != nullptr);
     QCOMPARE(view.annotationMeasurement(), QString());
-    const QMetaObject *mo = view.metaObject();
-    for (const char *name : {"annotationTool", "annotationToolsEnabled"}) {
+    const QMetaObject* mo = view.metaObject();
+    for (const char* name : {"annotationTool", "annotationToolsEnabled"}) {
         const QMetaProperty p = mo->property(mo->indexOfProperty(name));
         QVERIFY2(p.isValid() && p.isWritable() && p.isDesignable() && p.hasNotifySignal(), name);
     }
@@ -220,17 +203,15 @@ void TstAnnotationTools::propertiesAndDefaults()
     QCOMPARE(view.annotationTool(), IrisSlideView::Polygon); // kept, not in effect
 }
 
-void TstAnnotationTools::rectangleIsOneUndoableObject()
-{
-    IrisSlideView *view = m_w->view;
+void TstAnnotationTools::rectangleIsOneUndoableObject() {
+    IrisSlideView* view = m_w->view;
     QSignalSpy added(view, &IrisSlideView::annotationAdded);
     QSignalSpy changed(view, &IrisSlideView::annotationChanged);
     QSignalSpy removed(view, &IrisSlideView::annotationRemoved);
     view->setAnnotationTool(IrisSlideView::Rectangle);
     const QPoint p0(100, 80), p1(260, 200);
     QTest::mousePress(m_w->surface(), Qt::LeftButton, {}, p0, kSlowClickMs);
-    for (int i = 1; i <= 8; ++i)
-        QTest::mouseMove(m_w->surface(), p0 + (p1 - p0) * i / 8, 16);
+    for (int i = 1; i <= 8; ++i) QTest::mouseMove(m_w->surface(), p0 + (p1 - p0) * i / 8, 16);
     // The shape in progress is in the store (the engine draws it), without a signal.
     QCOMPARE(m_store->snapshot()->size(), size_t(1));
     QCOMPARE(added.count(), 0);
@@ -239,11 +220,11 @@ void TstAnnotationTools::rectangleIsOneUndoableObject()
 
     const auto objects = objectsOf(*m_store);
     QCOMPARE(objects.size(), size_t(1));
-    const AnnotationObject &r = objects[0];
+    const AnnotationObject& r = objects[0];
     QCOMPARE(r.kind, AnnotationKind::Rectangle);
     QVERIFY2(near({r.box.minX, r.box.minY}, slide(p0)) && near({r.box.maxX, r.box.maxY}, slide(p1)),
-             qPrintable(text(Point2{r.box.minX, r.box.minY}) + text(slide(p0)) + text(Point2{r.box.maxX, r.box.maxY})
-                        + text(slide(p1))));
+             qPrintable(text(Point2{r.box.minX, r.box.minY}) + text(slide(p0)) + text(Point2{r.box.maxX, r.box.maxY}) +
+                        text(slide(p1))));
     QCOMPARE(added.count(), 1);
     QCOMPARE(added[0][0].toULongLong(), quint64(r.id));
     QCOMPARE(changed.count(), 0);
@@ -258,16 +239,15 @@ void TstAnnotationTools::rectangleIsOneUndoableObject()
     QCOMPARE(changed.count(), 0);
 }
 
-void TstAnnotationTools::ellipseWithShiftIsACircle()
-{
-    IrisSlideView *view = m_w->view;
+void TstAnnotationTools::ellipseWithShiftIsACircle() {
+    IrisSlideView* view = m_w->view;
     QSignalSpy added(view, &IrisSlideView::annotationAdded);
     view->setAnnotationTool(IrisSlideView::Ellipse);
     const QPoint p0(120, 100), p1(300, 160);
     drag(p0, p1, Qt::ShiftModifier);
     const auto objects = objectsOf(*m_store);
     QCOMPARE(objects.size(), size_t(1));
-    const AnnotationObject &e = objects[0];
+    const AnnotationObject& e = objects[0];
     QCOMPARE(e.kind, AnnotationKind::Ellipse);
     QCOMPARE(added.count(), 1);
     // A square box growing from the press towards the pointer, side = the larger extent.
@@ -278,17 +258,15 @@ void TstAnnotationTools::ellipseWithShiftIsACircle()
     undoRedoRestores({}, objects);
 }
 
-void TstAnnotationTools::polygonClickByClick()
-{
-    IrisSlideView *view = m_w->view;
+void TstAnnotationTools::polygonClickByClick() {
+    IrisSlideView* view = m_w->view;
     QSignalSpy added(view, &IrisSlideView::annotationAdded);
     view->setAnnotationTool(IrisSlideView::Polygon);
     const QPoint v[] = {{100, 100}, {300, 110}, {280, 250}, {200, 300}, {120, 240}};
-    for (const QPoint &p : v)
-        click(p);
+    for (const QPoint& p : v) click(p);
     QTest::mouseMove(m_w->surface(), QPoint(50, 50), 16); // the rubber band follows
     QCOMPARE(added.count(), 0);
-    QCOMPARE(m_store->snapshot()->size(), size_t(1)); // the preview
+    QCOMPARE(m_store->snapshot()->size(), size_t(1));   // the preview
     QTest::keyClick(m_w->surface(), Qt::Key_Backspace); // drops (120, 240)
     // A double click on the last vertex closes it (its two presses are one vertex).
     QTest::mouseMove(m_w->surface(), QPoint(140, 200), 16);
@@ -296,10 +274,10 @@ void TstAnnotationTools::polygonClickByClick()
     QCOMPARE(added.count(), 1);
     auto objects = objectsOf(*m_store);
     QCOMPARE(objects.size(), size_t(1));
-    const AnnotationObject &poly = objects[0];
+    const AnnotationObject& poly = objects[0];
     QCOMPARE(poly.kind, AnnotationKind::Polygon);
     QCOMPARE(poly.polygons.size(), size_t(1));
-    const auto &ring = poly.polygons[0].outer;
+    const auto& ring = poly.polygons[0].outer;
     const QPoint expected[] = {v[0], v[1], v[2], v[3], {140, 200}};
     QCOMPARE(ring.size(), size_t(5));
     for (size_t i = 0; i < ring.size(); ++i)
@@ -307,8 +285,7 @@ void TstAnnotationTools::polygonClickByClick()
     undoRedoRestores({}, objects);
 
     // Enter closes too; a polygon of two vertices is nothing.
-    for (const QPoint &p : {QPoint(350, 100), QPoint(420, 120), QPoint(400, 200)})
-        click(p);
+    for (const QPoint& p : {QPoint(350, 100), QPoint(420, 120), QPoint(400, 200)}) click(p);
     QTest::keyClick(m_w->surface(), Qt::Key_Return);
     QCOMPARE(added.count(), 4); // the first, two redos, this one
     QCOMPARE(m_store->snapshot()->size(), size_t(2));
@@ -319,9 +296,8 @@ void TstAnnotationTools::polygonClickByClick()
     QCOMPARE(m_store->snapshot()->size(), size_t(2));
 }
 
-void TstAnnotationTools::pointsAreClicks()
-{
-    IrisSlideView *view = m_w->view;
+void TstAnnotationTools::pointsAreClicks() {
+    IrisSlideView* view = m_w->view;
     QSignalSpy added(view, &IrisSlideView::annotationAdded);
     view->setAnnotationTool(IrisSlideView::Point);
     click(QPoint(150, 150));
@@ -336,16 +312,15 @@ void TstAnnotationTools::pointsAreClicks()
     undoRedoRestores({objects[0]}, objects);
 }
 
-void TstAnnotationTools::escCancelsShapes()
-{
-    IrisSlideView *view = m_w->view;
+void TstAnnotationTools::escCancelsShapes() {
+    IrisSlideView* view = m_w->view;
     QSignalSpy added(view, &IrisSlideView::annotationAdded);
     const QPoint p0(100, 80), p1(260, 200);
-    for (auto tool : {IrisSlideView::Rectangle, IrisSlideView::Ellipse, IrisSlideView::Freehand, IrisSlideView::Brush}) {
+    for (auto tool :
+         {IrisSlideView::Rectangle, IrisSlideView::Ellipse, IrisSlideView::Freehand, IrisSlideView::Brush}) {
         view->setAnnotationTool(tool);
         QTest::mousePress(m_w->surface(), Qt::LeftButton, {}, p0, kSlowClickMs);
-        for (int i = 1; i <= 8; ++i)
-            QTest::mouseMove(m_w->surface(), p0 + (p1 - p0) * i / 8, 16);
+        for (int i = 1; i <= 8; ++i) QTest::mouseMove(m_w->surface(), p0 + (p1 - p0) * i / 8, 16);
         QCOMPARE(m_store->snapshot()->size(), size_t(1));
         QTest::keyClick(m_w->surface(), Qt::Key_Escape);
         QCOMPARE(m_store->snapshot()->size(), size_t(0));
@@ -372,9 +347,8 @@ void TstAnnotationTools::escCancelsShapes()
     QCOMPARE(view->selectedAnnotation(), quint64(0));
 }
 
-void TstAnnotationTools::selectMovesAndDeletes()
-{
-    IrisSlideView *view = m_w->view;
+void TstAnnotationTools::selectMovesAndDeletes() {
+    IrisSlideView* view = m_w->view;
     const QPointF a = slide(QPoint(150, 120)), b = slide(QPoint(300, 240));
     AnnotationObject r;
     r.kind = AnnotationKind::Rectangle;
@@ -431,9 +405,8 @@ void TstAnnotationTools::selectMovesAndDeletes()
     QVERIFY(objectsOf(*m_store) == original);
 }
 
-void TstAnnotationTools::handlesMoveOneVertex()
-{
-    IrisSlideView *view = m_w->view;
+void TstAnnotationTools::handlesMoveOneVertex() {
+    IrisSlideView* view = m_w->view;
     const QPointF a = slide(QPoint(150, 120)), b = slide(QPoint(300, 240));
     AnnotationObject r;
     r.kind = AnnotationKind::Rectangle;
@@ -467,16 +440,15 @@ void TstAnnotationTools::handlesMoveOneVertex()
     const auto before2 = objectsOf(*m_store);
     drag(QPoint(400, 150), QPoint(420, 200));
     const auto after2 = objectsOf(*m_store);
-    const auto &ring = after2[1].polygons[0].outer;
+    const auto& ring = after2[1].polygons[0].outer;
     QVERIFY(near(ring[2], slide(QPoint(420, 200))));
     QCOMPARE(ring[0], before2[1].polygons[0].outer[0]);
     QCOMPARE(ring[1], before2[1].polygons[0].outer[1]);
     undoRedoRestores(before2, after2);
 }
 
-void TstAnnotationTools::lockedObjectsRefuseEdits()
-{
-    IrisSlideView *view = m_w->view;
+void TstAnnotationTools::lockedObjectsRefuseEdits() {
+    IrisSlideView* view = m_w->view;
     const QPointF a = slide(QPoint(150, 120)), b = slide(QPoint(300, 240));
     AnnotationObject r;
     r.kind = AnnotationKind::Rectangle;
@@ -501,9 +473,8 @@ void TstAnnotationTools::lockedObjectsRefuseEdits()
     QCOMPARE(view->annotationUndoStack()->count(), 0);
 }
 
-void TstAnnotationTools::freehandLasso()
-{
-    IrisSlideView *view = m_w->view;
+void TstAnnotationTools::freehandLasso() {
+    IrisSlideView* view = m_w->view;
     QSignalSpy added(view, &IrisSlideView::annotationAdded);
     view->setAnnotationTool(IrisSlideView::Freehand);
     // A circle of radius 80 around (240, 180), 90 steps, then a few moves of under a pixel.
@@ -514,22 +485,20 @@ void TstAnnotationTools::freehandLasso()
         path.push_back(c + QPoint(int(std::lround(80 * std::cos(t))), int(std::lround(80 * std::sin(t)))));
     }
     QTest::mousePress(m_w->surface(), Qt::LeftButton, {}, path[0], kSlowClickMs);
-    for (size_t i = 1; i < path.size(); ++i)
-        QTest::mouseMove(m_w->surface(), path[i], 16);
+    for (size_t i = 1; i < path.size(); ++i) QTest::mouseMove(m_w->surface(), path[i], 16);
     QTest::mouseRelease(m_w->surface(), Qt::LeftButton, {}, path.back(), 16);
     QCOMPARE(added.count(), 1);
     const auto objects = objectsOf(*m_store);
     QCOMPARE(objects.size(), size_t(1));
     QCOMPARE(objects[0].kind, AnnotationKind::Polygon);
-    const auto &ring = objects[0].polygons.at(0).outer;
+    const auto& ring = objects[0].polygons.at(0).outer;
     QVERIFY2(ring.size() >= 60 && ring.size() <= 91, qPrintable(QString::number(ring.size())));
     // Every vertex is a point of the path, a screen pixel or more from the one before.
     const double scale = view->downsample() * m_w->surface()->devicePixelRatio();
     for (size_t i = 0; i < ring.size(); ++i) {
         const QPointF w = view->mapFromSlide(QPointF(ring[i].x, ring[i].y));
         QVERIFY2(std::abs(std::hypot(w.x() - c.x(), w.y() - c.y()) - 80) < 1.5, qPrintable(text(w)));
-        if (i > 0)
-            QVERIFY(std::hypot(ring[i].x - ring[i - 1].x, ring[i].y - ring[i - 1].y) >= scale * 0.999);
+        if (i > 0) QVERIFY(std::hypot(ring[i].x - ring[i - 1].x, ring[i].y - ring[i - 1].y) >= scale * 0.999);
     }
     // Its area is the circle's, within the rounding of the path to whole pixels.
     const IrisWidget::Measurement m = IrisWidget::measure(objects[0], 0, 0);
@@ -538,18 +507,15 @@ void TstAnnotationTools::freehandLasso()
     undoRedoRestores({}, objects);
 }
 
-void TstAnnotationTools::brushPaintsTheUnionOfDiscs()
-{
-    IrisSlideView *view = m_w->view;
+void TstAnnotationTools::brushPaintsTheUnionOfDiscs() {
+    IrisSlideView* view = m_w->view;
     QSignalSpy added(view, &IrisSlideView::annotationAdded);
     view->setAnnotationTool(IrisSlideView::Brush);
     // An L: right 150 px, then down 100 px.
     const QPoint p0(100, 100), p1(250, 100), p2(250, 200);
     QTest::mousePress(m_w->surface(), Qt::LeftButton, {}, p0, kSlowClickMs);
-    for (int i = 1; i <= 15; ++i)
-        QTest::mouseMove(m_w->surface(), p0 + (p1 - p0) * i / 15, 16);
-    for (int i = 1; i <= 10; ++i)
-        QTest::mouseMove(m_w->surface(), p1 + (p2 - p1) * i / 10, 16);
+    for (int i = 1; i <= 15; ++i) QTest::mouseMove(m_w->surface(), p0 + (p1 - p0) * i / 15, 16);
+    for (int i = 1; i <= 10; ++i) QTest::mouseMove(m_w->surface(), p1 + (p2 - p1) * i / 10, 16);
     QCOMPARE(added.count(), 0);
     QTest::mouseRelease(m_w->surface(), Qt::LeftButton, {}, p2, 16);
     QCOMPARE(added.count(), 1);
@@ -573,9 +539,8 @@ void TstAnnotationTools::brushPaintsTheUnionOfDiscs()
     undoRedoRestores({}, objects);
 }
 
-void TstAnnotationTools::turnedAndMirroredView()
-{
-    IrisSlideView *view = m_w->view;
+void TstAnnotationTools::turnedAndMirroredView() {
+    IrisSlideView* view = m_w->view;
     view->setView(QPointF(2400, 1700), 2.0, 90, true, false);
     view->setAnnotationTool(IrisSlideView::Rectangle);
     const QPoint p0(100, 80), p1(260, 200);
@@ -583,26 +548,24 @@ void TstAnnotationTools::turnedAndMirroredView()
     const auto objects = objectsOf(*m_store);
     QCOMPARE(objects.size(), size_t(1));
     // At a quarter turn the screen's box is a level-0 box: its corners are the drag's.
-    const iris::Box2 expected = IrisWidget::boxFromDrag({slide(p0).x(), slide(p0).y()}, {slide(p1).x(), slide(p1).y()}, false);
-    const iris::Box2 &box = objects[0].box;
+    const iris::Box2 expected =
+        IrisWidget::boxFromDrag({slide(p0).x(), slide(p0).y()}, {slide(p1).x(), slide(p1).y()}, false);
+    const iris::Box2& box = objects[0].box;
     QVERIFY(std::abs(box.minX - expected.minX) < 1 && std::abs(box.maxX - expected.maxX) < 1);
     QVERIFY(std::abs(box.minY - expected.minY) < 1 && std::abs(box.maxY - expected.maxY) < 1);
     // The polygon tool on a 30° turn: each vertex under its click.
     view->setView(QPointF(2400, 1700), 2.0, 30, false, true);
     view->setAnnotationTool(IrisSlideView::Polygon);
     const QPoint v[] = {{100, 100}, {300, 120}, {200, 260}};
-    for (const QPoint &p : v)
-        click(p);
+    for (const QPoint& p : v) click(p);
     QTest::keyClick(m_w->surface(), Qt::Key_Enter);
     const auto all = objectsOf(*m_store);
     QCOMPARE(all.size(), size_t(2));
-    for (int i = 0; i < 3; ++i)
-        QVERIFY(near(all[1].polygons.at(0).outer.at(size_t(i)), slide(v[i])));
+    for (int i = 0; i < 3; ++i) QVERIFY(near(all[1].polygons.at(0).outer.at(size_t(i)), slide(v[i])));
 }
 
-void TstAnnotationTools::disabledToolsLeavePanning()
-{
-    IrisSlideView *view = m_w->view;
+void TstAnnotationTools::disabledToolsLeavePanning() {
+    IrisSlideView* view = m_w->view;
     view->setAnnotationTool(IrisSlideView::Rectangle);
     view->setAnnotationToolsEnabled(false);
     const QPointF c0 = view->centre();
@@ -622,9 +585,8 @@ void TstAnnotationTools::disabledToolsLeavePanning()
     QCOMPARE(m_store->snapshot()->size(), size_t(1));
 }
 
-void TstAnnotationTools::rightButtonPansUnderATool()
-{
-    IrisSlideView *view = m_w->view;
+void TstAnnotationTools::rightButtonPansUnderATool() {
+    IrisSlideView* view = m_w->view;
     view->setAnnotationTool(IrisSlideView::Polygon);
     const QPointF c0 = view->centre();
     const double scale = view->downsample() * m_w->surface()->devicePixelRatio();
@@ -636,9 +598,8 @@ void TstAnnotationTools::rightButtonPansUnderATool()
              qPrintable(text(view->centre()) + text(expected)));
 }
 
-void TstAnnotationTools::quPathKeysSwitchTools()
-{
-    IrisSlideView *view = m_w->view;
+void TstAnnotationTools::quPathKeysSwitchTools() {
+    IrisSlideView* view = m_w->view;
     QSignalSpy toolChanged(view, &IrisSlideView::annotationToolChanged);
     // In Navigate, R turns the view (the navigator's key) …
     QTest::keyClick(m_w->surface(), Qt::Key_R);
@@ -651,7 +612,7 @@ void TstAnnotationTools::quPathKeysSwitchTools()
         {Qt::Key_B, IrisSlideView::Brush},    {Qt::Key_Period, IrisSlideView::Point},
         {Qt::Key_M, IrisSlideView::Navigate},
     };
-    for (const auto &[key, tool] : keys) {
+    for (const auto& [key, tool] : keys) {
         QTest::keyClick(m_w->surface(), key);
         QCOMPARE(view->annotationTool(), tool);
     }
@@ -660,9 +621,8 @@ void TstAnnotationTools::quPathKeysSwitchTools()
     QCOMPARE(toolChanged.count(), 8);
 }
 
-void TstAnnotationTools::measurements()
-{
-    IrisSlideView *view = m_w->view;
+void TstAnnotationTools::measurements() {
+    IrisSlideView* view = m_w->view;
     const IrisSlideInfo info = view->slideInfo();
     QVERIFY(info.mppX > 0 && info.mppY > 0);
     AnnotationObject r;
@@ -676,15 +636,13 @@ void TstAnnotationTools::measurements()
     QVERIFY(id.ok() && lid.ok());
     const double perimeter = 2 * (400 * info.mppX + 200 * info.mppY);
     const double area = 400 * info.mppX * 200 * info.mppY;
-    const auto fmt = [](double v) {
-        return QString::number(v, 'f', v >= 100 ? 0 : v >= 10 ? 1 : v >= 1 ? 2 : 3);
-    };
-    const QString expected = QStringLiteral("perimeter %1 \u00b5m, area %2 \u00b5m\u00b2").arg(fmt(perimeter), fmt(area));
+    const auto fmt = [](double v) { return QString::number(v, 'f', v >= 100 ? 0 : v >= 10 ? 1 : v >= 1 ? 2 : 3); };
+    const QString expected =
+        QStringLiteral("perimeter %1 \u00b5m, area %2 \u00b5m\u00b2").arg(fmt(perimeter), fmt(area));
     QCOMPARE(view->annotationMeasurement(*id), expected);
     const double length = std::hypot(3000 * info.mppX, 4000 * info.mppY);
-    QCOMPARE(view->annotationMeasurement(*lid),
-             length >= 1000 ? QStringLiteral("length %1 mm").arg(fmt(length / 1000))
-                            : QStringLiteral("length %1 \u00b5m").arg(fmt(length)));
+    QCOMPARE(view->annotationMeasurement(*lid), length >= 1000 ? QStringLiteral("length %1 mm").arg(fmt(length / 1000))
+                                                               : QStringLiteral("length %1 \u00b5m").arg(fmt(length)));
     QSignalSpy measured(view, &IrisSlideView::annotationMeasurementChanged);
     view->setSelectedAnnotation(*id);
     QCOMPARE(view->annotationMeasurement(), expected);
@@ -696,8 +654,9 @@ void TstAnnotationTools::measurements()
     bool updated = false;
     std::thread([&] { updated = m_store->update(wider).ok(); }).join();
     QVERIFY(updated);
-    const QString widened = QStringLiteral("perimeter %1 \u00b5m, area %2 \u00b5m\u00b2")
-                                .arg(fmt(2 * (800 * info.mppX + 200 * info.mppY)), fmt(800 * info.mppX * 200 * info.mppY));
+    const QString widened =
+        QStringLiteral("perimeter %1 \u00b5m, area %2 \u00b5m\u00b2")
+            .arg(fmt(2 * (800 * info.mppX + 200 * info.mppY)), fmt(800 * info.mppX * 200 * info.mppY));
     QTRY_COMPARE_WITH_TIMEOUT(view->annotationMeasurement(), widened, 5000);
     QTRY_COMPARE_WITH_TIMEOUT(measured.count(), 2, 5000);
     QCOMPARE(measured[1][0].toString(), widened);
@@ -722,9 +681,8 @@ void TstAnnotationTools::measurements()
 
 // A Select drag updates the store as it goes, without a signal; Esc mid-drag puts the object
 // back, with nothing on the stack.
-void TstAnnotationTools::dragsReportOnceAndEscPutsBack()
-{
-    IrisSlideView *view = m_w->view;
+void TstAnnotationTools::dragsReportOnceAndEscPutsBack() {
+    IrisSlideView* view = m_w->view;
     const QPointF a = slide(QPoint(150, 120)), b = slide(QPoint(300, 240));
     AnnotationObject e;
     e.kind = AnnotationKind::Ellipse;
@@ -735,8 +693,7 @@ void TstAnnotationTools::dragsReportOnceAndEscPutsBack()
     view->setAnnotationTool(IrisSlideView::Select);
     const QPoint from(225, 180), to(300, 260);
     QTest::mousePress(m_w->surface(), Qt::LeftButton, {}, from, kSlowClickMs);
-    for (int i = 1; i <= 8; ++i)
-        QTest::mouseMove(m_w->surface(), from + (to - from) * i / 8, 16);
+    for (int i = 1; i <= 8; ++i) QTest::mouseMove(m_w->surface(), from + (to - from) * i / 8, 16);
     QVERIFY(objectsOf(*m_store) != before); // moved, live
     QCOMPARE(changed.count(), 0);
     QTest::keyClick(m_w->surface(), Qt::Key_Escape);
@@ -757,9 +714,8 @@ void TstAnnotationTools::dragsReportOnceAndEscPutsBack()
 
 // A preview never outlives its gesture: another store (the old one loses it, the undo stack is
 // cleared), a closed slide, the view destroyed.
-void TstAnnotationTools::anotherStoreOrClosingDropsThePreview()
-{
-    IrisSlideView *view = m_w->view;
+void TstAnnotationTools::anotherStoreOrClosingDropsThePreview() {
+    IrisSlideView* view = m_w->view;
     view->setAnnotationTool(IrisSlideView::Rectangle);
     drag(QPoint(100, 100), QPoint(200, 200));
     QCOMPARE(view->annotationUndoStack()->count(), 1);
@@ -798,9 +754,8 @@ void TstAnnotationTools::anotherStoreOrClosingDropsThePreview()
 
 // The host edits the store behind the tools' back: a command whose object is gone is dropped
 // (logged), the others still undo.
-void TstAnnotationTools::editsElsewhereDropStaleCommands()
-{
-    IrisSlideView *view = m_w->view;
+void TstAnnotationTools::editsElsewhereDropStaleCommands() {
+    IrisSlideView* view = m_w->view;
     QSignalSpy removed(view, &IrisSlideView::annotationRemoved);
     view->setAnnotationTool(IrisSlideView::Rectangle);
     drag(QPoint(100, 100), QPoint(200, 200));
@@ -808,9 +763,10 @@ void TstAnnotationTools::editsElsewhereDropStaleCommands()
     const auto both = objectsOf(*m_store);
     QCOMPARE(both.size(), size_t(2));
     QVERIFY(m_store->remove(both[1].id).ok()); // the host's own edit
-    QUndoStack *stack = view->annotationUndoStack();
+    QUndoStack* stack = view->annotationUndoStack();
     QCOMPARE(stack->count(), 2);
-    QTest::ignoreMessage(QtWarningMsg, QRegularExpression(QStringLiteral("annotation %1 removal .* failed").arg(both[1].id)));
+    QTest::ignoreMessage(QtWarningMsg,
+                         QRegularExpression(QStringLiteral("annotation %1 removal .* failed").arg(both[1].id)));
     stack->undo();
     QCOMPARE(stack->count(), 1);
     QCOMPARE(removed.count(), 0);

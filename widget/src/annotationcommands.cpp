@@ -24,8 +24,8 @@ bool succeeded(const iris::Result &r, const char *what, quint64 id)
 
 } // namespace
 
-AddAnnotationCommand::AddAnnotationCommand(AnnotationEditSink *sink, iris::AnnotationObject object,
-                                           bool replacesPreview)
+AddAnnotationCommand::AddAnnotationCommand(
+    AnnotationEditSink *sink, iris::AnnotationObject object, bool replacesPreview)
     : m_sink(sink)
     , m_object(std::move(object))
     , m_replacesPreview(replacesPreview)
@@ -97,8 +97,8 @@ void RemoveAnnotationCommand::undo()
     m_sink->objectAdded(m_object.id);
 }
 
-ChangeAnnotationCommand::ChangeAnnotationCommand(AnnotationEditSink *sink, iris::AnnotationObject before,
-                                                 iris::AnnotationObject after, const QString &text)
+ChangeAnnotationCommand::ChangeAnnotationCommand(
+    AnnotationEditSink *sink, iris::AnnotationObject before, iris::AnnotationObject after, const QString &text)
     : m_sink(sink)
     , m_before(std::move(before))
     , m_after(std::move(after))

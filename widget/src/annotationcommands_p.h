@@ -22,7 +22,8 @@
 namespace IrisWidget {
 
 // What the commands edit and whom they tell (AnnotationTools).
-class AnnotationEditSink {
+class AnnotationEditSink
+{
 public:
     virtual ~AnnotationEditSink() = default;
     virtual iris::AnnotationStore *editedStore() const = 0;
@@ -31,7 +32,8 @@ public:
     virtual void objectRemoved(quint64 id) = 0;
 };
 
-class AddAnnotationCommand final : public QUndoCommand {
+class AddAnnotationCommand final : public QUndoCommand
+{
 public:
     // replacesPreview: the object's id is a preview in the store now; the first redo updates it.
     AddAnnotationCommand(AnnotationEditSink *sink, iris::AnnotationObject object, bool replacesPreview);
@@ -44,7 +46,8 @@ private:
     bool m_replacesPreview;
 };
 
-class RemoveAnnotationCommand final : public QUndoCommand {
+class RemoveAnnotationCommand final : public QUndoCommand
+{
 public:
     RemoveAnnotationCommand(AnnotationEditSink *sink, iris::AnnotationObject object);
     void redo() override;
@@ -55,10 +58,11 @@ private:
     iris::AnnotationObject m_object;
 };
 
-class ChangeAnnotationCommand final : public QUndoCommand {
+class ChangeAnnotationCommand final : public QUndoCommand
+{
 public:
-    ChangeAnnotationCommand(AnnotationEditSink *sink, iris::AnnotationObject before, iris::AnnotationObject after,
-                            const QString &text);
+    ChangeAnnotationCommand(
+        AnnotationEditSink *sink, iris::AnnotationObject before, iris::AnnotationObject after, const QString &text);
     void redo() override;
     void undo() override;
 

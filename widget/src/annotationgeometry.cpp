@@ -26,14 +26,14 @@ Box2 boxFromDrag(Point2 a, Point2 b, bool square)
 
 AnnotationObject translated(AnnotationObject o, double dx, double dy)
 {
-    const auto move = [&](Point2& p) { p.x += dx, p.y += dy; };
-    for (Point2& p : o.points)
+    const auto move = [&](Point2 &p) { p.x += dx, p.y += dy; };
+    for (Point2 &p : o.points)
         move(p);
-    for (iris::PolygonPart& part : o.polygons) {
-        for (Point2& p : part.outer)
+    for (iris::PolygonPart &part : o.polygons) {
+        for (Point2 &p : part.outer)
             move(p);
-        for (auto& hole : part.holes)
-            for (Point2& p : hole)
+        for (auto &hole : part.holes)
+            for (Point2 &p : hole)
                 move(p);
     }
     if (!o.box.empty())
@@ -41,7 +41,7 @@ AnnotationObject translated(AnnotationObject o, double dx, double dy)
     return o;
 }
 
-std::vector<VertexHandle> vertexHandles(const AnnotationObject& o)
+std::vector<VertexHandle> vertexHandles(const AnnotationObject &o)
 {
     std::vector<VertexHandle> handles;
     switch (o.kind) {
@@ -52,7 +52,7 @@ std::vector<VertexHandle> vertexHandles(const AnnotationObject& o)
         break;
     case AnnotationKind::Polygon:
         for (int p = 0; p < int(o.polygons.size()); ++p) {
-            const iris::PolygonPart& part = o.polygons[size_t(p)];
+            const iris::PolygonPart &part = o.polygons[size_t(p)];
             for (int i = 0; i < int(part.outer.size()); ++i)
                 handles.push_back({part.outer[size_t(i)], p, 0, i});
             for (int h = 0; h < int(part.holes.size()); ++h)
@@ -61,23 +61,23 @@ std::vector<VertexHandle> vertexHandles(const AnnotationObject& o)
         }
         break;
     case AnnotationKind::Rectangle: {
-        const Box2& b = o.box;
-        handles = {{{b.minX, b.minY}, -1, 0, 0}, {{b.maxX, b.minY}, -1, 0, 1},
-                   {{b.maxX, b.maxY}, -1, 0, 2}, {{b.minX, b.maxY}, -1, 0, 3}};
+        const Box2 &b = o.box;
+        handles = {{{b.minX, b.minY}, -1, 0, 0}, {{b.maxX, b.minY}, -1, 0, 1}, {{b.maxX, b.maxY}, -1, 0, 2},
+            {{b.minX, b.maxY}, -1, 0, 3}};
         break;
     }
     case AnnotationKind::Ellipse: {
-        const Box2& b = o.box;
+        const Box2 &b = o.box;
         const double cx = (b.minX + b.maxX) / 2, cy = (b.minY + b.maxY) / 2;
-        handles = {{{b.maxX, cy}, -1, 0, 0}, {{cx, b.maxY}, -1, 0, 1},
-                   {{b.minX, cy}, -1, 0, 2}, {{cx, b.minY}, -1, 0, 3}};
+        handles
+            = {{{b.maxX, cy}, -1, 0, 0}, {{cx, b.maxY}, -1, 0, 1}, {{b.minX, cy}, -1, 0, 2}, {{cx, b.minY}, -1, 0, 3}};
         break;
     }
     }
     return handles;
 }
 
-AnnotationObject withHandleMoved(AnnotationObject o, const VertexHandle& h, Point2 to)
+AnnotationObject withHandleMoved(AnnotationObject o, const VertexHandle &h, Point2 to)
 {
     switch (o.kind) {
     case AnnotationKind::Point:
@@ -88,8 +88,9 @@ AnnotationObject withHandleMoved(AnnotationObject o, const VertexHandle& h, Poin
     case AnnotationKind::Polygon: {
         if (h.polygon < 0 || h.polygon >= int(o.polygons.size()))
             break;
-        iris::PolygonPart& part = o.polygons[size_t(h.polygon)];
-        std::vector<Point2>* ring = h.ring == 0 ? &part.outer
+        iris::PolygonPart &part = o.polygons[size_t(h.polygon)];
+        std::vector<Point2> *ring = h.ring == 0
+            ? &part.outer
             : (h.ring >= 1 && h.ring <= int(part.holes.size()) ? &part.holes[size_t(h.ring - 1)] : nullptr);
         if (ring && h.vertex >= 0 && h.vertex < int(ring->size()))
             (*ring)[size_t(h.vertex)] = to;
@@ -100,19 +101,30 @@ AnnotationObject withHandleMoved(AnnotationObject o, const VertexHandle& h, Poin
         const bool left = h.vertex == 0 || h.vertex == 3, top = h.vertex == 0 || h.vertex == 1;
         (left ? b.minX : b.maxX) = to.x;
         (top ? b.minY : b.maxY) = to.y;
-        o.box = {std::min(b.minX, b.maxX), std::min(b.minY, b.maxY), std::max(b.minX, b.maxX), std::max(b.minY, b.maxY)};
+        o.box
+            = {std::min(b.minX, b.maxX), std::min(b.minY, b.maxY), std::max(b.minX, b.maxX), std::max(b.minY, b.maxY)};
         break;
     }
     case AnnotationKind::Ellipse: {
         Box2 b = o.box;
         switch (h.vertex) {
-        case 0: b.maxX = to.x; break;
-        case 1: b.maxY = to.y; break;
-        case 2: b.minX = to.x; break;
-        case 3: b.minY = to.y; break;
-        default: break;
+        case 0:
+            b.maxX = to.x;
+            break;
+        case 1:
+            b.maxY = to.y;
+            break;
+        case 2:
+            b.minX = to.x;
+            break;
+        case 3:
+            b.minY = to.y;
+            break;
+        default:
+            break;
         }
-        o.box = {std::min(b.minX, b.maxX), std::min(b.minY, b.maxY), std::max(b.minX, b.maxX), std::max(b.minY, b.maxY)};
+        o.box
+            = {std::min(b.minX, b.maxX), std::min(b.minY, b.maxY), std::max(b.minX, b.maxX), std::max(b.minY, b.maxY)};
         break;
     }
     }
@@ -126,16 +138,16 @@ double distance(Point2 a, Point2 b)
 }
 } // namespace
 
-void appendThinned(std::vector<Point2>& path, Point2 p, double minDistance)
+void appendThinned(std::vector<Point2> &path, Point2 p, double minDistance)
 {
     if (path.empty() || distance(path.back(), p) >= minDistance)
         path.push_back(p);
 }
 
-std::vector<Point2> withoutRepeats(const std::vector<Point2>& ring, double minDistance)
+std::vector<Point2> withoutRepeats(const std::vector<Point2> &ring, double minDistance)
 {
     std::vector<Point2> out;
-    for (const Point2& p : ring)
+    for (const Point2 &p : ring)
         if (out.empty() || distance(out.back(), p) >= minDistance)
             out.push_back(p);
     while (out.size() > 1 && distance(out.back(), out.front()) < minDistance)
@@ -148,18 +160,19 @@ std::vector<Point2> withoutRepeats(const std::vector<Point2>& ring, double minDi
 namespace {
 
 // One GEOS context for the call (reentrant API; the engine uses its own per thread).
-struct GeosContext {
+struct GeosContext
+{
     GEOSContextHandle_t handle = GEOS_init_r();
     ~GeosContext() { GEOS_finish_r(handle); }
     GeosContext() = default;
-    GeosContext(const GeosContext&) = delete;
-    GeosContext& operator=(const GeosContext&) = delete;
+    GeosContext(const GeosContext &) = delete;
+    GeosContext &operator=(const GeosContext &) = delete;
 };
 
-std::vector<Point2> ringPoints(GEOSContextHandle_t ctx, const GEOSGeometry* ring)
+std::vector<Point2> ringPoints(GEOSContextHandle_t ctx, const GEOSGeometry *ring)
 {
     std::vector<Point2> out;
-    const GEOSCoordSequence* seq = GEOSGeom_getCoordSeq_r(ctx, ring);
+    const GEOSCoordSequence *seq = GEOSGeom_getCoordSeq_r(ctx, ring);
     unsigned int n = 0;
     if (!seq || !GEOSCoordSeq_getSize_r(ctx, seq, &n))
         return out;
@@ -174,7 +187,7 @@ std::vector<Point2> ringPoints(GEOSContextHandle_t ctx, const GEOSGeometry* ring
     return out;
 }
 
-void appendPolygon(GEOSContextHandle_t ctx, const GEOSGeometry* polygon, std::vector<iris::PolygonPart>& parts)
+void appendPolygon(GEOSContextHandle_t ctx, const GEOSGeometry *polygon, std::vector<iris::PolygonPart> &parts)
 {
     iris::PolygonPart part;
     part.outer = ringPoints(ctx, GEOSGetExteriorRing_r(ctx, polygon));
@@ -191,10 +204,10 @@ void appendPolygon(GEOSContextHandle_t ctx, const GEOSGeometry* polygon, std::ve
 
 } // namespace
 
-std::vector<iris::PolygonPart> brushOutline(const std::vector<Point2>& path, double radius, std::string* error)
+std::vector<iris::PolygonPart> brushOutline(const std::vector<Point2> &path, double radius, std::string *error)
 {
     std::vector<iris::PolygonPart> parts;
-    const auto fail = [&](const char* why) {
+    const auto fail = [&](const char *why) {
         if (error)
             *error = why;
         return std::vector<iris::PolygonPart>{};
@@ -205,16 +218,16 @@ std::vector<iris::PolygonPart> brushOutline(const std::vector<Point2>& path, dou
     GEOSContextHandle_t ctx = context.handle;
     if (!ctx)
         return fail("GEOS could not start");
-    GEOSCoordSequence* seq = GEOSCoordSeq_create_r(ctx, unsigned(path.size()), 2);
+    GEOSCoordSequence *seq = GEOSCoordSeq_create_r(ctx, unsigned(path.size()), 2);
     if (!seq)
         return fail("GEOS could not make a coordinate sequence");
     for (unsigned i = 0; i < path.size(); ++i)
         GEOSCoordSeq_setXY_r(ctx, seq, i, path[i].x, path[i].y);
     // A line of one point is not a line: a single stamp is the buffer of the point.
-    GEOSGeometry* line = path.size() == 1 ? GEOSGeom_createPoint_r(ctx, seq) : GEOSGeom_createLineString_r(ctx, seq);
+    GEOSGeometry *line = path.size() == 1 ? GEOSGeom_createPoint_r(ctx, seq) : GEOSGeom_createLineString_r(ctx, seq);
     if (!line)
         return fail("GEOS could not make the brush path");
-    GEOSGeometry* area = GEOSBuffer_r(ctx, line, radius, 8);
+    GEOSGeometry *area = GEOSBuffer_r(ctx, line, radius, 8);
     GEOSGeom_destroy_r(ctx, line);
     if (!area)
         return fail("GEOS could not buffer the brush path");
@@ -236,7 +249,7 @@ std::vector<iris::PolygonPart> brushOutline(const std::vector<Point2>& path, dou
 
 namespace {
 
-double ringLength(const std::vector<Point2>& ring, bool closed, double sx, double sy)
+double ringLength(const std::vector<Point2> &ring, bool closed, double sx, double sy)
 {
     double sum = 0;
     for (size_t i = 1; i < ring.size(); ++i)
@@ -246,12 +259,12 @@ double ringLength(const std::vector<Point2>& ring, bool closed, double sx, doubl
     return sum;
 }
 
-double ringArea(const std::vector<Point2>& ring)
+double ringArea(const std::vector<Point2> &ring)
 {
     double twice = 0;
     for (size_t i = 0, n = ring.size(); i < n; ++i) {
-        const Point2& a = ring[i];
-        const Point2& b = ring[(i + 1) % n];
+        const Point2 &a = ring[i];
+        const Point2 &b = ring[(i + 1) % n];
         twice += a.x * b.y - b.x * a.y;
     }
     return std::abs(twice) / 2;
@@ -281,7 +294,7 @@ std::string areaText(double v, bool physical)
 
 } // namespace
 
-Measurement measure(const AnnotationObject& o, double mppX, double mppY)
+Measurement measure(const AnnotationObject &o, double mppX, double mppY)
 {
     Measurement m;
     m.physical = mppX > 0 && mppY > 0;
@@ -295,10 +308,10 @@ Measurement measure(const AnnotationObject& o, double mppX, double mppY)
         break;
     case AnnotationKind::Polygon:
         m.closed = true;
-        for (const iris::PolygonPart& part : o.polygons) {
+        for (const iris::PolygonPart &part : o.polygons) {
             m.length += ringLength(part.outer, true, sx, sy);
             m.area += ringArea(part.outer);
-            for (const auto& hole : part.holes) {
+            for (const auto &hole : part.holes) {
                 m.length += ringLength(hole, true, sx, sy);
                 m.area -= ringArea(hole);
             }
@@ -323,7 +336,7 @@ Measurement measure(const AnnotationObject& o, double mppX, double mppY)
     return m;
 }
 
-std::string measurementText(const AnnotationObject& o, double mppX, double mppY)
+std::string measurementText(const AnnotationObject &o, double mppX, double mppY)
 {
     const Measurement m = measure(o, mppX, mppY);
     if (o.kind == AnnotationKind::Point)

@@ -20,8 +20,7 @@ using iris::Point2;
 
 AnnotationTools::AnnotationTools(IrisSlideView *view)
     : m_view(view)
-{
-}
+{ }
 
 AnnotationTools::~AnnotationTools() = default;
 
@@ -230,10 +229,10 @@ bool AnnotationTools::mouseMove(const QMouseEvent *event)
             return true;
         m_dragStarted = true;
         m_current = m_gesture == Gesture::Move ? translated(m_before, p.x - m_start.x, p.y - m_start.y)
-                                                : withHandleMoved(m_before, m_handle, p);
+                                               : withHandleMoved(m_before, m_handle, p);
         if (const iris::Result r = m_store->update(m_current); !r.ok()) {
-            qCWarning(lcIrisWidget).noquote() << "cannot move annotation" << m_current.id << ":"
-                                              << QString::fromStdString(r.message());
+            qCWarning(lcIrisWidget).noquote()
+                << "cannot move annotation" << m_current.id << ":" << QString::fromStdString(r.message());
             cancel();
         }
         updateMeasurement();
@@ -275,9 +274,9 @@ bool AnnotationTools::mouseRelease(const QMouseEvent *event)
         m_store.reset();
         if (m_locked || !m_dragStarted || m_current == m_before)
             return true;
-        const QString text = move
-            ? QCoreApplication::translate("IrisSlideView", "Move %1").arg(QString::fromUtf8(iris::annotationKindName(m_before.kind)))
-            : QCoreApplication::translate("IrisSlideView", "Move vertex");
+        const QString text = move ? QCoreApplication::translate("IrisSlideView", "Move %1")
+                                        .arg(QString::fromUtf8(iris::annotationKindName(m_before.kind)))
+                                  : QCoreApplication::translate("IrisSlideView", "Move vertex");
         m_stack.push(new ChangeAnnotationCommand(this, m_before, m_current, text));
         return true;
     }
@@ -301,8 +300,8 @@ std::optional<AnnotationObject> AnnotationTools::shapeNow(bool final) const
     switch (m_gestureTool) {
     case IrisSlideView::Rectangle:
     case IrisSlideView::Ellipse: {
-        AnnotationObject o = newObject(m_gestureTool == IrisSlideView::Rectangle ? AnnotationKind::Rectangle
-                                                                                 : AnnotationKind::Ellipse);
+        AnnotationObject o = newObject(
+            m_gestureTool == IrisSlideView::Rectangle ? AnnotationKind::Rectangle : AnnotationKind::Ellipse);
         o.box = boxFromDrag(m_start, m_pointer, m_square);
         if (final && !(o.box.width() > 0 && o.box.height() > 0))
             return std::nullopt;
@@ -533,10 +532,13 @@ void AnnotationTools::watchStore(const std::shared_ptr<iris::AnnotationStore> &s
         if (posted->exchange(true, std::memory_order_acq_rel))
             return;
         // Queued to the view: Qt drops it if the view is gone before it runs (the tools die with it).
-        QMetaObject::invokeMethod(view, [this, posted] {
-            posted->store(false, std::memory_order_release);
-            updateMeasurement();
-        }, Qt::QueuedConnection);
+        QMetaObject::invokeMethod(
+            view,
+            [this, posted] {
+                posted->store(false, std::memory_order_release);
+                updateMeasurement();
+            },
+            Qt::QueuedConnection);
     });
 }
 

@@ -46,7 +46,8 @@ QT_END_NAMESPACE
 
 namespace IrisWidget {
 
-class AnnotationTools final : public AnnotationEditSink {
+class AnnotationTools final : public AnnotationEditSink
+{
 public:
     using Tool = IrisSlideView::AnnotationTool;
 
@@ -93,10 +94,10 @@ public:
     void objectChanged(quint64 id) override;
     void objectRemoved(quint64 id) override;
 
-    static constexpr double kHitTolerancePx = 4;    // logical px, for picking objects
+    static constexpr double kHitTolerancePx = 4; // logical px, for picking objects
     static constexpr double kHandleTolerancePx = 6; // a handle is drawn 8 device px wide
-    static constexpr double kBrushRadiusPx = 10;    // logical px, fixed when the stroke starts
-    static constexpr double kThinningPx = 1;        // freehand and brush vertices, logical px
+    static constexpr double kBrushRadiusPx = 10; // logical px, fixed when the stroke starts
+    static constexpr double kThinningPx = 1; // freehand and brush vertices, logical px
 
 private:
     enum class Gesture { None, Shape, Polygon, Move, Vertex };
@@ -125,11 +126,11 @@ private:
     std::shared_ptr<iris::AnnotationStore> m_store; // the store the gesture edits
     quint64 m_previewId = 0;
     std::optional<iris::AnnotationObject> m_preview; // as last shown
-    iris::Point2 m_start;              // the press, level-0
-    iris::Point2 m_pointer;            // the pointer now, level-0
-    bool m_square = false;             // Shift held (Rectangle, Ellipse)
-    std::vector<iris::Point2> m_path;  // Polygon vertices, Freehand and Brush paths
-    double m_scale = 1;                // level-0 px per logical px at the press
+    iris::Point2 m_start; // the press, level-0
+    iris::Point2 m_pointer; // the pointer now, level-0
+    bool m_square = false; // Shift held (Rectangle, Ellipse)
+    std::vector<iris::Point2> m_path; // Polygon vertices, Freehand and Brush paths
+    double m_scale = 1; // level-0 px per logical px at the press
     // Select's drags
     iris::AnnotationObject m_before;
     iris::AnnotationObject m_current;

@@ -33,7 +33,7 @@ IrisSlideView::~IrisSlideView()
 {
     Q_D(IrisSlideView);
     d->tools.watchStore(nullptr); // no more calls from the store's writers
-    d->tools.cancel();            // a preview leaves the host's store
+    d->tools.cancel(); // a preview leaves the host's store
     d->teardown();
 }
 
@@ -355,8 +355,8 @@ void IrisSlideView::setAnnotations(std::shared_ptr<iris::AnnotationStore> store)
     Q_D(IrisSlideView);
     if (store == d->settings.annotations)
         return;
-    d->tools.cancel();                  // from the old store
-    d->tools.undoStack()->clear();      // its commands edit the old store
+    d->tools.cancel(); // from the old store
+    d->tools.undoStack()->clear(); // its commands edit the old store
     d->tools.watchStore(store);
     d->settings.annotations = std::move(store);
     d->host.applyAnnotations(d->settings);
@@ -791,9 +791,8 @@ std::unique_ptr<QMouseEvent> asLeftButton(const QMouseEvent *event, QEvent::Type
 {
     const Qt::MouseButton button = type == QEvent::MouseMove ? Qt::NoButton : Qt::LeftButton;
     const Qt::MouseButtons buttons = type == QEvent::MouseButtonRelease ? Qt::NoButton : Qt::LeftButton;
-    auto copy = std::make_unique<QMouseEvent>(type, event->position(), event->scenePosition(),
-                                              event->globalPosition(), button, buttons,
-                                              event->modifiers() & ~Qt::ControlModifier, event->pointingDevice());
+    auto copy = std::make_unique<QMouseEvent>(type, event->position(), event->scenePosition(), event->globalPosition(),
+        button, buttons, event->modifiers() & ~Qt::ControlModifier, event->pointingDevice());
     copy->setTimestamp(event->timestamp());
     return copy;
 }

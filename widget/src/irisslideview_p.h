@@ -90,7 +90,7 @@ public:
     QLabel *message = nullptr;
     IrisWidget::EngineHost host;
     IrisWidget::ViewNavigator navigator;
-    IrisWidget::AnnotationTools tools;       // takes input first while a tool is in effect
+    IrisWidget::AnnotationTools tools; // takes input first while a tool is in effect
     Qt::MouseButton toolPanButton = Qt::NoButton; // a right or middle drag panning under a tool
     IrisWidget::EngineSettings settings;     // for the next engine
     IrisWidget::FpsMeter fps;

@@ -78,7 +78,7 @@ class IRIS_WIDGET_EXPORT IrisSlideView : public QWidget {
     Q_PROPERTY(bool annotationToolsEnabled READ annotationToolsEnabled WRITE setAnnotationToolsEnabled NOTIFY
             annotationToolsEnabledChanged)
     Q_PROPERTY(QString annotationMeasurement READ annotationMeasurement NOTIFY annotationMeasurementChanged
-                   DESIGNABLE false STORED false)
+            DESIGNABLE false STORED false)
 
 public:
     // The overlays: a scale bar (hidden when the slide states no mpp), the magnification

@@ -105,6 +105,7 @@ private Q_SLOTS:
     void dragsReportOnceAndEscPutsBack();
     void anotherStoreOrClosingDropsThePreview();
     void editsElsewhereDropStaleCommands();
+    void geometryAlone();
 
 private:
     void drag(QPoint from, QPoint to, Qt::KeyboardModifiers modifiers = {}, int steps = 8,
@@ -776,6 +777,72 @@ void TstAnnotationTools::editsElsewhereDropStaleCommands() {
     QCOMPARE(m_store->snapshot()->size(), size_t(0));
     stack->redo();
     QVERIFY(objectsOf(*m_store) == std::vector<AnnotationObject>{both[0]});
+}
+
+// The pure functions under the tools (annotationgeometry_p.h), on hand-made objects.
+void TstAnnotationTools::geometryAlone() {
+    using namespace IrisWidget;
+    // A polygon with a hole moves whole.
+    AnnotationObject p;
+    p.kind = AnnotationKind::Polygon;
+    p.polygons = {{{{0, 0}, {10, 0}, {10, 10}, {0, 10}}, {{{2, 2}, {4, 2}, {4, 4}}}}};
+    const AnnotationObject moved = translated(p, 5, -3);
+    QCOMPARE(moved.polygons[0].outer[2], (Point2{15, 7}));
+    QCOMPARE(moved.polygons[0].holes[0][1], (Point2{9, -1}));
+    QCOMPARE(translated(moved, -5, 3), p);
+    // Handles: every ring's vertices; a hole's vertex moves alone.
+    const auto handles = vertexHandles(p);
+    QCOMPARE(handles.size(), size_t(7));
+    QCOMPARE(handles[5].ring, 1);
+    const AnnotationObject reshaped = withHandleMoved(p, handles[5], {3, 5});
+    QCOMPARE(reshaped.polygons[0].holes[0][1], (Point2{3, 5}));
+    QCOMPARE(reshaped.polygons[0].outer, p.polygons[0].outer);
+    // An ellipse's left side dragged past its right one: the box turns the right way round.
+    AnnotationObject e;
+    e.kind = AnnotationKind::Ellipse;
+    e.box = {0, 0, 10, 4};
+    const AnnotationObject flipped = withHandleMoved(e, vertexHandles(e)[2], {14, 2});
+    QCOMPARE(flipped.box, (iris::Box2{10, 0, 14, 4}));
+    // A rectangle's bottom-right corner: the top-left stays.
+    AnnotationObject r;
+    r.kind = AnnotationKind::Rectangle;
+    r.box = {0, 0, 10, 4};
+    QCOMPARE(withHandleMoved(r, vertexHandles(r)[2], {20, 8}).box, (iris::Box2{0, 0, 20, 8}));
+    // Squares grow from the press towards the pointer, in every quadrant.
+    QCOMPARE(boxFromDrag({10, 10}, {4, 12}, true), (iris::Box2{4, 10, 10, 16}));
+    QCOMPARE(boxFromDrag({10, 10}, {4, 12}, false), (iris::Box2{4, 10, 10, 12}));
+    // Repeats merged, the closing vertex dropped; thinning keeps a pixel between vertices.
+    QCOMPARE(withoutRepeats({{0, 0}, {0, 0.2}, {5, 0}, {5, 5}, {0.1, 0}}, 0.5),
+             (std::vector<Point2>{{0, 0}, {5, 0}, {5, 5}}));
+    std::vector<Point2> path{{0, 0}};
+    appendThinned(path, {0.5, 0}, 1);
+    appendThinned(path, {1, 0}, 1);
+    QCOMPARE(path.size(), size_t(2));
+    // A brush stroke around a square loop leaves a hole in the middle.
+    std::string error;
+    const auto parts = brushOutline({{0, 0}, {100, 0}, {100, 100}, {0, 100}, {0, 0}}, 10, &error);
+    QCOMPARE(parts.size(), size_t(1));
+    QCOMPARE(parts[0].holes.size(), size_t(1));
+    AnnotationObject loop;
+    loop.kind = AnnotationKind::Polygon;
+    loop.polygons = parts;
+    const double area = measure(loop, 0, 0).area; // 120² rounded corners outside, less the 80² hole
+    const double expected = 120.0 * 120 - (4 - std::numbers::pi) * 100 - 80.0 * 80;
+    QVERIFY2(std::abs(area - expected) < 0.01 * expected, qPrintable(QString::number(area)));
+    QVERIFY(brushOutline({}, 10, &error).empty());
+    QVERIFY(!error.empty());
+    // Readouts: a circle's perimeter, a polyline, points.
+    AnnotationObject c;
+    c.kind = AnnotationKind::Ellipse;
+    c.box = {0, 0, 200, 200};
+    QVERIFY(std::abs(measure(c, 0.5, 0.5).length - 2 * std::numbers::pi * 50) < 1e-9);
+    // 0.785 mm²: below 1 mm², so in µm².
+    QCOMPARE(QString::fromStdString(measurementText(c, 5, 5)),
+             QStringLiteral("perimeter 3.14 mm, area 785398 \u00b5m\u00b2"));
+    AnnotationObject pts;
+    pts.kind = AnnotationKind::Point;
+    pts.points = {{1, 1}, {2, 2}, {3, 3}};
+    QCOMPARE(QString::fromStdString(measurementText(pts, 0.25, 0.25)), QStringLiteral("3 points"));
 }
 
 IRIS_WIDGET_TEST_MAIN(TstAnnotationTools)

@@ -150,6 +150,12 @@ QString IrisSlideViewPlugin::domXml() const
     <property name="renderingIntent">
       <enum>IrisSlideView::%7</enum>
     </property>
+    <property name="annotationToolsEnabled">
+      <bool>true</bool>
+    </property>
+    <property name="annotationTool">
+      <enum>IrisSlideView::Navigate</enum>
+    </property>
   </widget>
   <customwidgets>
     <customwidget>

@@ -6,6 +6,7 @@
 
 #include <QtCore/QFile>
 #include <QtGui/QKeyEvent>
+#include <QtGui/QUndoStack>
 #include <QtGui/QMouseEvent>
 #include <QtGui/QWheelEvent>
 
@@ -31,6 +32,8 @@ IrisSlideView::IrisSlideView(QWidget *parent)
 IrisSlideView::~IrisSlideView()
 {
     Q_D(IrisSlideView);
+    d->tools.watchStore(nullptr); // no more calls from the store's writers
+    d->tools.cancel(); // a preview leaves the host's store
     d->teardown();
 }
 
@@ -108,6 +111,7 @@ bool IrisSlideView::hasNetworkCredentials() const
 bool IrisSlideView::openSlide(const QString &path)
 {
     Q_D(IrisSlideView);
+    d->tools.cancel();
     return d->open(path);
 }
 
@@ -122,6 +126,7 @@ void IrisSlideView::closeSlide()
 {
     Q_D(IrisSlideView);
     d->navigator.stopMotion();
+    d->tools.cancel();
     if (!d->slide)
         return;
     if (d->engine())
@@ -350,6 +355,9 @@ void IrisSlideView::setAnnotations(std::shared_ptr<iris::AnnotationStore> store)
     Q_D(IrisSlideView);
     if (store == d->settings.annotations)
         return;
+    d->tools.cancel(); // from the old store
+    d->tools.undoStack()->clear(); // its commands edit the old store
+    d->tools.watchStore(store);
     d->settings.annotations = std::move(store);
     d->host.applyAnnotations(d->settings);
     Q_EMIT annotationsChanged();
@@ -391,6 +399,59 @@ void IrisSlideView::setSelectedAnnotation(quint64 id)
     d->settings.selectedAnnotation = id;
     d->host.applyAnnotations(d->settings);
     Q_EMIT annotationsChanged();
+    d->tools.updateMeasurement();
+}
+
+IrisSlideView::AnnotationTool IrisSlideView::annotationTool() const
+{
+    Q_D(const IrisSlideView);
+    return d->tools.tool();
+}
+
+void IrisSlideView::setAnnotationTool(AnnotationTool tool)
+{
+    Q_D(IrisSlideView);
+    if (tool < Navigate || tool > Brush || tool == d->tools.tool())
+        return;
+    d->tools.setTool(tool);
+    if (d->window)
+        d->window->setCursor(d->tools.active() ? d->tools.cursor() : Qt::OpenHandCursor);
+    Q_EMIT annotationToolChanged(tool);
+}
+
+bool IrisSlideView::annotationToolsEnabled() const
+{
+    Q_D(const IrisSlideView);
+    return d->tools.enabled();
+}
+
+void IrisSlideView::setAnnotationToolsEnabled(bool on)
+{
+    Q_D(IrisSlideView);
+    if (on == d->tools.enabled())
+        return;
+    d->tools.setEnabled(on);
+    if (d->window)
+        d->window->setCursor(d->tools.active() ? d->tools.cursor() : Qt::OpenHandCursor);
+    Q_EMIT annotationToolsEnabledChanged(on);
+}
+
+QUndoStack *IrisSlideView::annotationUndoStack() const
+{
+    Q_D(const IrisSlideView);
+    return const_cast<IrisWidget::AnnotationTools &>(d->tools).undoStack();
+}
+
+QString IrisSlideView::annotationMeasurement(quint64 id) const
+{
+    Q_D(const IrisSlideView);
+    return d->tools.measurement(id);
+}
+
+QString IrisSlideView::annotationMeasurement() const
+{
+    Q_D(const IrisSlideView);
+    return d->tools.currentMeasurement();
 }
 
 QSize IrisSlideView::targetSize() const
@@ -724,6 +785,19 @@ bool IrisSlideView::event(QEvent *event)
     return QWidget::event(event);
 }
 
+namespace {
+// A right or middle button event as the navigator's left-button drag (panning under a tool).
+std::unique_ptr<QMouseEvent> asLeftButton(const QMouseEvent *event, QEvent::Type type)
+{
+    const Qt::MouseButton button = type == QEvent::MouseMove ? Qt::NoButton : Qt::LeftButton;
+    const Qt::MouseButtons buttons = type == QEvent::MouseButtonRelease ? Qt::NoButton : Qt::LeftButton;
+    auto copy = std::make_unique<QMouseEvent>(type, event->position(), event->scenePosition(), event->globalPosition(),
+        button, buttons, event->modifiers() & ~Qt::ControlModifier, event->pointingDevice());
+    copy->setTimestamp(event->timestamp());
+    return copy;
+}
+} // namespace
+
 void IrisSlideView::mousePressEvent(QMouseEvent *event)
 {
     Q_D(IrisSlideView);
@@ -731,6 +805,21 @@ void IrisSlideView::mousePressEvent(QMouseEvent *event)
     // of starting a pan.
     if (event->button() == Qt::LeftButton && d->moveToOverview(event->position(), false)) {
         d->overviewDragging = true;
+        event->accept();
+        return;
+    }
+    // Under a tool, the right and middle buttons pan as the left one does in Navigate.
+    if (d->tools.active() && d->toolPanButton == Qt::NoButton
+        && (event->button() == Qt::RightButton || event->button() == Qt::MiddleButton)) {
+        const auto left = asLeftButton(event, QEvent::MouseButtonPress);
+        if (d->navigator.mousePress(left.get())) {
+            d->toolPanButton = event->button();
+            event->accept();
+            return;
+        }
+    }
+    if (d->tools.mousePress(event)) {
+        d->navigator.stopMotion(); // the view holds still under a shape being drawn
         event->accept();
         return;
     }
@@ -751,7 +840,18 @@ void IrisSlideView::mouseMoveEvent(QMouseEvent *event)
         event->accept();
         return;
     }
-    const bool used = d->navigator.mouseMove(event);
+    bool used = false;
+    if (d->toolPanButton != Qt::NoButton) {
+        if (event->buttons() & d->toolPanButton) {
+            const auto left = asLeftButton(event, QEvent::MouseMove);
+            used = d->navigator.mouseMove(left.get());
+        } else {
+            d->toolPanButton = Qt::NoButton; // the release went elsewhere
+            d->navigator.stopMotion();
+        }
+    } else {
+        used = d->tools.mouseMove(event) || d->navigator.mouseMove(event);
+    }
     d->updateCursor(event->position());
     if (d->slide)
         Q_EMIT cursorMoved(mapToSlide(event->position()));
@@ -769,7 +869,14 @@ void IrisSlideView::mouseReleaseEvent(QMouseEvent *event)
         event->accept();
         return;
     }
-    if (d->navigator.mouseRelease(event))
+    if (d->toolPanButton != Qt::NoButton && event->button() == d->toolPanButton) {
+        d->toolPanButton = Qt::NoButton;
+        const auto left = asLeftButton(event, QEvent::MouseButtonRelease);
+        d->navigator.mouseRelease(left.get());
+        event->accept();
+        return;
+    }
+    if (d->tools.mouseRelease(event) || d->navigator.mouseRelease(event))
         event->accept();
     else
         QWidget::mouseReleaseEvent(event);
@@ -784,7 +891,7 @@ void IrisSlideView::mouseDoubleClickEvent(QMouseEvent *event)
         event->accept();
         return;
     }
-    if (d->navigator.mouseDoubleClick(event))
+    if (d->tools.mouseDoubleClick(event) || d->navigator.mouseDoubleClick(event))
         event->accept();
     else
         QWidget::mouseDoubleClickEvent(event);
@@ -802,7 +909,7 @@ void IrisSlideView::wheelEvent(QWheelEvent *event)
 void IrisSlideView::keyPressEvent(QKeyEvent *event)
 {
     Q_D(IrisSlideView);
-    if (d->navigator.keyPress(event))
+    if (d->tools.keyPress(event) || d->navigator.keyPress(event))
         event->accept();
     else
         QWidget::keyPressEvent(event);

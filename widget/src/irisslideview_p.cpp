@@ -29,6 +29,7 @@ QString fromStd(const std::string &s)
 IrisSlideViewPrivate::IrisSlideViewPrivate(IrisSlideView *q)
     : q_ptr(q)
     , navigator(this)
+    , tools(q)
 {
     const auto &[r, g, b] = settings.background; // the engine's default
     background = QColor::fromRgbF(r, g, b);
@@ -430,7 +431,10 @@ void IrisSlideViewPrivate::updateCursor(QPointF widgetPos)
         return;
     const QPointF t = toTarget(widgetPos);
     const bool overview = engine() && slide && engine()->overviewHit(t.x(), t.y());
-    window->setCursor(overview ? Qt::PointingHandCursor : Qt::OpenHandCursor);
+    if (overview)
+        window->setCursor(Qt::PointingHandCursor);
+    else
+        window->setCursor(tools.active() ? tools.cursor() : Qt::OpenHandCursor);
 }
 
 // --- NavigationTarget ------------------------------------------------------------------

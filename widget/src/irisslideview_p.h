@@ -15,6 +15,7 @@
 
 #include <iris/engine.h>
 
+#include "annotationtools_p.h"
 #include "enginehost_p.h"
 #include "fpsmeter_p.h"
 #include "iris/IrisSlideView.h"
@@ -89,6 +90,8 @@ public:
     QLabel *message = nullptr;
     IrisWidget::EngineHost host;
     IrisWidget::ViewNavigator navigator;
+    IrisWidget::AnnotationTools tools; // takes input first while a tool is in effect
+    Qt::MouseButton toolPanButton = Qt::NoButton; // a right or middle drag panning under a tool
     IrisWidget::EngineSettings settings;     // for the next engine
     IrisWidget::FpsMeter fps;
     QColor background;

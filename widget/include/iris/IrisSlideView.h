@@ -26,6 +26,7 @@
 #include "iris/IrisWidgetGlobal.h"
 
 QT_BEGIN_NAMESPACE
+class QUndoStack;
 class QWindow;
 namespace iris {
 class AnnotationStore; // iris/annotations.h (the engine's public API)
@@ -71,6 +72,13 @@ class IRIS_WIDGET_EXPORT IrisSlideView : public QWidget {
     Q_PROPERTY(bool annotationsVisible READ annotationsVisible WRITE setAnnotationsVisible NOTIFY annotationsChanged)
     Q_PROPERTY(quint64 selectedAnnotation READ selectedAnnotation WRITE setSelectedAnnotation NOTIFY annotationsChanged
                    DESIGNABLE false STORED false)
+    // Editing them (docs/ANNOTATIONS.md, "Editing in the widget"): the tool the left button
+    // uses (Navigate: it pans, as always), and whether tools may be used at all.
+    Q_PROPERTY(AnnotationTool annotationTool READ annotationTool WRITE setAnnotationTool NOTIFY annotationToolChanged)
+    Q_PROPERTY(bool annotationToolsEnabled READ annotationToolsEnabled WRITE setAnnotationToolsEnabled NOTIFY
+            annotationToolsEnabledChanged)
+    Q_PROPERTY(QString annotationMeasurement READ annotationMeasurement NOTIFY annotationMeasurementChanged
+            DESIGNABLE false STORED false)
 
 public:
     // The overlays: a scale bar (hidden when the slide states no mpp), the magnification
@@ -85,6 +93,12 @@ public:
     // clips the rest, with black-point compensation.
     enum RenderingIntent { Perceptual, RelativeColorimetric };
     Q_ENUM(RenderingIntent)
+    // What the left button does on the slide. Navigate pans (the default); the others edit the
+    // store set with setAnnotations(): Select picks, moves, reshapes and deletes objects; the
+    // rest draw a new object each. Keys (QuPath's where it has them): M, S, ".", R, O, P,
+    // Shift+P, B; see docs/ANNOTATIONS.md.
+    enum AnnotationTool { Navigate, Select, Point, Rectangle, Ellipse, Polygon, Freehand, Brush };
+    Q_ENUM(AnnotationTool)
 
     // How the view authenticates to a DICOMweb server when openSlide() is given a series URL
     // (https://host/prefix/studies/<StudyUID>/series/<SeriesUID>). Deliberately not a
@@ -150,6 +164,20 @@ public:
     bool annotationsVisible() const;
     // The object drawn selected, with its vertex handles (0: none).
     quint64 selectedAnnotation() const;
+    // The editing tool chosen; it is in effect while annotationToolsEnabled() (else the view
+    // navigates whatever is chosen), a store is set and a slide is open. Changing it drops a
+    // shape in progress.
+    AnnotationTool annotationTool() const;
+    bool annotationToolsEnabled() const;
+    // Every edit the tools make is a command here (Ctrl+Z / Ctrl+Shift+Z on the view, or a
+    // host's Edit menu through QUndoStack::createUndoAction); setting another store clears it.
+    QUndoStack *annotationUndoStack() const;
+    // Length (polylines) or perimeter and area (closed shapes) of an object of the store, in µm
+    // and µm² from the slide's mpp (mm, mm² from 1 mm and 1 mm² up; px without mpp); "" when the
+    // store has no such object.
+    QString annotationMeasurement(quint64 id) const;
+    // The same for the shape being drawn, else the selected object ("" for none).
+    QString annotationMeasurement() const;
     // The render target's size in device pixels (the widget's size × devicePixelRatio).
     QSize targetSize() const;
 
@@ -273,6 +301,10 @@ public Q_SLOTS:
     void zoomBy(double factor);
     void setAnnotationsVisible(bool visible);
     void setSelectedAnnotation(quint64 id);
+    void setAnnotationTool(AnnotationTool tool);
+    // Off: the view navigates whatever tool is chosen, and the tool keys do nothing (hosts that
+    // only show annotations). On by default.
+    void setAnnotationToolsEnabled(bool on);
 
 Q_SIGNALS:
     void slideOpened(const IrisSlideInfo &info);
@@ -292,6 +324,15 @@ Q_SIGNALS:
     void colorManagementChanged();
     // Another store was set, the annotations were shown or hidden, or the selection changed.
     void annotationsChanged();
+    // The tools (or their undo and redo) added, changed or removed an object of the store: once
+    // per finished object, never for the shape being drawn. For a host that saves each edit.
+    void annotationAdded(quint64 id);
+    void annotationChanged(quint64 id);
+    void annotationRemoved(quint64 id);
+    void annotationToolChanged(IrisSlideView::AnnotationTool tool);
+    void annotationToolsEnabledChanged(bool on);
+    // annotationMeasurement() changed (a shape drawn, a selection, an edit): for a status bar.
+    void annotationMeasurementChanged(const QString &text);
 
 protected:
     bool event(QEvent *event) override;

@@ -11,6 +11,9 @@
 #include <QtGui/QDragEnterEvent>
 #include <QtWidgets/QApplication>
 #include <QtWidgets/QFileDialog>
+#include <QtWidgets/QLabel>
+#include <QtWidgets/QToolBar>
+#include <QtGui/QUndoStack>
 #include <QtWidgets/QMenuBar>
 #include <QtWidgets/QMessageBox>
 #include <QtWidgets/QProgressBar>
@@ -337,6 +340,8 @@ void MainWindow::createMenus()
     view->addAction(m_images->toggleViewAction());
     view->addAction(m_annotationsDock->toggleViewAction());
 
+    createAnnotationMenu();
+
     QMenu *help = menuBar()->addMenu(tr("&Help"));
     help->addAction(tr("&About Iris View"), this, [this] {
         const QString device = m_view->deviceName();
@@ -465,6 +470,59 @@ void MainWindow::showOpenDialog()
         return;
     settings.setValue(QStringLiteral("lastFolder"), QFileInfo(path).absolutePath());
     openSlide(path, true);
+}
+
+void MainWindow::createAnnotationMenu()
+{
+    // The view's annotation tools (IrisSlideView::AnnotationTool), in a menu and a toolbar, one
+    // checked; the view's own keys (QuPath's: M, S, ".", R, O, P, Shift+P, B) switch them too,
+    // and the checks follow. Undo and redo are the view's stack's.
+    QMenu *menu = menuBar()->addMenu(tr("&Annotations"));
+    menu->setObjectName(QStringLiteral("annotationsMenu"));
+    QAction *undo = m_view->annotationUndoStack()->createUndoAction(this, tr("&Undo"));
+    undo->setShortcut(QKeySequence::Undo);
+    QAction *redo = m_view->annotationUndoStack()->createRedoAction(this, tr("&Redo"));
+    redo->setShortcut(QKeySequence(Qt::CTRL | Qt::SHIFT | Qt::Key_Z));
+    menu->addAction(undo);
+    menu->addAction(redo);
+    menu->addSeparator();
+    QToolBar *bar = addToolBar(tr("Annotation Tools"));
+    bar->setObjectName(QStringLiteral("annotationToolBar"));
+    auto *group = new QActionGroup(this);
+    const struct {
+        IrisSlideView::AnnotationTool tool;
+        QString text;
+        QString key;
+        const char *name;
+    } tools[] = {
+        {IrisSlideView::Navigate, tr("&Navigate"), QStringLiteral("M"), "navigate"},
+        {IrisSlideView::Select, tr("&Select and Edit"), QStringLiteral("S"), "select"},
+        {IrisSlideView::Point, tr("P&oint"), QStringLiteral("."), "point"},
+        {IrisSlideView::Rectangle, tr("&Rectangle"), QStringLiteral("R"), "rectangle"},
+        {IrisSlideView::Ellipse, tr("&Ellipse"), QStringLiteral("O"), "ellipse"},
+        {IrisSlideView::Polygon, tr("&Polygon"), QStringLiteral("P"), "polygon"},
+        {IrisSlideView::Freehand, tr("&Freehand"), QStringLiteral("Shift+P"), "freehand"},
+        {IrisSlideView::Brush, tr("&Brush"), QStringLiteral("B"), "brush"},
+    };
+    for (const auto &t : tools) {
+        auto *action = new QAction(t.text + QLatin1Char('\t') + t.key, this);
+        action->setObjectName(QStringLiteral("tool_") + QLatin1String(t.name));
+        action->setCheckable(true);
+        action->setChecked(m_view->annotationTool() == t.tool);
+        action->setToolTip(QString(t.text).remove(QLatin1Char('&')) + QStringLiteral(" (") + t.key + QLatin1Char(')'));
+        group->addAction(action);
+        menu->addAction(action);
+        bar->addAction(action);
+        const IrisSlideView::AnnotationTool tool = t.tool;
+        connect(action, &QAction::triggered, m_view, [this, tool] { m_view->setAnnotationTool(tool); });
+        connect(m_view, &IrisSlideView::annotationToolChanged, action,
+            [action, tool](IrisSlideView::AnnotationTool now) { action->setChecked(now == tool); });
+    }
+    // The length and area of the object selected or being drawn, in the status bar.
+    auto *measurement = new QLabel(statusBar());
+    measurement->setObjectName(QStringLiteral("annotationMeasurement"));
+    statusBar()->addPermanentWidget(measurement);
+    connect(m_view, &IrisSlideView::annotationMeasurementChanged, measurement, &QLabel::setText);
 }
 
 void MainWindow::showOpenFolderDialog()

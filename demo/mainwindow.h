@@ -54,6 +54,7 @@ public Q_SLOTS:
     void showOpenDialog();
     // A DICOM series is a folder of files (a level or more each): chosen as a folder.
     void showOpenFolderDialog();
+    void createAnnotationMenu();
     // File › Open from Server…: the QIDO-RS browser (made on first use, kept for the session).
     ServerBrowser *showServerBrowser();
     void exportAsIris();

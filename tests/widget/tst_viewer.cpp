@@ -22,6 +22,8 @@
 #include <QtTest/QTest>
 #include <QtWidgets/QApplication>
 #include <QtWidgets/QFileDialog>
+#include <QtWidgets/QLabel>
+#include <QtWidgets/QToolBar>
 #include <QtWidgets/QMenu>
 #include <QtWidgets/QToolButton>
 
@@ -85,6 +87,7 @@ private Q_SLOTS:
     void compareLinkToggleCrosshairAndCurrentView();
     void compareHoldsFourSlidesTwoByTwo();
     void openDicomFolderFromTheFileMenu();
+    void annotationToolsFromTheMenu();
 
 private:
     // Shows the main window and opens `path` in it once its view is on screen.
@@ -182,6 +185,29 @@ void TstViewer::openDicomFolderFromTheFileMenu()
     QCOMPARE(QFileInfo(m_main->view()->slidePath()).canonicalFilePath(), QFileInfo(boxes).canonicalFilePath());
     QVERIFY(m_main->view()->hasSlide());
     QCOMPARE(m_main->view()->slideInfo().vendor.isEmpty(), false);
+}
+
+// Issue 18: the Annotations menu and toolbar switch the view's tool, follow the view's own
+// switches, and undo what the view's stack holds.
+void TstViewer::annotationToolsFromTheMenu()
+{
+    showMain(m_sample);
+    IrisSlideView *view = m_main->view();
+    QCOMPARE(view->annotationTool(), IrisSlideView::Navigate);
+    auto *rectangle = m_main->findChild<QAction *>(QStringLiteral("tool_rectangle"));
+    auto *polygon = m_main->findChild<QAction *>(QStringLiteral("tool_polygon"));
+    auto *navigate = m_main->findChild<QAction *>(QStringLiteral("tool_navigate"));
+    QVERIFY(rectangle && polygon && navigate);
+    QVERIFY(navigate->isChecked());
+    rectangle->trigger();
+    QCOMPARE(view->annotationTool(), IrisSlideView::Rectangle);
+    QVERIFY(rectangle->isChecked() && !navigate->isChecked());
+    view->setAnnotationTool(IrisSlideView::Polygon);
+    QVERIFY(polygon->isChecked() && !rectangle->isChecked());
+    QVERIFY(m_main->findChild<QToolBar *>(QStringLiteral("annotationToolBar")));
+    QVERIFY(m_main->findChild<QLabel *>(QStringLiteral("annotationMeasurement")));
+    navigate->trigger();
+    QCOMPARE(view->annotationTool(), IrisSlideView::Navigate);
 }
 
 void TstViewer::recentFilesRememberOrientation()

@@ -209,6 +209,7 @@ Expected<Image> OpenSlideSource::readAssociatedImage(const std::string& name) {
     if (std::find(info_.associatedImages.begin(), info_.associatedImages.end(), name) == info_.associatedImages.end()) {
         return Result(Status::InvalidArgument, "The slide has no associated image '" + name + "'");
     }
+    std::lock_guard lock(associatedMutex_);
     int64_t w = 0, h = 0;
     openslide_get_associated_image_dimensions(osr_, name.c_str(), &w, &h);
     // Checked before the allocation: a file stating a 60000×60000 label would otherwise ask for

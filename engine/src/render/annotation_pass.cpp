@@ -80,20 +80,20 @@ Result AnnotationPass::recordDraws(VkCommandBuffer cmd, const FrameContext& fram
     const VkRect2D scissor{{0, 0}, frame.extent};
     const gpu::AnnotationPush push{{float(frame.extent.width), float(frame.extent.height)}};
     const VkDeviceSize offset = 0;
-    if (fillCount_ > 0) {
-        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, p->fill);
+    // Fills, then strokes over them: the same state for both, each its own pipeline and buffer.
+    const auto bind = [&](VkPipeline pipeline, VkBuffer buffer) {
+        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipeline);
         vkCmdSetViewport(cmd, 0, 1, &viewport);
         vkCmdSetScissor(cmd, 0, 1, &scissor);
         vkCmdPushConstants(cmd, pipeline_.layout(), VK_SHADER_STAGE_VERTEX_BIT, 0, sizeof(push), &push);
-        vkCmdBindVertexBuffers(cmd, 0, 1, &s.fills.buffer, &offset);
+        vkCmdBindVertexBuffers(cmd, 0, 1, &buffer, &offset);
+    };
+    if (fillCount_ > 0) {
+        bind(p->fill, s.fills.buffer);
         vkCmdDraw(cmd, fillCount_, 1, 0, 0);
     }
     if (strokeCount_ > 0) {
-        vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, p->stroke);
-        vkCmdSetViewport(cmd, 0, 1, &viewport);
-        vkCmdSetScissor(cmd, 0, 1, &scissor);
-        vkCmdPushConstants(cmd, pipeline_.layout(), VK_SHADER_STAGE_VERTEX_BIT, 0, sizeof(push), &push);
-        vkCmdBindVertexBuffers(cmd, 0, 1, &s.strokes.buffer, &offset);
+        bind(p->stroke, s.strokes.buffer);
         vkCmdDraw(cmd, 4, strokeCount_, 0, 0);
     }
     return {};

@@ -5,6 +5,8 @@
 #include "iris/annotations.h"
 
 #include <cmath>
+#include <memory>
+#include <shared_mutex>
 
 #include "buffer/buffer_thread.h"
 #include "cache/loader_pool.h"
@@ -66,11 +68,44 @@ struct Engine::Impl {
         if (Result r = buffer->init(); !r.ok()) return r;
         shared.update([&](Snapshot& s) { s.background = config.background; });
         (void)bakeColor(nullptr, color, colorStatus); // the display profile's description
-        render->start();
+        // Whichever thread sees the device lost wakes the render thread, which recovers.
+        device.setLostCallback([this] { shared.bump(); });
+        render->setRebuild([this] { return rebuildGpu(); });
         buffer->start();
+        render->start();
         loaders = std::make_unique<LoaderPool>(shared, cache, log, config.loaderThreads, int(config.perimeterTiles));
         log.info("engine ready: " + std::to_string(atlas.slotCount()) + " atlas slots, RAM budget " +
                  std::to_string(cache.budgetBytes() >> 20) + " MiB");
+        return {};
+    }
+
+    // Device loss, called by the render thread's recovery (RenderThread::recover) once its own
+    // GPU objects are gone: parks the buffer thread (which drops its own), destroys the mip and
+    // tile pipelines and the atlas, makes a new logical device, and builds them again in place
+    // (the threads hold references to them). The atlas asks for no more slots than it had, so
+    // that the hand-over ring, sized for them, still holds every slot. The RAM cache, the slide,
+    // the view and the loaders are untouched: the view is re-buffered from RAM.
+    Result rebuildGpu() {
+        buffer->park();
+        if (shared.stopping.load(std::memory_order_acquire)) return Result(Status::Cancelled, "the engine is stopping");
+        {
+            std::unique_lock lock(gpuMutex); // memoryStats() and device() read the atlas
+            if (atlas.slotCount()) atlasSlots = atlas.slotCount();
+            std::destroy_at(&mips);
+            std::destroy_at(&pipeline);
+            std::destroy_at(&atlas);
+            std::construct_at(&atlas, device);
+            std::construct_at(&pipeline, device, atlas);
+            std::construct_at(&mips, device, atlas);
+            handover->reset();
+            if (Result r = device.recreate(); !r.ok()) return r;
+            const uint64_t budget = std::min<uint64_t>(config.vramBudgetBytes, uint64_t(atlasSlots) * gpu::TileAtlas::bytesPerSlot());
+            if (Result r = atlas.init(budget, config.tuning.deviceAllocationLimit); !r.ok()) return r;
+            if (Result r = pipeline.init(RenderThread::kFramesInFlight, config.tuning.colorLookup); !r.ok()) return r;
+            if (Result r = mips.init(config.tuning.mipSchedule); !r.ok()) return r;
+        }
+        if (Result r = buffer->init(); !r.ok()) return r;
+        buffer->resume();
         return {};
     }
 
@@ -134,6 +169,10 @@ struct Engine::Impl {
     gpu::TilePipeline pipeline;
     gpu::MipPipeline mips;
     std::unique_ptr<Handover> handover;
+    // Held exclusively while rebuildGpu() replaces the atlas and the pipelines, shared by the API
+    // calls that read them (the threads that use them are parked then).
+    mutable std::shared_mutex gpuMutex;
+    uint32_t atlasSlots = 0; // the atlas's slots before a rebuild
     UploadCounters counters;
     uint64_t fieldCounter = 0; // guarded by SharedState's update lock
     // Colour settings and what they give for the open slide; written under openMutex too.
@@ -617,6 +656,9 @@ DeviceInfo Engine::device() const {
     d.graphicsFamily = impl_->device.families().graphics;
     d.computeFamily = impl_->device.families().compute;
     d.transferFamily = impl_->device.families().transfer;
+    d.recoveries = impl_->render->recoveries();
+    d.lost = impl_->device.lost() || impl_->render->recovering();
+    std::shared_lock lock(impl_->gpuMutex);
     d.atlasSlots = impl_->atlas.slotCount();
     d.mipSchedule = gpu::MipPipeline::scheduleName(impl_->mips.schedule());
     return d;
@@ -626,9 +668,10 @@ MemoryStats Engine::memoryStats() const {
     MemoryStats m;
     m.ramCacheBytes = impl_->cache.bytesUsed();
     m.ramBudgetBytes = impl_->cache.budgetBytes();
+    std::shared_lock lock(impl_->gpuMutex);
     m.vramAtlasBytes = uint64_t(impl_->atlas.slotCount()) * gpu::TileAtlas::bytesPerSlot();
     m.atlasSlots = impl_->atlas.slotCount();
-    m.atlasActive = impl_->atlas.map().countActive();
+    m.atlasActive = m.atlasSlots ? impl_->atlas.map().countActive() : 0; // none while a rebuild failed
     return m;
 }
 
@@ -640,5 +683,35 @@ EngineMetrics Engine::metrics() const {
 void Engine::resetMetrics() { impl_->render->resetMetrics(); }
 
 uint64_t Engine::validationMessageCount() const { return impl_->device.validationMessages(); }
+
+namespace {
+const char* faultName(Engine::InjectedFault f) {
+    switch (f) {
+    case Engine::InjectedFault::DeviceLostAtFrameSubmit: return "device lost at the next frame submission";
+    case Engine::InjectedFault::DeviceLostAtUploadSubmit: return "device lost at the next upload submission";
+    case Engine::InjectedFault::DeviceLostAtFrameWait: return "device lost at the next frame fence wait";
+    case Engine::InjectedFault::DeviceLostAtPresent: return "device lost at the next present";
+    case Engine::InjectedFault::SurfaceLostAtPresent: return "surface lost at the next present";
+    }
+    return "?";
+}
+} // namespace
+
+void Engine::injectFault(InjectedFault fault) {
+    using F = gpu::Device::Fault;
+    switch (fault) {
+    case InjectedFault::DeviceLostAtFrameSubmit: impl_->device.inject(F::LostAtFrameSubmit); break;
+    case InjectedFault::DeviceLostAtUploadSubmit: impl_->device.inject(F::LostAtUploadSubmit); break;
+    case InjectedFault::DeviceLostAtFrameWait: impl_->device.inject(F::LostAtFrameWait); break;
+    case InjectedFault::DeviceLostAtPresent: impl_->device.inject(F::LostAtPresent); break;
+    case InjectedFault::SurfaceLostAtPresent: impl_->device.inject(F::SurfaceLostAtPresent); break;
+    default: return;
+    }
+    impl_->log.warn(std::string("fault injected: ") + faultName(fault));
+}
+
+void Engine::setFaultCallback(std::function<void(const Result&)> callback) {
+    impl_->render->setFaultCallback(std::move(callback));
+}
 
 } // namespace iris

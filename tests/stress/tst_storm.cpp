@@ -1,7 +1,7 @@
 // The engine under a storm of concurrent API calls: four threads issue random calls of every
 // public Engine function but create and bindSurface (no window here) — open, close, moves,
 // resizes, rebinds, reads, settings, colour, overlays, fonts, annotations (and edits of the store
-// shown), metrics, callbacks — while the engine renders, until they have made kStormCalls calls and the engine has drawn kStormFrames frames
+// shown), metrics, callbacks, injected device losses — while the engine renders, until they have made kStormCalls calls and the engine has drawn kStormFrames frames
 // meanwhile. Run in the dev build and under the tsan and asan presets: no
 // data race report, no crash, no deadlock, and afterwards the engine shows exactly the last
 // view set.
@@ -14,6 +14,7 @@
 
 #include <array>
 #include <atomic>
+#include <functional>
 #include <optional>
 #include <memory>
 #include <mutex>
@@ -74,6 +75,7 @@ void TestStorm::storm() {
     std::atomic<bool> stop{false};
     std::atomic<uint64_t> calls{0};
     auto callbackFrames = std::make_shared<std::atomic<uint64_t>>(0);
+    auto faults = std::make_shared<std::atomic<uint64_t>>(0);
     const uint64_t targetCalls = stormCalls();
     const uint64_t framesBefore = e.metrics().frames;
     const auto stormStart = std::chrono::steady_clock::now();
@@ -212,6 +214,16 @@ void TestStorm::storm() {
             case 26:
                 if (rng() % 32 == 0) (void)e.bindOffscreen(64 + uint32_t(rng() % 400), 64 + uint32_t(rng() % 300));
                 if (rng() % 64 == 0) e.unbindSurface(); // no surface: a no-op that must stay one
+                // A lost device now and then (a few a storm), recovered while the calls go on.
+                if (rng() % 512 == 0) {
+                    using F = iris::Engine::InjectedFault;
+                    constexpr F kinds[] = {F::DeviceLostAtFrameSubmit, F::DeviceLostAtUploadSubmit, F::DeviceLostAtFrameWait};
+                    e.injectFault(kinds[rng() % 3]);
+                }
+                if (rng() % 256 == 0)
+                    e.setFaultCallback(rng() % 2 ? std::function<void(const iris::Result&)>{}
+                                                 : [faults](const iris::Result&) { faults->fetch_add(1); });
+                (void)e.device();
                 break;
             }
             // Every 256th call asks whether the storm is over (metrics() is not free).
@@ -231,6 +243,7 @@ void TestStorm::storm() {
           static_cast<unsigned long long>(stormFrames),
           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - stormStart).count());
     QVERIFY2(stormFrames >= kStormFrames, qPrintable(QString("only %1 frames drawn during the storm").arg(stormFrames)));
+    qInfo("storm: %u device recoveries", e.device().recoveries);
 
     // Settle: a known slide, size and view; the engine must show exactly that.
     e.setVisible(true);
@@ -258,6 +271,8 @@ void TestStorm::storm() {
         if (line.find("No such file") != std::string::npos || line.find("no such file") != std::string::npos ||
             line.find("/nonexistent/") != std::string::npos) // the storm's missing slide and font
             continue;
+        if (line.find("Vulkan device lost") != std::string::npos || line.find("The GPU device was lost") != std::string::npos)
+            continue; // the storm's injected faults
         qWarning("engine logged an error: %s", line.c_str());
         ++logErrors;
     }

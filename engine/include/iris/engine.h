@@ -260,6 +260,33 @@ public:
     // Messages the Vulkan validation layers reported (tests require zero).
     uint64_t validationMessageCount() const;
 
+    // --- faults --------------------------------------------------------------------
+    // A lost device (VK_ERROR_DEVICE_LOST from any submit, wait or present: a driver reset, a
+    // GPU hang, a removed eGPU) is recovered by the engine itself: error() reports it
+    // (Status::DeviceLost) and it is logged; the render thread parks the buffer thread,
+    // destroys and recreates the logical device, the tile atlas and every pipeline, binds the
+    // same target again and re-buffers the current view from the RAM cache. The host does
+    // nothing: its calls meanwhile are kept (views, target requests, waitForFrame), and
+    // DeviceInfo::recoveries counts the recoveries. docs/RELIABILITY.md "Device loss".
+    //
+    // Fault injection, for tests (the host's and the engine's): the next operation of the kind
+    // named reports the fault as the driver would. DeviceLost* also makes every later
+    // submission fail until the engine has recreated the device, as a real loss does.
+    enum class InjectedFault {
+        DeviceLostAtFrameSubmit,  // the render thread's next frame submission
+        DeviceLostAtUploadSubmit, // the buffer thread's next upload (copy or mip) submission
+        DeviceLostAtFrameWait,    // the render thread's next wait on a frame's fence
+        DeviceLostAtPresent,      // the next vkQueuePresentKHR (a bound surface only)
+        SurfaceLostAtPresent,     // the next vkQueuePresentKHR reports VK_ERROR_SURFACE_LOST_KHR
+    };
+    void injectFault(InjectedFault fault);
+    // Told of faults and recoveries, on an engine thread (quick, thread-safe; a Qt host
+    // queues to its own thread): Status::DeviceLost when a lost device is noticed,
+    // Status::Ok with a message once it has been recreated, Status::SurfaceLost when the
+    // window system took the bound surface away (nothing is drawn until the host binds a new
+    // one: unbindSurface(), destroy it, make one, bindSurface()). They also set error().
+    void setFaultCallback(std::function<void(const Result&)> callback);
+
     struct Impl;
 
 private:

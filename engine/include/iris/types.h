@@ -32,11 +32,12 @@ enum class Status : int {
     IoError,            // the operating system refused a read
     OutOfMemory,
     Vulkan,             // a Vulkan call failed (VkResult in the message)
-    DeviceLost,         // the GPU went away; the engine must be recreated
+    DeviceLost,         // the GPU went away; the engine recreates its device (Engine::injectFault)
     NoSlide,            // the call needs an open slide
     NotBound,           // the call needs a render target (offscreen or surface)
     Timeout,
     Cancelled,          // the caller's cancel flag stopped the operation (encodeIris)
+    SurfaceLost,        // the window system took the bound surface away: bind a new one
 };
 
 IRIS_API const char* statusName(Status s) noexcept;
@@ -385,6 +386,8 @@ struct DeviceInfo {
     uint32_t transferFamily = 0;
     uint32_t atlasSlots = 0;     // tile slots the VRAM budget bought
     std::string mipSchedule;     // "wide" (16 workgroups per tile, GPUs) or "serial" (one, CPU devices)
+    uint32_t recoveries = 0;     // lost devices the engine recreated since create() (Engine::injectFault)
+    bool lost = false;           // the device is lost now and not yet recreated
 };
 
 // Memory the engine holds, readable at any time.

@@ -85,24 +85,89 @@ void BufferThread::start() {
 }
 
 void BufferThread::stop() {
+    {
+        std::lock_guard lock(parkMutex_);
+        stopped_ = true;
+    }
+    parkCv_.notify_all();
     if (thread_.joinable()) thread_.join();
-    // Let the GPU finish the uploads in flight before their resources go away.
-    if (timeline_ && nextValue_ > 0) {
+    releaseGpu();
+}
+
+// Lets the GPU finish the uploads in flight before their resources go away. On a lost device
+// nothing may signal the timeline again: the device is waited for as a whole instead.
+void BufferThread::releaseGpu() {
+    if (!device_.device()) return;
+    if (device_.lost()) {
+        (void)device_.waitIdle(); // reports the loss, known already
+    } else if (timeline_ && submittedValue_ > 0) {
         const VkSemaphore timeline = timeline_.get();
         const VkSemaphoreWaitInfo wi{.sType = VK_STRUCTURE_TYPE_SEMAPHORE_WAIT_INFO,
                                      .pNext = nullptr,
                                      .flags = 0,
                                      .semaphoreCount = 1,
                                      .pSemaphores = &timeline,
-                                     .pValues = &nextValue_};
-        if (const VkResult r = vkWaitSemaphores(device_.device(), &wi, UINT64_MAX); r != VK_SUCCESS)
-            log_.error(vk::check(r, "vkWaitSemaphores (uploads in flight at shutdown)").message());
+                                     .pValues = &submittedValue_};
+        if (const VkResult r = vkWaitSemaphores(device_.device(), &wi, UINT64_MAX); r != VK_SUCCESS) {
+            if (r == VK_ERROR_DEVICE_LOST) device_.reportLost("vkWaitSemaphores (uploads in flight)");
+            (void)device_.waitIdle();
+        }
     }
+    txns_.clear(); // their command buffers go with the pools
+    freeStaging_.clear();
+    staging_ = {};
+    mipTimestamps_ = {};
+    copyTimeline_ = {};
+    timeline_ = {};
+    copyPool_ = {};
+    pool_ = {};
+    nextValue_ = submittedValue_ = 0;
+    handover_.uploadTimeline = VK_NULL_HANDLE;
+    regionSlide_ = nullptr; // the region is planned again against the new atlas
+    regionSerial_ = 0;
+    atlasFull_ = false;
+}
+
+void BufferThread::park() {
+    std::unique_lock lock(parkMutex_);
+    if (!thread_.joinable() || stopped_) return;
+    parkRequested_ = true;
+    lock.unlock();
+    shared_.bump(); // a thread asleep on the wake counter looks again
+    lock.lock();
+    parkCv_.wait(lock, [&] { return parked_ || stopped_; });
+}
+
+void BufferThread::resume() {
+    {
+        std::lock_guard lock(parkMutex_);
+        parkRequested_ = false;
+    }
+    parkCv_.notify_all();
 }
 
 void BufferThread::run() {
     while (!shared_.stopping.load(std::memory_order_acquire)) {
         const uint64_t seen = shared_.wakeValue();
+        {
+            std::unique_lock lock(parkMutex_);
+            if (parkRequested_) {
+                lock.unlock();
+                releaseGpu();
+                lock.lock();
+                parked_ = true;
+                parkCv_.notify_all();
+                parkCv_.wait(lock, [&] { return !parkRequested_ || stopped_; });
+                parked_ = false;
+                continue;
+            }
+        }
+        if (device_.lost()) {
+            // Nothing submitted will complete and nothing new may be: wait for the render
+            // thread's recovery to park this thread.
+            shared_.waitChange(seen);
+            continue;
+        }
         bool progress = pollCompleted();
         const Snapshot snap = shared_.snapshot();
         if (snap.slide) progress |= submitNew(snap);
@@ -122,9 +187,12 @@ void BufferThread::run() {
                                          .pSemaphores = &timeline,
                                          .pValues = &oldest};
             if (const VkResult r = vkWaitSemaphores(device_.device(), &wi, 2'000'000); r < 0) {
-                // The device is lost: nothing in flight will complete. Report it once (first
-                // error wins) and sleep until the host changes something, instead of spinning.
-                shared_.setError(vk::check(r, "vkWaitSemaphores (uploads in flight)"));
+                // The device is lost: nothing in flight will complete. The render thread
+                // recovers (it parks this thread); any other error is reported once.
+                if (r == VK_ERROR_DEVICE_LOST)
+                    device_.reportLost("vkWaitSemaphores (uploads in flight)");
+                else
+                    shared_.setError(vk::check(r, "vkWaitSemaphores (uploads in flight)"));
                 shared_.waitChange(seen);
             }
             continue;
@@ -136,6 +204,10 @@ void BufferThread::run() {
         }
         shared_.waitChange(seen);
     }
+    // An ended thread counts as parked: a recovery that asks now must not wait for it.
+    std::lock_guard lock(parkMutex_);
+    parked_ = true;
+    parkCv_.notify_all();
 }
 
 bool BufferThread::regionDone(const Snapshot& snap) const {
@@ -149,7 +221,10 @@ bool BufferThread::pollCompleted() {
     uint64_t done = 0;
     const VkResult vr = vkGetSemaphoreCounterValue(device_.device(), timeline_.get(), &done);
     if (vr != VK_SUCCESS) {
-        shared_.setError(vk::check(vr, "vkGetSemaphoreCounterValue"));
+        if (vr == VK_ERROR_DEVICE_LOST)
+            device_.reportLost("vkGetSemaphoreCounterValue (uploads)");
+        else
+            shared_.setError(vk::check(vr, "vkGetSemaphoreCounterValue"));
         return false;
     }
     bool any = false;
@@ -244,12 +319,17 @@ bool BufferThread::submitNew(const Snapshot& snap) {
     }
     tx.signalValue = ++nextValue_;
     if (Result r = submit(tx); !r.ok()) {
-        shared_.setError(r);
-        log_.error(r.message());
         // The GPU state is unknown after a failed submit: leave the slots FILLING (never drawn).
+        // A lost device is the render thread's to recover (Device marked it); anything else is
+        // reported here.
+        if (r.status() != Status::DeviceLost) {
+            shared_.setError(r);
+            log_.error(r.message());
+        }
         tx.signalValue = 0;
         return false;
     }
+    submittedValue_ = tx.signalValue;
     return true;
 }
 

@@ -14,6 +14,8 @@
 #pragma once
 
 #include <atomic>
+#include <condition_variable>
+#include <mutex>
 #include <thread>
 #include <unordered_set>
 #include <vector>
@@ -38,6 +40,14 @@ public:
     void start();
     void stop(); // shared.stopping must be set first
 
+    // Device loss (RenderThread::recover, through the engine's rebuild): park() returns once
+    // this thread has waited for the device and destroyed every GPU object it holds, and sleeps;
+    // while it sleeps the device and the atlas are recreated and init() makes its objects anew
+    // on the caller's thread; resume() lets it go on from an empty atlas. A thread not started
+    // (or stopped) counts as parked.
+    void park();
+    void resume();
+
     static constexpr uint32_t kTilesPerTransaction = 8;
     static constexpr uint32_t kMaxTransactions = 8;
 
@@ -51,6 +61,7 @@ private:
         std::vector<uint32_t> staging;
     };
     void run();
+    void releaseGpu();
     bool pollCompleted();
     bool submitNew(const Snapshot& snap);
     Result record(Transaction& t);
@@ -85,10 +96,18 @@ private:
     bool separateCopy_ = false;
     uint32_t transferFamily_ = 0, computeFamily_ = 0, graphicsFamily_ = 0;
     uint64_t nextValue_ = 0;
+    uint64_t submittedValue_ = 0; // the last timeline value a successful submission will signal
     vk::MappedBuffer staging_;
     std::vector<uint32_t> freeStaging_;
     std::vector<Transaction> txns_;
     std::thread thread_;
+    // park()/resume(): parkRequested_ is set by park() and cleared by resume(); parked_ is the
+    // thread's answer. Guarded by parkMutex_.
+    std::mutex parkMutex_;
+    std::condition_variable parkCv_;
+    bool parkRequested_ = false;
+    bool parked_ = false;
+    bool stopped_ = false; // stop() was called: a parked thread wakes to end
 };
 
 } // namespace iris

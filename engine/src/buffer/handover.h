@@ -46,6 +46,12 @@ public:
         tail_.store(t, std::memory_order_release); // frees entries for the producer
     }
 
+    // Device loss: forgets what was handed over, while neither thread uses the ring.
+    void reset() {
+        head_.store(0, std::memory_order_relaxed);
+        tail_.store(0, std::memory_order_relaxed);
+    }
+
 private:
     std::vector<HandoverItem> ring_;
     size_t mask_;

@@ -18,6 +18,7 @@ const char* statusName(Status s) noexcept {
     case Status::NotBound: return "no render target";
     case Status::Timeout: return "timeout";
     case Status::Cancelled: return "cancelled";
+    case Status::SurfaceLost: return "surface lost";
     }
     return "unknown";
 }

@@ -287,21 +287,74 @@ Result Device::createDevice() {
 }
 
 VkResult Device::submit(Role role, const VkSubmitInfo2& info, VkFence fence) {
+    if (lost()) return VK_ERROR_DEVICE_LOST; // as a lost device answers every submission
+    if (takeFault(role == Role::Graphics ? Fault::LostAtFrameSubmit : Fault::LostAtUploadSubmit)) {
+        reportLost(role == Role::Graphics ? "frame submission (injected)" : "upload submission (injected)");
+        return VK_ERROR_DEVICE_LOST;
+    }
     const int q = queueIndex_[int(role)];
     std::lock_guard lock(queueMutex_[q]);
-    return vkQueueSubmit2(queues_[q], 1, &info, fence);
+    return noteResult(vkQueueSubmit2(queues_[q], 1, &info, fence), "vkQueueSubmit2");
 }
 
 VkResult Device::present(const VkPresentInfoKHR& info) {
-    const int q = queueIndex_[int(Role::Graphics)];
-    std::lock_guard lock(queueMutex_[q]);
-    return vkQueuePresentKHR(queues_[q], &info);
+    if (lost()) return VK_ERROR_DEVICE_LOST;
+    VkResult r;
+    {
+        const int q = queueIndex_[int(Role::Graphics)];
+        std::lock_guard lock(queueMutex_[q]);
+        r = vkQueuePresentKHR(queues_[q], &info);
+    }
+    // An injected fault lets the present happen (the image goes back to the window system, as
+    // after a real fault the driver reports) and then reports the fault.
+    if (r >= 0 && takeFault(Fault::SurfaceLostAtPresent)) return VK_ERROR_SURFACE_LOST_KHR;
+    if (r >= 0 && takeFault(Fault::LostAtPresent)) {
+        reportLost("vkQueuePresentKHR (injected)");
+        return VK_ERROR_DEVICE_LOST;
+    }
+    return noteResult(r, "vkQueuePresentKHR");
+}
+
+VkResult Device::waitFence(VkFence fence) {
+    const VkResult r = noteResult(vkWaitForFences(device_, 1, &fence, VK_TRUE, UINT64_MAX), "vkWaitForFences");
+    if (r == VK_SUCCESS && takeFault(Fault::LostAtFrameWait)) {
+        reportLost("frame fence wait (injected)");
+        return VK_ERROR_DEVICE_LOST;
+    }
+    return r;
 }
 
 Result Device::waitIdle() {
-    // vkDeviceWaitIdle needs every queue externally synchronised.
-    std::scoped_lock lock(queueMutex_[0], queueMutex_[1], queueMutex_[2]);
-    return vk::check(vkDeviceWaitIdle(device_), "vkDeviceWaitIdle");
+    // vkDeviceWaitIdle needs every queue externally synchronised. On a device lost by an
+    // injected fault the wait is real (the work submitted before it still runs), so that
+    // teardown after it is safe either way; the result then reports the loss.
+    VkResult r;
+    {
+        std::scoped_lock lock(queueMutex_[0], queueMutex_[1], queueMutex_[2]);
+        r = vkDeviceWaitIdle(device_);
+    }
+    noteResult(r, "vkDeviceWaitIdle");
+    if (r == VK_SUCCESS && lost()) r = VK_ERROR_DEVICE_LOST;
+    return vk::check(r, "vkDeviceWaitIdle");
+}
+
+void Device::reportLost(const char* where) {
+    if (lost_.exchange(true, std::memory_order_acq_rel)) return; // noticed already
+    log_.error(std::string("Vulkan device lost (") + where + ")");
+    if (onLost_) onLost_();
+}
+
+Result Device::recreate() {
+    if (device_) {
+        (void)vkDeviceWaitIdle(device_); // lost: returns at once; what it reports is known
+        vkDestroyDevice(device_, nullptr);
+        device_ = VK_NULL_HANDLE;
+    }
+    for (VkQueue& q : queues_) q = VK_NULL_HANDLE;
+    if (Result r = createDevice(); !r.ok()) return r;
+    injected_.store(Fault::None, std::memory_order_release);
+    lost_.store(false, std::memory_order_release);
+    return {};
 }
 
 } // namespace iris::gpu

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <atomic>
+#include <functional>
 #include <mutex>
 #include <string>
 
@@ -55,6 +56,25 @@ public:
 
     uint64_t validationMessages() const { return validationMessages_.load(std::memory_order_relaxed); }
 
+    // Device loss (docs/ARCHITECTURE.md "Device loss"). The first VK_ERROR_DEVICE_LOST that
+    // submit(), present() or waitIdle() sees, or that a thread reports from a wait of its own
+    // (reportLost), marks the device lost: every later submission fails at once as on a lost
+    // device, and onLost (set before the engine threads start) is called once, from the thread
+    // that noticed. recreate() makes a new logical device and queues on the same physical device
+    // and instance; only the render thread calls it, once every object made from the old device
+    // is gone (RenderThread::recover). properties(), families() and instance() never change.
+    void setLostCallback(std::function<void()> onLost) { onLost_ = std::move(onLost); }
+    bool lost() const { return lost_.load(std::memory_order_acquire); }
+    void reportLost(const char* where);
+    [[nodiscard]] Result recreate();
+    // Fault injection (Engine::injectFault): the next operation of the kind named fails as the
+    // driver would report it. One fault is armed at a time.
+    enum class Fault { None, LostAtFrameSubmit, LostAtUploadSubmit, LostAtFrameWait, LostAtPresent, SurfaceLostAtPresent };
+    void inject(Fault f) { injected_.store(f, std::memory_order_release); }
+    // The render thread's fence waits: VK_ERROR_DEVICE_LOST when a LostAtFrameWait fault is
+    // armed (the fence is then waited for all the same, as teardown needs it signalled).
+    VkResult waitFence(VkFence fence);
+
 private:
     static VKAPI_ATTR VkBool32 VKAPI_CALL debugCallback(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
                                                         VkDebugUtilsMessageTypeFlagsEXT types,
@@ -62,6 +82,15 @@ private:
     Result createInstance(const EngineConfig& config);
     Result pickPhysicalDevice();
     Result createDevice();
+    bool takeFault(Fault f) {
+        Fault expected = f;
+        return injected_.compare_exchange_strong(expected, Fault::None, std::memory_order_acq_rel);
+    }
+    // A VK_ERROR_DEVICE_LOST result marks the device lost; any result is passed on.
+    VkResult noteResult(VkResult r, const char* where) {
+        if (r == VK_ERROR_DEVICE_LOST) reportLost(where);
+        return r;
+    }
 
     const Log& log_;
     EngineTuning tuning_; // the device choice and queue roles (EngineConfig::tuning)
@@ -80,6 +109,9 @@ private:
     std::string driver_;
     std::atomic<uint64_t> validationMessages_{0}; // a counter only: relaxed is enough
     std::atomic<bool> performanceAdviceLogged_{false};
+    std::function<void()> onLost_;
+    std::atomic<bool> lost_{false};
+    std::atomic<Fault> injected_{Fault::None};
 };
 
 } // namespace iris::gpu

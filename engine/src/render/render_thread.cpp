@@ -42,44 +42,55 @@ RenderThread::RenderThread(SharedState& shared, gpu::Device& device, gpu::TileAt
                            Handover& handover, const UploadCounters& counters, const Log& log,
                            const EngineTuning& tuning)
     : shared_(shared), device_(device), atlas_(atlas), pipeline_(pipeline), handover_(handover), counters_(counters),
-      log_(log), metrics_(counters), tuning_(tuning), tilePass_(pipeline, tuning.drawCovered),
-      annotationPass_(device, log), hudPass_(device, log, tilePass_) {
+      log_(log), metrics_(counters), tuning_(tuning) {
     if (tuning_.drawCovered) log_.info("draw covered: coarse tiles are drawn also under resident finer tiles");
 }
 
 RenderThread::~RenderThread() {
     stop();
-    VkDevice dev = device_.device();
-    if (!dev) return;
-    // The GPU finishes every frame before anything it uses goes: the targets here, the frame
-    // slots' objects and the timestamp queries with the members, after this body.
-    if (Result r = device_.waitIdle(); !r.ok()) log_.error(r.message()); // going away regardless
+    releaseGpu();
+}
+
+// The GPU finishes every frame before anything it uses goes: the targets, the frame slots'
+// objects, the passes and the timestamp queries. Pins are dropped with the frames (the atlas's
+// tile map is still the one they were taken in: releaseGpu() runs before the atlas goes).
+void RenderThread::releaseGpu() {
+    if (!device_.device()) return;
+    if (Result r = device_.waitIdle(); !r.ok() && !device_.lost()) log_.error(r.message()); // going away regardless
     swapchain_.reset();
     offscreen_.reset();
-    for (FrameSlot& f : frames_) {
-        for (int s : f.pinned) atlas_.map().unpin(s);
-        f.pinned.clear();
+    if (atlas_.slotCount()) {
+        for (FrameSlot& f : frames_)
+            for (int s : f.pinned) atlas_.map().unpin(s);
     }
+    for (FrameSlot& f : frames_) f = FrameSlot{};
+    resolvePass_.reset();
+    passes_.reset();
+    timestamps_ = {};
 }
 
 Result RenderThread::init() {
-    VkDevice dev = device_.device();
     switch (tuning_.pacing) {
     case EngineTuning::Pacing::Auto: paceFrames_ = device_.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU; break;
     case EngineTuning::Pacing::On: paceFrames_ = true; break;
     case EngineTuning::Pacing::Off: paceFrames_ = false; break;
     }
     log_.info(std::string("frame pacing: ") + (paceFrames_ ? "on" : "off"));
-    if (Result r = annotationPass_.init(kFramesInFlight); !r.ok()) return r;
-    if (Result r = hudPass_.init(kFramesInFlight); !r.ok()) return r;
+    if (Result r = initGpu(); !r.ok()) return r;
+    log_.info(resolvePass_ ? "tile resolve: compute (offscreen targets; a swapchain draws quads)" : "tile resolve: quads");
+    return {};
+}
+
+Result RenderThread::initGpu() {
+    VkDevice dev = device_.device();
+    passes_.emplace(device_, pipeline_, log_, tuning_.drawCovered);
+    if (Result r = passes_->annotation.init(kFramesInFlight); !r.ok()) return r;
+    if (Result r = passes_->hud.init(kFramesInFlight); !r.ok()) return r;
     const bool cpuDevice = device_.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
     if (tuning_.tileResolve == EngineTuning::TileResolve::Compute ||
         (tuning_.tileResolve == EngineTuning::TileResolve::Auto && !cpuDevice)) {
         resolvePass_ = std::make_unique<render::ResolvePass>(device_, atlas_, pipeline_);
         if (Result r = resolvePass_->init(kFramesInFlight); !r.ok()) return r;
-        log_.info("tile resolve: compute (offscreen targets; a swapchain draws quads)");
-    } else {
-        log_.info("tile resolve: quads");
     }
     if (Result r = vk::createTimestampPool(device_.physical(), dev, device_.queueFamily(), 2 * kFramesInFlight,
                                            *timestamps_.replace(dev), timestampPeriodNs_);
@@ -307,9 +318,10 @@ RenderThread::TargetStep RenderThread::handleSurfaceChanges() {
             // The window system took the surface away (its window is gone or was re-created):
             // nothing can be drawn until the host binds a new one (the widget does when it
             // next shows its window).
-            const Result r(Status::Vulkan, "the window's Vulkan surface was lost; drawing stops until a new one is bound");
+            const Result r(Status::SurfaceLost, "the window's Vulkan surface was lost; drawing stops until a new one is bound");
             shared_.setError(r);
             log_.error(r.message());
+            reportFault(r);
             if (Result w = device_.waitIdle(); !w.ok()) shared_.setError(w);
             swapchain_.reset();
         }
@@ -323,6 +335,12 @@ void RenderThread::run() {
     uint64_t renderedWake = 0;
     bool rendered = false; // renderedWake is the wake value of the last frame drawn
     while (!shared_.stopping.load(std::memory_order_acquire)) {
+        if (device_.lost()) {
+            recover();
+            rendered = false; // the recreated target needs a frame
+            drawnViewSerial_ = UINT64_MAX;
+            continue;
+        }
         const uint64_t seen = shared_.wakeValue();
         const TargetStep step = handleSurfaceChanges();
         if (step.redraw) {
@@ -349,15 +367,12 @@ void RenderThread::run() {
             continue;
         }
         if (Result r = renderFrame(snap); !r.ok()) {
-            shared_.setError(r);
-            log_.error("render: " + r.message());
             if (r.status() == Status::DeviceLost) {
-                // Nothing more can be drawn; sleep until the host tears the engine down.
-                renderedWake = seen;
-                rendered = true;
-                shared_.waitChange(seen);
+                device_.reportLost(r.message().c_str()); // a wait or an acquire saw it: the loop recovers
                 continue;
             }
+            shared_.setError(r);
+            log_.error("render: " + r.message());
         }
         renderedWake = seen;
         rendered = true;
@@ -367,6 +382,65 @@ void RenderThread::run() {
                                             std::chrono::duration<double, std::milli>(kPaceFactor * lastGpuMs_));
         }
     }
+}
+
+void RenderThread::reportFault(const Result& r) {
+    if (const auto cb = faultCallback_.load(); cb && *cb) (*cb)(r);
+}
+
+void RenderThread::setFaultCallback(std::function<void(const Result&)> cb) {
+    faultCallback_.store(cb ? std::make_shared<const std::function<void(const Result&)>>(std::move(cb)) : nullptr);
+}
+
+void RenderThread::recover() {
+    recovering_.store(true, std::memory_order_relaxed);
+    const Result lost(Status::DeviceLost, "The GPU device was lost; the engine is recreating it and will draw the view again");
+    shared_.setError(lost);
+    log_.error(lost.message());
+    reportFault(lost);
+    const auto t0 = Clock::now();
+    auto pause = std::chrono::milliseconds(50);
+    for (int attempt = 1; !shared_.stopping.load(std::memory_order_acquire); ++attempt) {
+        releaseGpu();
+        Result r = rebuild_ ? rebuild_() : Result(Status::DeviceLost, "no way to rebuild the device");
+        if (r.ok()) r = initGpu();
+        if (r.ok()) {
+            // The target it had, on the new device: the same offscreen size, or a new swapchain
+            // on the same surface (one the window system took away stays lost).
+            if (kind_ == TargetKind::Offscreen) {
+                offscreen_ = std::make_unique<gpu::OffscreenTarget>(device_);
+                r = offscreen_->init(reqWidth_, reqHeight_, resolvePass_ != nullptr);
+                if (!r.ok()) offscreen_.reset();
+            } else if (kind_ == TargetKind::Surface && surfacePhase_ != SurfacePhase::Lost) {
+                swapchain_ = std::make_unique<gpu::Swapchain>(device_, surface_);
+                surfacePhase_ = SurfacePhase::Stale;
+            }
+        }
+        if (r.ok() && !device_.lost()) {
+            serial_ = 0;
+            lastGpuMs_ = -1;
+            lrWholeViewSerial_ = UINT64_MAX;
+            const uint32_t n = recoveries_.fetch_add(1, std::memory_order_relaxed) + 1;
+            const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+            const Result back(Status::Ok, "The GPU device was recreated after a loss (" + std::to_string(n) +
+                                               (n == 1 ? " recovery" : " recoveries") + " so far, this one took " +
+                                               std::to_string(int(std::lround(ms))) + " ms); the view is being re-buffered");
+            log_.warn(back.message());
+            recovering_.store(false, std::memory_order_relaxed);
+            reportFault(back);
+            shared_.bump();
+            return;
+        }
+        log_.error("device recovery, attempt " + std::to_string(attempt) + ": " +
+                   (r.ok() ? std::string("the new device was lost too") : r.message()) + "; trying again in " +
+                   std::to_string(pause.count()) + " ms");
+        // Polled: nothing announces that a device has come back.
+        for (const auto until = Clock::now() + pause;
+             Clock::now() < until && !shared_.stopping.load(std::memory_order_acquire);)
+            std::this_thread::sleep_for(std::chrono::milliseconds(10));
+        pause = std::min(pause * 2, std::chrono::milliseconds(5000));
+    }
+    recovering_.store(false, std::memory_order_relaxed);
 }
 
 bool RenderThread::showsLayerWhole(const Snapshot& snap) const {
@@ -383,8 +457,7 @@ bool RenderThread::showsLayerWhole(const Snapshot& snap) const {
 
 Result RenderThread::waitSlot(FrameSlot& f) {
     if (!f.fence) return Result(Status::DeviceLost, "frame slot without a fence (a submit failed and so did its replacement)");
-    const VkFence fence = f.fence.get();
-    IRIS_VK_TRY(vkWaitForFences(device_.device(), 1, &fence, VK_TRUE, UINT64_MAX));
+    IRIS_VK_TRY(device_.waitFence(f.fence.get()));
     if (f.timed) {
         uint64_t t[2] = {0, 0};
         const size_t idx = size_t(&f - frames_.data());
@@ -493,16 +566,16 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
         shared_.setError(r);
         log_.error(std::string(pass.name()) + ": " + r.message());
     };
-    tilePass_.setDrawLevels(!resolve);
-    for (render::FramePass* pass : passes_)
+    passes_->tile.setDrawLevels(!resolve);
+    for (render::FramePass* pass : passes_->list)
         if (Result r = pass->prepare(frame); !r.ok()) passFailed(*pass, r); // the frame goes on without it
     if (resolve) {
         const std::array<float, 4> bg{clearUnorm(snap.background[0]), clearUnorm(snap.background[1]),
                                       clearUnorm(snap.background[2]), 1.0f};
-        if (Result r = resolvePass_->prepare(frame, tilePass_.drawList(), bg, target.view); !r.ok()) return r;
+        if (Result r = resolvePass_->prepare(frame, passes_->tile.drawList(), bg, target.view); !r.ok()) return r;
     }
-    if (tilePass_.progress().lrComplete) lrWholeViewSerial_ = snap.viewSerial;
-    metrics_.frameDrawn(snap, tilePass_.progress());
+    if (passes_->tile.progress().lrComplete) lrWholeViewSerial_ = snap.viewSerial;
+    metrics_.frameDrawn(snap, passes_->tile.progress());
 
     // Recording: uploads, then one render pass with every pass's draws in order.
     VkCommandBuffer cmd = f.cmd;
@@ -518,7 +591,7 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
         vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_TOP_OF_PIPE_BIT, timestamps_.get(), query);
     }
     if (!acquires.empty()) vk::pipelineBarrier(cmd, acquires.data(), uint32_t(acquires.size()));
-    for (render::FramePass* pass : passes_) pass->recordUploads(cmd, frame);
+    for (render::FramePass* pass : passes_->list) pass->recordUploads(cmd, frame);
     if (resolve) {
         // The atlas's tiles (and a new colour table) were written by earlier submissions and
         // commands; the quads' fragment reads are covered by their barriers, a compute read is not.
@@ -574,7 +647,7 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
         .pStencilAttachment = nullptr,
     };
     vkCmdBeginRendering(cmd, &ri);
-    for (render::FramePass* pass : passes_)
+    for (render::FramePass* pass : passes_->list)
         if (Result r = pass->recordDraws(cmd, frame); !r.ok()) passFailed(*pass, r);
     vkCmdEndRendering(cmd);
     recordTargetFinish(cmd, target);
@@ -584,8 +657,8 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
 
     if (Result r = submitFrame(f, target, uploadWait); !r.ok()) return r;
     if (Result r = deliverFrame(f, target, frame); !r.ok()) return r;
-    publishFrame(snap, frame.complete, buffered, tilePass_.tilesDrawn(),
-                 std::chrono::duration<double, std::milli>(Clock::now() - t0).count(), hudPass_.layout());
+    publishFrame(snap, frame.complete, buffered, passes_->tile.tilesDrawn(),
+                 std::chrono::duration<double, std::milli>(Clock::now() - t0).count(), passes_->hud.layout());
     if (frame.redraw) shared_.bump();
     return {};
 }
@@ -703,7 +776,7 @@ Result RenderThread::deliverFrame(FrameSlot& f, const TargetImage& target, const
     out->view = frame.viewport.view;
     out->serial = frame.serial;
     out->complete = frame.complete;
-    out->overlays = hudPass_.layout();
+    out->overlays = passes_->hud.layout();
     lastFrame_.store(std::move(out));
     return {};
 }

@@ -57,6 +57,15 @@ public:
     // view's buffer region (SharedState::bufferedView).
     Result waitForSettled(uint64_t viewSerial, std::chrono::milliseconds timeout);
     void setFrameCallback(std::function<void(const FrameStats&)> cb);
+    // Faults the host is told of (Engine::setFaultCallback): a lost device, its recovery, a lost
+    // surface. Called on the render thread.
+    void setFaultCallback(std::function<void(const Result&)> cb);
+    // Device loss: what the engine rebuilds between this thread's release of its own GPU objects
+    // and their re-creation (recover()): it parks the buffer thread, recreates the device, the
+    // atlas and the shared pipelines, and lets the buffer thread go on. Set before start().
+    void setRebuild(std::function<Result()> rebuild) { rebuild_ = std::move(rebuild); }
+    uint32_t recoveries() const { return recoveries_.load(std::memory_order_relaxed); }
+    bool recovering() const { return recovering_.load(std::memory_order_relaxed); }
     // Metrics: the render thread publishes by pointer swap (metrics/field_metrics.h).
     EngineMetrics metrics() const;
     void resetMetrics();
@@ -105,6 +114,16 @@ private:
     };
 
     void run();
+    // The GPU objects this thread owns: frame slots, timestamp queries, the passes' buffers and
+    // pipelines, the resolve pass. initGpu() makes them on the current device, releaseGpu()
+    // waits for the device and destroys them with the target (device loss, then initGpu()).
+    Result initGpu();
+    void releaseGpu();
+    // After a lost device: releases this thread's objects, has the engine rebuild the device
+    // and the shared objects (rebuild_), makes its own again and binds the target it had,
+    // retrying with a growing pause until it works or the engine stops.
+    void recover();
+    void reportFault(const Result& r);
     // The one place where the target changes: the host's requests (offscreen, surface, resize,
     // unbind), a stale swapchain (out of date or suboptimal at acquire or present, a resize), a
     // window that has not yet taken the size asked for, and a lost surface.
@@ -143,11 +162,17 @@ private:
     // cover them (the engine before culling; for A/B measurements and the culling test).
     const EngineTuning tuning_;
     // The frame's passes, in drawing order (render/frame_pass.h): tiles, annotations, HUD.
-    // Heat-map layers will go between the tiles and the annotations.
-    render::TilePass tilePass_;
-    render::AnnotationPass annotationPass_;
-    render::HudPass hudPass_;
-    std::array<render::FramePass*, 3> passes_{&tilePass_, &annotationPass_, &hudPass_};
+    // Heat-map layers will go between the tiles and the annotations. Made anew with the device
+    // after a loss (initGpu), in place: the HUD pass refers to the tile pass.
+    struct Passes {
+        Passes(gpu::Device& device, gpu::TilePipeline& pipeline, const Log& log, bool drawCovered)
+            : tile(pipeline, drawCovered), annotation(device, log), hud(device, log, tile) {}
+        render::TilePass tile;
+        render::AnnotationPass annotation;
+        render::HudPass hud;
+        std::array<render::FramePass*, 3> list{&tile, &annotation, &hud};
+    };
+    std::optional<Passes> passes_;
     // EngineTuning::TileResolve::Compute: offscreen frames resolve the tiles per pixel in a
     // compute pass instead of the tile pass's quads (null otherwise).
     std::unique_ptr<render::ResolvePass> resolvePass_;
@@ -210,6 +235,12 @@ private:
     std::atomic<uint64_t> completeViewSerial_{0};
     std::atomic<uint64_t> settledViewSerial_{0}; // the same for settled frames (waitForSettled)
     std::atomic<int> frameWaiters_{0};
+
+    // Device loss (recover()).
+    std::function<Result()> rebuild_;
+    Published<std::function<void(const Result&)>> faultCallback_;
+    std::atomic<uint32_t> recoveries_{0};
+    std::atomic<bool> recovering_{false};
 
     std::thread thread_;
 };

@@ -35,6 +35,7 @@
 
 #include "enginehost_p.h"
 #include "iris/annotations.h"
+#include "irisslideview_p.h"
 #include "navigator_p.h"
 #include "widget_test_support.h"
 
@@ -118,6 +119,7 @@ private Q_SLOTS:
     void turnsAndMirrors();
     void annotationsAreDrawnOverTheSlide();
     void resizeStormEndsRightAndValid();
+    void survivesLostSurfacesAndDevices();
 
 private:
     // Shows m_w with the sample slide and waits for a complete frame.
@@ -1021,6 +1023,47 @@ void TstIrisSlideView::resizeStormEndsRightAndValid()
     QVERIFY(m_w->frames->waitForCompleteFrame());
     QTRY_COMPARE(grabPresented(view).size(), target);
     checkPresentedMatchesHeadless(view, m_sample, QStringLiteral("after a resize storm"));
+    QCOMPARE(view->validationMessageCount(), quint64(0));
+}
+
+// Issue 14: VK_ERROR_SURFACE_LOST_KHR at a present makes the view replace its native window
+// (a new VkSurfaceKHR) and present again, with no error reported to the host; a lost device
+// at a present is recovered by the engine itself (the view keeps its engine) and reported
+// once as slideError. Either way the next complete frame matches the headless render, at the
+// right size, with the validation layer silent.
+void TstIrisSlideView::survivesLostSurfacesAndDevices()
+{
+    showSample();
+    IrisSlideView *view = m_w->view;
+    IrisSlideViewPrivate *d = IrisSlideViewPrivate::get(view);
+    iris::Engine *engine = d->engine();
+    QVERIFY(engine);
+    const int engines = IrisWidget::EngineHost::liveEngineCount();
+    const int replacedBefore = d->surfaceReplacements;
+    const uint32_t recoveredBefore = engine->device().recoveries;
+    QSignalSpy errors(view, &IrisSlideView::slideError);
+    constexpr int kRounds = 3;
+    for (int round = 0; round < kRounds; ++round) {
+        engine->injectFault(iris::Engine::InjectedFault::SurfaceLostAtPresent);
+        view->setCentre(QPointF(1500 + 400 * round, 1200));
+        view->setDownsample(2.0 + round);
+        QTRY_COMPARE_WITH_TIMEOUT(d->surfaceReplacements, replacedBefore + round + 1, 20000);
+        QTRY_VERIFY_WITH_TIMEOUT(view->surfaceWindow()->isExposed(), 20000);
+        QVERIFY(m_w->frames->waitForCompleteFrame());
+        QTRY_COMPARE(grabPresented(view).size(), view->targetSize());
+        checkPresentedMatchesHeadless(view, m_sample, QStringLiteral("after a lost surface %1").arg(round));
+
+        engine->injectFault(iris::Engine::InjectedFault::DeviceLostAtPresent);
+        view->setCentre(QPointF(3500 - 300 * round, 2200));
+        QTRY_COMPARE_WITH_TIMEOUT(engine->device().recoveries, recoveredBefore + round + 1, 20000);
+        QVERIFY(m_w->frames->waitForCompleteFrame());
+        checkPresentedMatchesHeadless(view, m_sample, QStringLiteral("after a lost device %1").arg(round));
+    }
+    QCOMPARE(d->engine(), engine); // recovered in place, not recreated by the widget
+    QCOMPARE(IrisWidget::EngineHost::liveEngineCount(), engines);
+    QCOMPARE(errors.count(), kRounds); // once per lost device; a replaced surface is no error
+    for (const QList<QVariant> &e : errors)
+        QVERIFY2(e.at(0).toString().contains(QStringLiteral("graphics device was lost")), qPrintable(e.at(0).toString()));
     QCOMPARE(view->validationMessageCount(), quint64(0));
 }
 

@@ -112,6 +112,21 @@ bool EngineHost::create(QVulkanInstance *vulkan, const EngineSettings &settings,
         }, Qt::QueuedConnection);
     });
 
+    m_engine->setFaultCallback([weakRelay](const iris::Result &fault) {
+        const std::shared_ptr<Relay> relay = weakRelay.lock();
+        if (!relay)
+            return;
+        std::lock_guard lock(relay->mutex);
+        if (!relay->host)
+            return;
+        EngineHost *host = relay->host;
+        const iris::Status status = fault.status();
+        const QString message = fromStd(fault.message());
+        QMetaObject::invokeMethod(host, [host, status, message] {
+            Q_EMIT host->engineFault(status, message);
+        }, Qt::QueuedConnection);
+    });
+
     const iris::DeviceInfo device = m_engine->device();
     qCInfo(lcIrisWidget).noquote() << "engine ready on" << fromStd(device.name) << "with"
                                    << device.atlasSlots << "tile slots";
@@ -173,6 +188,7 @@ void EngineHost::destroy()
         return;
     unbindSurface();
     m_engine->setFrameCallback({});
+    m_engine->setFaultCallback({});
     m_engine.reset(); // joins the engine's threads: no callback runs after this
     m_vulkan = nullptr;
     g_liveEngines.fetch_sub(1, std::memory_order_relaxed);

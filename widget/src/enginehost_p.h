@@ -94,6 +94,9 @@ public:
 Q_SIGNALS:
     // A frame was rendered and presented (delivered on the GUI thread).
     void frameRendered(const iris::FrameStats &stats);
+    // The engine lost its device (it recovers by itself), recovered it (status Ok), or lost
+    // the bound surface (Engine::setFaultCallback; delivered on the GUI thread).
+    void engineFault(iris::Status status, const QString &message);
 
 private:
     struct Relay;

@@ -37,6 +37,11 @@ IrisSlideViewPrivate::IrisSlideViewPrivate(IrisSlideView *q)
 
 IrisSlideViewPrivate::~IrisSlideViewPrivate() = default;
 
+IrisSlideViewPrivate *IrisSlideViewPrivate::get(IrisSlideView *view)
+{
+    return view ? view->d_func() : nullptr;
+}
+
 void IrisSlideViewPrivate::init()
 {
     Q_Q(IrisSlideView);
@@ -53,11 +58,21 @@ void IrisSlideViewPrivate::init()
             window->setCursor(dragging ? Qt::ClosedHandCursor : Qt::OpenHandCursor);
     });
 
+    QObject::connect(&host, &EngineHost::engineFault, &host,
+                     [this](iris::Status status, const QString &message) { onEngineFault(status, message); });
+
     vulkan = acquireVulkanInstance(&rendererError);
     if (!vulkan) {
         showMessage(rendererError);
         return;
     }
+    createSurfaceWindow();
+}
+
+// The native window the engine presents into, embedded in the widget, and its connections.
+void IrisSlideViewPrivate::createSurfaceWindow()
+{
+    Q_Q(IrisSlideView);
     window = new SurfaceWindow;
     window->setVulkanInstance(vulkan.get());
     window->inputHandler = [this](QEvent *event) {
@@ -95,6 +110,55 @@ void IrisSlideViewPrivate::init()
     container->setMouseTracking(true);
     q->setFocusProxy(container);
     stack->addWidget(container);
+    stack->setCurrentWidget(container);
+}
+
+// The window system took the surface away (VK_ERROR_SURFACE_LOST_KHR): the engine draws
+// nothing until it is given a new one. A new native window brings a new VkSurfaceKHR; the
+// engine, its slide and view stay, and the next expose binds it (bindIfReady).
+void IrisSlideViewPrivate::replaceSurfaceWindow()
+{
+    Q_Q(IrisSlideView);
+    const bool hadFocus = container && container->hasFocus();
+    host.unbindSurface();
+    if (container) {
+        q->setFocusProxy(nullptr);
+        delete container; // the window and its lost VkSurfaceKHR go with it
+        container = nullptr;
+        window = nullptr;
+    }
+    createSurfaceWindow();
+    if (q->isVisible())
+        container->show();
+    if (hadFocus)
+        container->setFocus(Qt::OtherFocusReason);
+    surfaceReplacements++;
+}
+
+void IrisSlideViewPrivate::onEngineFault(iris::Status status, const QString &message)
+{
+    Q_Q(IrisSlideView);
+    switch (status) {
+    case iris::Status::SurfaceLost:
+        qCWarning(lcIrisWidget).noquote() << "surface lost:" << message << "- making a new one";
+        if (engine())
+            engine()->clearError(); // handled here: checkEngineError() must not report it again
+        replaceSurfaceWindow();
+        break;
+    case iris::Status::DeviceLost:
+        // The engine recreates its device and draws the view again by itself.
+        qCWarning(lcIrisWidget).noquote() << "device lost:" << message;
+        if (engine())
+            engine()->clearError();
+        Q_EMIT q->slideError(IrisSlideView::tr("The graphics device was lost; the view is being restored."));
+        break;
+    case iris::Status::Ok:
+        qCInfo(lcIrisWidget).noquote() << message;
+        break;
+    default:
+        qCWarning(lcIrisWidget).noquote() << "engine fault:" << message;
+        break;
+    }
 }
 
 void IrisSlideViewPrivate::teardown()
@@ -263,21 +327,10 @@ void IrisSlideViewPrivate::checkEngineError()
     Q_Q(IrisSlideView);
     const QString text = fromStd(error.message());
     qCWarning(lcIrisWidget).noquote() << "engine error:" << iris::statusName(error.status()) << text;
+    // A lost device or surface is dealt with by onEngineFault (the engine told it first).
+    if (error.status() == iris::Status::DeviceLost || error.status() == iris::Status::SurfaceLost)
+        return;
     Q_EMIT q->slideError(text);
-    if (error.status() == iris::Status::DeviceLost && !recovering) {
-        recovering = true;
-        // Not from inside the frame delivery that noticed it.
-        QTimer::singleShot(0, &host, [this] { recoverFromDeviceLoss(); });
-    }
-}
-
-void IrisSlideViewPrivate::recoverFromDeviceLoss()
-{
-    const QString reopen = path;
-    const std::optional<iris::View> view = engine() && slide ? std::optional(engine()->view()) : std::nullopt;
-    if (recreateEngine() && !reopen.isEmpty() && open(reopen) && view)
-        setView(*view);
-    recovering = false;
 }
 
 // --- slide and view --------------------------------------------------------------------

@@ -16,6 +16,7 @@
 #include <iris/engine.h>
 
 #include "annotationtools_p.h"
+#include "autotest_p.h"
 #include "enginehost_p.h"
 #include "fpsmeter_p.h"
 #include "iris/IrisSlideView.h"
@@ -33,6 +34,8 @@ class IrisSlideViewPrivate final : public IrisWidget::NavigationTarget {
 public:
     explicit IrisSlideViewPrivate(IrisSlideView *q);
     ~IrisSlideViewPrivate() override;
+    // The widget's own tests reach the engine through this (fault injection).
+    IRIS_WIDGET_AUTOTEST_EXPORT static IrisSlideViewPrivate *get(IrisSlideView *view);
 
     void init();
     void teardown();
@@ -47,7 +50,9 @@ public:
     void onSurfaceAboutToBeDestroyed();
     void onFrameRendered(const iris::FrameStats &stats);
     void checkEngineError();
-    void recoverFromDeviceLoss();
+    void createSurfaceWindow();
+    void replaceSurfaceWindow();
+    void onEngineFault(iris::Status status, const QString &message);
     void showMessage(const QString &text);
     // Takes the display profile from the host's setting or the view's screen and gives the
     // engine the colour settings when they changed; emits colorManagementChanged() when the
@@ -100,7 +105,7 @@ public:
     IrisSlideInfo info;
     QString path;
     bool fitPending = false;                 // opened before a target was bound
-    bool recovering = false;
+    int surfaceReplacements = 0;             // lost surfaces replaced (tests)
     double boundDevicePixelRatio = 0;        // at the last bind or resize
     std::optional<iris::View> notifiedView;  // last view viewChanged() announced
     bool overviewDragging = false;           // a press on the overview map: moves follow it

@@ -1,4 +1,4 @@
-// The engine under a storm of concurrent API calls: four threads issue random calls of every
+// The engine under a storm of concurrent API calls: eight threads issue random calls of every
 // public Engine function but create and bindSurface (no window here) — open, close, moves,
 // resizes, rebinds, reads, settings, colour, overlays, fonts, annotations (and edits of the store
 // shown), metrics, callbacks, injected device losses — while the engine renders, until they have made kStormCalls calls and the engine has drawn kStormFrames frames
@@ -34,7 +34,7 @@ QString testData() {
     return QString::fromLocal8Bit(d);
 }
 
-// The storm's size: calls made by the four threads together ($IRIS_STORM_CALLS, for a longer
+// The storm's size: calls made by the eight threads together ($IRIS_STORM_CALLS, for a longer
 // storm), and frames the engine must draw while they are made.
 uint64_t stormCalls() {
     bool ok = false;
@@ -237,7 +237,7 @@ void TestStorm::storm() {
         }
     };
     std::vector<std::thread> threads;
-    for (int i = 0; i < 4; ++i) threads.emplace_back(worker, i);
+    for (int i = 0; i < 8; ++i) threads.emplace_back(worker, i);
     for (auto& t : threads) t.join();
     qInfo("storm: %llu calls, %llu frames in %.0f ms", static_cast<unsigned long long>(calls.load()),
           static_cast<unsigned long long>(stormFrames),

@@ -116,6 +116,17 @@ inline bool writeTiffDir(TIFF* tif, const TiffImage& im) {
     return true;
 }
 
+template <class T>
+std::vector<uint8_t> rawBytes(const std::vector<T>& v, bool swap = false);
+
+// A float32 image of w × h pixels all `value`, in 16-pixel tiles: a pyramid level.
+inline TiffImage floatLevel(uint32_t w, uint32_t h, float value) {
+    TiffImage im{w, h, 1, 32, SAMPLEFORMAT_IEEEFP};
+    im.tile = 16;
+    im.data = rawBytes(std::vector<float>(size_t(w) * h, value));
+    return im;
+}
+
 // Writes `images` as a chain of IFDs or, with `subIfds`, the first with the others as its SubIFDs.
 inline bool writeTiff(const std::string& path, const std::vector<TiffImage>& images, bool subIfds = false,
                       bool bigTiff = false) {
@@ -159,7 +170,7 @@ inline bool writeBytes(const std::string& path, const std::vector<uint8_t>& byte
 }
 
 template <class T>
-std::vector<uint8_t> rawBytes(const std::vector<T>& v, bool swap = false) {
+std::vector<uint8_t> rawBytes(const std::vector<T>& v, bool swap) {
     std::vector<uint8_t> out(v.size() * sizeof(T));
     std::memcpy(out.data(), v.data(), out.size());
     if (swap)

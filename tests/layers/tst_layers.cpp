@@ -449,12 +449,7 @@ private slots:
 
     void tiffPyramids() {
         using TI = rw::TiffImage;
-        auto level = [](uint32_t w, uint32_t h, float base) {
-            TI im{w, h, 1, 32, SAMPLEFORMAT_IEEEFP};
-            im.tile = 16;
-            im.data = rw::rawBytes(std::vector<float>(size_t(w) * h, base));
-            return im;
-        };
+        const auto level = rw::floatLevel;
         // 3 levels of ≈ /2 with odd sizes, as SubIFDs and as an IFD chain; BigTIFF too.
         const std::vector<TI> levels = {level(101, 50, 1), level(51, 25, 2), level(25, 13, 3)};
         QVERIFY(rw::writeTiff(out("pyr-sub.tif"), levels, true));

@@ -316,7 +316,7 @@ Expected<RasterMap> readTiffRaster(std::span<const uint8_t> bytes, const std::st
         if (map.kind == RasterKind::Scalar) l.scalar.assign(n, 0.0f);
         else if (map.kind == RasterKind::Label) l.label.assign(n, 0);
         else l.rgba.assign(4 * n, 0);
-        const std::string levelName = map.levels.empty() ? name : name + ", level " + std::to_string(map.levels.size());
+        const std::string levelName = map.levels.empty() ? name : name + ": level " + std::to_string(map.levels.size());
         if (Result r = readPixels(tif, d, l, mem, levelName); !r) return r;
         map.levels.push_back(std::move(l));
     }

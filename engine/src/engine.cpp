@@ -4,6 +4,7 @@
 #include "iris/engine.h"
 #include "iris/annotations.h"
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <shared_mutex>
@@ -175,6 +176,7 @@ struct Engine::Impl {
     uint32_t atlasSlots = 0; // the atlas's slots before a rebuild
     UploadCounters counters;
     uint64_t fieldCounter = 0; // guarded by SharedState's update lock
+    uint64_t layerCounter = 0; // the last layer id given; guarded by SharedState's update lock
     // Colour settings and what they give for the open slide; written under openMutex too.
     mutable std::mutex colorMutex;
     ColorSettings color;
@@ -556,6 +558,75 @@ void Engine::setSelectedAnnotation(uint64_t id) {
 }
 
 uint64_t Engine::selectedAnnotation() const { return impl_->shared.snapshot().selectedAnnotation; }
+
+namespace {
+using Layers = std::vector<Engine::LayerEntry>;
+// The stack with `edit` applied to a copy (the render thread may be drawing the old one).
+template <class F>
+Result editLayers(SharedState& shared, uint64_t id, F&& edit) {
+    bool found = false;
+    shared.update([&](Snapshot& s) {
+        auto next = std::make_shared<Layers>(*s.layers);
+        auto it = std::find_if(next->begin(), next->end(), [&](const Engine::LayerEntry& e) { return e.id == id; });
+        if (it == next->end()) return;
+        found = true;
+        edit(*next, it);
+        s.layers = std::move(next);
+    });
+    if (!found) return Result(Status::NotFound, "No layer " + std::to_string(id) + " is shown");
+    return {};
+}
+Result checkMap(const std::shared_ptr<const RasterMap>& map) {
+    if (!map) return Result(Status::InvalidArgument, "No raster map given");
+    if (std::string problem = rasterMapProblem(*map); !problem.empty())
+        return Result(Status::InvalidArgument, "The raster map cannot be shown: " + problem);
+    return {};
+}
+} // namespace
+
+Expected<uint64_t> Engine::addLayer(std::shared_ptr<const RasterMap> map, const LayerStyle& style,
+                                    std::optional<Placement> placement) {
+    if (Result r = checkMap(map); !r.ok()) return r;
+    uint64_t id = 0;
+    impl_->shared.update([&](Snapshot& s) {
+        id = ++impl_->layerCounter; // guarded by the update lock
+        auto next = std::make_shared<Layers>(*s.layers);
+        next->push_back(LayerEntry{id, std::move(map), style, placement});
+        s.layers = std::move(next);
+    });
+    return id;
+}
+
+Result Engine::setLayerMap(uint64_t id, std::shared_ptr<const RasterMap> map) {
+    if (Result r = checkMap(map); !r.ok()) return r;
+    return editLayers(impl_->shared, id, [&](Layers&, Layers::iterator it) { it->map = std::move(map); });
+}
+
+Result Engine::setLayerStyle(uint64_t id, const LayerStyle& style) {
+    return editLayers(impl_->shared, id, [&](Layers&, Layers::iterator it) { it->style = style; });
+}
+
+Result Engine::setLayerPlacement(uint64_t id, std::optional<Placement> placement) {
+    return editLayers(impl_->shared, id, [&](Layers&, Layers::iterator it) { it->placement = placement; });
+}
+
+Result Engine::moveLayer(uint64_t id, size_t index) {
+    return editLayers(impl_->shared, id, [&](Layers& l, Layers::iterator it) {
+        LayerEntry e = std::move(*it);
+        l.erase(it);
+        l.insert(l.begin() + std::ptrdiff_t(std::min(index, l.size())), std::move(e));
+    });
+}
+
+void Engine::removeLayer(uint64_t id) {
+    (void)editLayers(impl_->shared, id, [&](Layers& l, Layers::iterator it) { l.erase(it); });
+}
+
+void Engine::clearLayers() {
+    impl_->shared.update([&](Snapshot& s) { s.layers = std::make_shared<const Layers>(); });
+}
+
+std::vector<Engine::LayerEntry> Engine::layers() const { return *impl_->shared.snapshot().layers; }
 
 void Engine::setCrosshair(std::optional<std::array<double, 2>> slidePos) {
     if (slidePos && (!std::isfinite((*slidePos)[0]) || !std::isfinite((*slidePos)[1]))) slidePos.reset();

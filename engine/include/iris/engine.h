@@ -14,6 +14,7 @@
 
 #include <vulkan/vulkan_core.h>
 
+#include "iris/layers.h"
 #include "iris/types.h"
 
 namespace iris {
@@ -237,6 +238,33 @@ public:
     // The object drawn selected (a contrasting outline and its vertex handles); 0: none.
     void setSelectedAnnotation(uint64_t id);
     uint64_t selectedAnnotation() const;
+
+    // --- raster layers: heat maps and label maps (iris/layers.h, docs/LAYERS.md) -----------
+    // A map drawn over the tiles and under the annotations, layers in the order added (a later
+    // one over an earlier one), each pixel shaded exactly as shadeLayerAt() says and blended as
+    // blendOver() says. `placement` std::nullopt: the map spans the open slide's level 0
+    // (Placement::spanning, for whichever slide is open). The map is shared, never copied; the
+    // engine uploads the parts of the level a view needs. Returns the layer's id (never 0);
+    // an empty or inconsistent map (rasterMapProblem) is InvalidArgument.
+    Expected<uint64_t> addLayer(std::shared_ptr<const RasterMap> map, const LayerStyle& style = {},
+                                std::optional<Placement> placement = std::nullopt);
+    // Replaces a shown layer's map (a model streaming its results), style or placement; the
+    // next frame shows it. NotFound for an id that is not shown.
+    Result setLayerMap(uint64_t id, std::shared_ptr<const RasterMap> map);
+    Result setLayerStyle(uint64_t id, const LayerStyle& style);
+    Result setLayerPlacement(uint64_t id, std::optional<Placement> placement);
+    // Moves a layer to position `index` of the stack (0: the bottom; past the end: the top).
+    Result moveLayer(uint64_t id, size_t index);
+    void removeLayer(uint64_t id);
+    void clearLayers();
+    struct LayerEntry {
+        uint64_t id = 0;
+        std::shared_ptr<const RasterMap> map;
+        LayerStyle style;
+        std::optional<Placement> placement;
+    };
+    // The stack, bottom first.
+    std::vector<LayerEntry> layers() const;
 
     // A cross-hair marker over the slide at a level-0 position (a linked view's cursor), drawn
     // over the tiles and the other overlays, turned with the view; std::nullopt hides it

@@ -49,6 +49,9 @@ struct Snapshot {
     std::shared_ptr<const AnnotationStore> annotations;
     bool annotationsVisible = true;
     uint64_t selectedAnnotation = 0;
+    // Raster layers (render/layer_pass.h), bottom first; never null. Each change makes a new
+    // vector: the render thread keeps the one it drew with while it uploads.
+    std::shared_ptr<const std::vector<Engine::LayerEntry>> layers = std::make_shared<const std::vector<Engine::LayerEntry>>();
     // The newest move to an entirely new field of view (0: none being timed). Set by the API
     // call that made the move; the render thread times the field from fieldStart.
     uint64_t fieldId = 0;

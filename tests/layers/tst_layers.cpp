@@ -52,9 +52,12 @@ RasterMap scalarMap(std::vector<float> v, int w, int h) {
     return std::move(m).value();
 }
 
-// Sets a single-valued entry of a little-endian classic TIFF's first IFD to a LONG `value`.
-bool patchTiffTag(std::vector<uint8_t>& tiff, unsigned tag, uint32_t value) {
-    const uint32_t ifd = tiff[4] | tiff[5] << 8 | tiff[6] << 16 | uint32_t(tiff[7]) << 24;
+// Sets a single-valued entry of IFD number `dir` of a little-endian classic TIFF (its main
+// chain) to a LONG `value`.
+bool patchTiffTag(std::vector<uint8_t>& tiff, unsigned tag, uint32_t value, int dir = 0) {
+    auto u32 = [&](size_t at) { return tiff[at] | tiff[at + 1] << 8 | tiff[at + 2] << 16 | uint32_t(tiff[at + 3]) << 24; };
+    uint32_t ifd = u32(4);
+    for (int d = 0; d < dir; ++d) ifd = u32(ifd + 2 + 12 * size_t(tiff[ifd] | tiff[ifd + 1] << 8));
     const unsigned n = tiff[ifd] | tiff[ifd + 1] << 8;
     for (unsigned e = 0; e < n; ++e) {
         uint8_t* p = &tiff[ifd + 2 + 12 * e];
@@ -103,7 +106,7 @@ private slots:
     }
 
     void userColorMaps() {
-        std::string text = "# a ramp\n\n";
+        std::string text = "# a ramp — from a model's legend\n\n";
         for (int i = 0; i < 256; ++i)
             text += std::to_string(255 - i) + " " + std::to_string(i) + " 7" + (i % 2 ? " 128" : "") + "\r\n";
         rw::writeBytes(out("ramp.lut"), std::vector<uint8_t>(text.begin(), text.end()));
@@ -214,8 +217,7 @@ private slots:
     void npyMalformed() {
         const auto f4 = rw::rawBytes(std::vector<float>{1, 2, 3, 4, 5, 6});
         const auto good = rw::npyBytes("<f4", false, "(3, 2)", f4);
-        auto truncated = good;
-        truncated.resize(truncated.size() - 3);
+        const std::vector<uint8_t> truncated(good.begin(), good.end() - 3); // (resize trips gcc 12's -Wstringop-overflow under ASan)
         expectError(loadNpy("truncated.npy", truncated), Status::CorruptData, "truncated.npy", "truncated: 3x2 of '<f4' need 24 bytes");
         auto extra = good;
         extra.push_back(0);
@@ -473,6 +475,16 @@ private slots:
         QVERIFY(m.ok());
         QCOMPARE(int(m->levels.size()), 2);
         QCOMPARE(m->levels[1].scalar[0], 2.0f);
+        // A reduced level that does not decode fails the load, naming the file first and then
+        // the level (found by fuzz_raster_map: the message began "NAME, level 1").
+        TI l0{40, 20, 1, 8}, l1{20, 10, 1, 8};
+        l0.data.assign(800, 1), l1.data.assign(200, 2);
+        l0.rowsPerStrip = 20, l1.rowsPerStrip = 10; // one strip each: its offset sits in the IFD
+        QVERIFY(rw::writeTiff(out("pyr-two.tif"), {l0, l1}));
+        auto broken = rw::readBytes(out("pyr-two.tif"));
+        QVERIFY(patchTiffTag(broken, 273, uint32_t(broken.size() - 4), 1));
+        expectError(loadNpy("pyr-broken-level.tif", broken), Status::CorruptData, "pyr-broken-level.tif",
+                    "pyr-broken-level.tif: level 1: the strip at row 0 does not decode");
         // Limits count every level.
         RasterLoadOptions small;
         small.maxBytes = 101 * 50 * 4 + 100;

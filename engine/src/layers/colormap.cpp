@@ -147,8 +147,8 @@ Expected<ColorMap> fromPngStrip(std::span<const uint8_t> bytes, const std::strin
 Expected<ColorMap> ColorMap::fromMemory(std::span<const uint8_t> bytes, const std::string& name) {
     if (isPng(bytes)) return fromPngStrip(bytes, name);
     if (bytes.size() > (1u << 20)) return fail(Status::UnsupportedFormat, name, "too large for a colour-map text file");
-    for (uint8_t b : bytes)
-        if (b == 0 || b >= 0x80)
+    for (uint8_t b : bytes) // text: UTF-8 comments are fine, control characters other than tab/CR/LF are not
+        if (b < 0x20 && b != '\t' && b != '\r' && b != '\n')
             return fail(Status::UnsupportedFormat, name, "neither a PNG strip nor a text colour map (binary bytes)");
     return fromText(std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()), name);
 }

@@ -142,6 +142,7 @@ dicom_json - 1/1
 geojson tests/fuzz/geojson.dict 1/1
 asap_xml tests/fuzz/asap_xml.dict 1/1
 qido - 1/1
+raster_map tests/fuzz/raster.dict 1/1
 EOF
 while [ "${#fuzz_pids[@]}" -gt 0 ]; do
   wait -n || true

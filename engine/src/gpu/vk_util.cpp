@@ -240,7 +240,7 @@ Expected<VkPipeline> createBlendedPipeline(VkDevice dev, VkPipelineLayout layout
     const VkVertexInputBindingDescription vib{.binding = 0, .stride = stride, .inputRate = inputRate};
     const VkPipelineVertexInputStateCreateInfo vi{
         .sType = VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO, .pNext = nullptr, .flags = 0,
-        .vertexBindingDescriptionCount = 1, .pVertexBindingDescriptions = &vib,
+        .vertexBindingDescriptionCount = stride ? 1u : 0u, .pVertexBindingDescriptions = stride ? &vib : nullptr,
         .vertexAttributeDescriptionCount = attributeCount, .pVertexAttributeDescriptions = attributes};
     const VkPipelineInputAssemblyStateCreateInfo ia{
         .sType = VK_STRUCTURE_TYPE_PIPELINE_INPUT_ASSEMBLY_STATE_CREATE_INFO, .pNext = nullptr, .flags = 0,

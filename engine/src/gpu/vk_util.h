@@ -200,7 +200,8 @@ Expected<VkPipeline> createInstancedQuadPipeline(VkDevice dev, VkPipelineLayout 
                                                  uint32_t attributeCount, VkFormat format,
                                                  const VkSpecializationInfo* fragSpecialization = nullptr);
 // The same blending and dynamic state for any vertex input rate and topology (the annotation
-// pass's fill triangles are a per-vertex triangle list).
+// pass's fill triangles are a per-vertex triangle list). A stride of 0 declares no vertex
+// binding: the vertex shader makes everything from gl_VertexIndex (the layer pass).
 Expected<VkPipeline> createBlendedPipeline(VkDevice dev, VkPipelineLayout layout, VkShaderModule vert,
                                            VkShaderModule frag, uint32_t stride, VkVertexInputRate inputRate,
                                            VkPrimitiveTopology topology,

@@ -84,6 +84,7 @@ Result RenderThread::init() {
 Result RenderThread::initGpu() {
     VkDevice dev = device_.device();
     passes_.emplace(device_, pipeline_, log_, tuning_.drawCovered);
+    if (Result r = passes_->layers.init(kFramesInFlight); !r.ok()) return r;
     if (Result r = passes_->annotation.init(kFramesInFlight); !r.ok()) return r;
     if (Result r = passes_->hud.init(kFramesInFlight); !r.ok()) return r;
     const bool cpuDevice = device_.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;

@@ -29,6 +29,7 @@
 #include "render/annotation_pass.h"
 #include "render/frame_pass.h"
 #include "render/hud_pass.h"
+#include "render/layer_pass.h"
 #include "render/resolve_pass.h"
 #include "render/tile_pass.h"
 
@@ -161,16 +162,17 @@ private:
     // EngineConfig::tuning: drawCovered draws coarse tiles even where resident finer tiles
     // cover them (the engine before culling; for A/B measurements and the culling test).
     const EngineTuning tuning_;
-    // The frame's passes, in drawing order (render/frame_pass.h): tiles, annotations, HUD.
-    // Heat-map layers will go between the tiles and the annotations. Made anew with the device
+    // The frame's passes, in drawing order (render/frame_pass.h): tiles, raster layers (heat
+    // maps, label maps), annotations, HUD. Made anew with the device
     // after a loss (initGpu), in place: the HUD pass refers to the tile pass.
     struct Passes {
         Passes(gpu::Device& device, gpu::TilePipeline& pipeline, const Log& log, bool drawCovered)
-            : tile(pipeline, drawCovered), annotation(device, log), hud(device, log, tile) {}
+            : tile(pipeline, drawCovered), layers(device, log), annotation(device, log), hud(device, log, tile) {}
         render::TilePass tile;
+        render::LayerPass layers;
         render::AnnotationPass annotation;
         render::HudPass hud;
-        std::array<render::FramePass*, 3> list{&tile, &annotation, &hud};
+        std::array<render::FramePass*, 4> list{&tile, &layers, &annotation, &hud};
     };
     std::optional<Passes> passes_;
     // EngineTuning::TileResolve::Compute: offscreen frames resolve the tiles per pixel in a

@@ -102,21 +102,8 @@ int runAnnotationBench(const AnnotationBenchOptions& o) {
                     const bool shown = round % 2 == 1;
                     e.setAnnotationsVisible(shown);
                     (void)e.waitForFrame(std::chrono::seconds(60));
-                    for (int i = 0; i < 3; ++i) { // triangulations and the first frames' GPU start-up
-                        e.translate(i % 2 ? -0.25 : 0.25, 0);
-                        (void)e.waitForFrame(std::chrono::seconds(60));
-                    }
-                    log.start();
-                    for (int i = 0; i < 24; ++i) {
-                        e.translate(i % 2 ? -0.25 : 0.25, 0);
-                        (void)e.waitForFrame(std::chrono::seconds(60));
-                    }
-                    log.stop();
-                    std::lock_guard lock(log.m);
-                    auto& g = shown ? s.gpuShown : s.gpuHidden;
-                    auto& c = shown ? s.cpuShown : s.cpuHidden;
-                    g.insert(g.end(), log.gpu.begin(), log.gpu.end());
-                    c.insert(c.end(), log.cpu.begin(), log.cpu.end());
+                    measureSettledFrames(e, log, shown ? s.gpuShown : s.gpuHidden,
+                                         shown ? s.cpuShown : s.cpuHidden);
                 }
             };
             struct Row {

@@ -3,6 +3,7 @@
 // annotation and raster-layer benches.
 #pragma once
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <mutex>
@@ -35,6 +36,25 @@ struct FrameLog {
         cpu.push_back(s.cpuMs);
     }
 };
+
+// Settled frames of the engine's current view: three to warm up (uploads, triangulations, the
+// first frames' GPU start-up), then 24 logged, the view nudged a quarter pixel each (nothing
+// new to load); their GPU and CPU times are appended to gpu and cpu.
+inline void measureSettledFrames(iris::Engine& e, FrameLog& log, std::vector<double>& gpu, std::vector<double>& cpu) {
+    for (int i = 0; i < 3; ++i) {
+        e.translate(i % 2 ? -0.25 : 0.25, 0);
+        (void)e.waitForFrame(std::chrono::seconds(60));
+    }
+    log.start();
+    for (int i = 0; i < 24; ++i) {
+        e.translate(i % 2 ? -0.25 : 0.25, 0);
+        (void)e.waitForFrame(std::chrono::seconds(60));
+    }
+    log.stop();
+    std::lock_guard lock(log.m);
+    gpu.insert(gpu.end(), log.gpu.begin(), log.gpu.end());
+    cpu.insert(cpu.end(), log.cpu.begin(), log.cpu.end());
+}
 
 inline nlohmann::json frameStat(const std::vector<double>& v) {
     return {{"median", percentile(v, 0.5)}, {"p95", percentile(v, 0.95)}, {"frames", v.size()}};

@@ -125,19 +125,7 @@ int runLayerBench(const LayerBenchOptions& o) {
                     for (int c = 0; c < 3; ++c) {
                         if (iris::Result r = showLayers(kCounts[c]); !r.ok()) return fail(r.message());
                         (void)e.waitForSettled(std::chrono::seconds(120));
-                        for (int i = 0; i < 3; ++i) { // uploads and the first frames' GPU start-up
-                            e.translate(i % 2 ? -0.25 : 0.25, 0);
-                            (void)e.waitForFrame(std::chrono::seconds(60));
-                        }
-                        log.start();
-                        for (int i = 0; i < 24; ++i) {
-                            e.translate(i % 2 ? -0.25 : 0.25, 0);
-                            (void)e.waitForFrame(std::chrono::seconds(60));
-                        }
-                        log.stop();
-                        std::lock_guard lock(log.m);
-                        gpu[c].insert(gpu[c].end(), log.gpu.begin(), log.gpu.end());
-                        cpu[c].insert(cpu[c].end(), log.cpu.begin(), log.cpu.end());
+                        measureSettledFrames(e, log, gpu[c], cpu[c]);
                     }
                 }
                 std::printf("%-8s %9s | %8s / %-7s / %-7s | %8s / %-7s / %-7s\n", viewName, fmtMs(downsample).c_str(),

@@ -29,6 +29,7 @@
 #include "associatedimagesdock.h"
 #include "comparewindow.h"
 #include "exportdialog.h"
+#include "layersdock.h"
 #include "orientationactions.h"
 #include "recentfiles.h"
 #include "sampleslide.h"
@@ -55,6 +56,7 @@ MainWindow::MainWindow(QWidget *parent)
     , m_properties(new SlidePropertiesDock(this))
     , m_images(new AssociatedImagesDock(this))
     , m_annotationsDock(new AnnotationsDock(m_view, this))
+    , m_layersDock(new LayersDock(m_view, this))
     , m_writing(new QProgressBar)
     , m_status(nullptr)
     , m_sample(new SampleSlide(this))
@@ -68,6 +70,8 @@ MainWindow::MainWindow(QWidget *parent)
     addDockWidget(Qt::RightDockWidgetArea, m_images);
     addDockWidget(Qt::RightDockWidgetArea, m_annotationsDock);
     tabifyDockWidget(m_images, m_annotationsDock);
+    addDockWidget(Qt::RightDockWidgetArea, m_layersDock);
+    tabifyDockWidget(m_annotationsDock, m_layersDock);
     m_images->raise();
 
     m_busy->setRange(0, 0); // busy: iris-sample reports no progress through a pipe
@@ -339,6 +343,7 @@ void MainWindow::createMenus()
     view->addAction(m_properties->toggleViewAction());
     view->addAction(m_images->toggleViewAction());
     view->addAction(m_annotationsDock->toggleViewAction());
+    view->addAction(m_layersDock->toggleViewAction());
 
     createAnnotationMenu();
 

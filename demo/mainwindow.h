@@ -27,6 +27,7 @@ class QProgressBar;
 QT_END_NAMESPACE
 class AnnotationImport;
 class AnnotationsDock;
+class LayersDock;
 class AssociatedImagesDock;
 class CompareWindow;
 class OrientationActions;
@@ -46,6 +47,7 @@ public:
     // The open slide's annotations (null while no slide is open) and their dock.
     std::shared_ptr<iris::AnnotationStore> annotationStore() const { return m_annotations; }
     AnnotationsDock *annotationsDock() const { return m_annotationsDock; }
+    LayersDock *layersDock() const { return m_layersDock; }
 
 public Q_SLOTS:
     // userInitiated: errors also appear in a message box (not only the status bar).
@@ -129,6 +131,7 @@ private:
     SlidePropertiesDock *m_properties;
     AssociatedImagesDock *m_images;
     AnnotationsDock *m_annotationsDock;
+    LayersDock *m_layersDock;
     std::shared_ptr<iris::AnnotationStore> m_annotations;
     QPointer<AnnotationImport> m_import; // at most one at a time
     QProgressBar *m_writing; // busy while a write runs

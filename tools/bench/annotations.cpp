@@ -4,13 +4,12 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
-#include <mutex>
 #include <random>
 
 #include <nlohmann/json.hpp>
 
 #include "iris/annotations.h"
-#include "stats.h"
+#include "frame_log.h"
 
 namespace {
 
@@ -44,42 +43,9 @@ std::vector<iris::AnnotationObject> detections(size_t n, double w, double h, uin
     return v;
 }
 
-struct FrameLog {
-    std::mutex m;
-    bool on = false;
-    std::vector<double> gpu, cpu;
-    void start() {
-        std::lock_guard lock(m);
-        gpu.clear();
-        cpu.clear();
-        on = true;
-    }
-    void stop() {
-        std::lock_guard lock(m);
-        on = false;
-    }
-    void add(const iris::FrameStats& s) {
-        std::lock_guard lock(m);
-        if (!on) return;
-        if (s.gpuMs >= 0) gpu.push_back(s.gpuMs);
-        cpu.push_back(s.cpuMs);
-    }
-};
-
 struct Series {
     std::vector<double> gpuShown, gpuHidden, cpuShown, cpuHidden;
 };
-
-Json stat(const std::vector<double>& v) {
-    return {{"median", percentile(v, 0.5)}, {"p95", percentile(v, 0.95)}, {"frames", v.size()}};
-}
-
-std::string fmt(double v) {
-    if (std::isnan(v)) return "-";
-    char b[32];
-    std::snprintf(b, sizeof b, v < 1 ? "%.3f" : v < 10 ? "%.2f" : "%.1f", v);
-    return b;
-}
 
 } // namespace
 
@@ -136,21 +102,8 @@ int runAnnotationBench(const AnnotationBenchOptions& o) {
                     const bool shown = round % 2 == 1;
                     e.setAnnotationsVisible(shown);
                     (void)e.waitForFrame(std::chrono::seconds(60));
-                    for (int i = 0; i < 3; ++i) { // triangulations and the first frames' GPU start-up
-                        e.translate(i % 2 ? -0.25 : 0.25, 0);
-                        (void)e.waitForFrame(std::chrono::seconds(60));
-                    }
-                    log.start();
-                    for (int i = 0; i < 24; ++i) {
-                        e.translate(i % 2 ? -0.25 : 0.25, 0);
-                        (void)e.waitForFrame(std::chrono::seconds(60));
-                    }
-                    log.stop();
-                    std::lock_guard lock(log.m);
-                    auto& g = shown ? s.gpuShown : s.gpuHidden;
-                    auto& c = shown ? s.cpuShown : s.cpuHidden;
-                    g.insert(g.end(), log.gpu.begin(), log.gpu.end());
-                    c.insert(c.end(), log.cpu.begin(), log.cpu.end());
+                    measureSettledFrames(e, log, shown ? s.gpuShown : s.gpuHidden,
+                                         shown ? s.cpuShown : s.cpuHidden);
                 }
             };
             struct Row {
@@ -190,21 +143,21 @@ int runAnnotationBench(const AnnotationBenchOptions& o) {
             e.setFrameCallback({});
 
             std::printf("\n%zu annotations, %ux%u on %s: replaceAll %s ms; first fit frame shown %s ms\n", n, W, H,
-                        e.device().name.c_str(), fmt(loadMs).c_str(), fmt(firstFitMs).c_str());
+                        e.device().name.c_str(), fmtMs(loadMs).c_str(), fmtMs(firstFitMs).c_str());
             std::printf("%-8s %9s | %-27s | %-27s\n", "view", "downsmpl", "GPU ms shown / hidden (p50)",
                         "render CPU ms shown / hidden");
             Json rowsJson = Json::array();
             for (const Row& r : rows) {
                 std::printf("%-8s %9s | %12s / %-12s | %12s / %-12s\n", r.name.c_str(),
-                            fmt(std::min(r.downsample, fit.downsample)).c_str(),
-                            fmt(percentile(r.s.gpuShown, 0.5)).c_str(), fmt(percentile(r.s.gpuHidden, 0.5)).c_str(),
-                            fmt(percentile(r.s.cpuShown, 0.5)).c_str(), fmt(percentile(r.s.cpuHidden, 0.5)).c_str());
+                            fmtMs(std::min(r.downsample, fit.downsample)).c_str(),
+                            fmtMs(percentile(r.s.gpuShown, 0.5)).c_str(), fmtMs(percentile(r.s.gpuHidden, 0.5)).c_str(),
+                            fmtMs(percentile(r.s.cpuShown, 0.5)).c_str(), fmtMs(percentile(r.s.cpuHidden, 0.5)).c_str());
                 rowsJson.push_back({{"view", r.name},
                                     {"downsample", std::min(r.downsample, fit.downsample)},
-                                    {"gpu_ms_shown", stat(r.s.gpuShown)},
-                                    {"gpu_ms_hidden", stat(r.s.gpuHidden)},
-                                    {"cpu_ms_shown", stat(r.s.cpuShown)},
-                                    {"cpu_ms_hidden", stat(r.s.cpuHidden)}});
+                                    {"gpu_ms_shown", frameStat(r.s.gpuShown)},
+                                    {"gpu_ms_hidden", frameStat(r.s.gpuHidden)},
+                                    {"cpu_ms_shown", frameStat(r.s.cpuShown)},
+                                    {"cpu_ms_hidden", frameStat(r.s.cpuHidden)}});
             }
             std::fflush(stdout);
             all.push_back({{"annotations", n},

@@ -30,6 +30,7 @@
 
 #include "baselines.h"
 #include "annotations.h"
+#include "layers.h"
 #include "linked.h"
 #include "iris/engine.h"
 #include "iris/environment.h"
@@ -558,6 +559,11 @@ int main(int argc, char** argv) {
                 return parseList(v).empty() ? "'" + v + "' is not a list of counts" : std::string();
             },
             ""));
+    bool heatmap = false;
+    app.add_flag("--heatmap", heatmap,
+                 "The raster-layer pass instead of the walk: a synthetic\n"
+                 "heat map of 1/224 and one of 1/4 of the slide's side,\n"
+                 "frames with 0, 1 and 4 layers at fit and a mid zoom");
     app.add_option("--color-managed", o.colorManaged,
                    "Colour management (docs/COLOR.md); both: each size\n"
                    "is run off, then on, in this run (its cost)")
@@ -584,6 +590,15 @@ int main(int argc, char** argv) {
         a.seed = o.seed;
         a.json = o.json;
         return runAnnotationBench(a);
+    }
+    if (heatmap) {
+        LayerBenchOptions l;
+        l.slide = o.slide;
+        l.sizes = sizes.empty() ? std::vector<std::pair<uint32_t, uint32_t>>{{1920, 1080}} : o.sizes;
+        l.validation = o.validation;
+        l.tuning = o.tuning;
+        l.json = o.json;
+        return runLayerBench(l);
     }
     if (o.views > 0) {
         if (sizes.empty()) o.sizes = {{1920, 1080}};

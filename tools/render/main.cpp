@@ -3,7 +3,12 @@
 //
 //   iris-render SLIDE --out FILE.png [--size WxH] [--center X,Y] [--downsample D]
 //               [--rotate DEG] [--flip h|v|hv] [--enhance on|off] [--color-managed on|off] [--display-profile FILE.icc]
-//               [--intent perceptual|relative] [--annotations FILE]... [--timeout S] [--validation] [--verbose]
+//               [--intent perceptual|relative] [--annotations FILE]... [--heatmap FILE[:OPACITY[:COLORMAP]]]...
+//               [--label-map FILE[:OPACITY]]... [--timeout S] [--validation] [--verbose]
+//
+// --heatmap and --label-map draw raster layers (a scalar map through a colour map, class ids
+// through the default class colours) over the slide and under the annotations, each spanning
+// the slide, in the order given, the last on top (layer_specs.h reads the specs).
 //
 // --annotations draws a QuPath GeoJSON or ASAP XML file's objects over the slide (the format
 // is chosen by content; several files are drawn together), as the viewer does.
@@ -26,6 +31,7 @@
 #include "iris/annotations.h"
 #include "iris/engine.h"
 #include "iris/environment.h"
+#include "layer_specs.h"
 #include "tool_cli.h"
 #include "png_write.h"
 
@@ -113,6 +119,31 @@ int main(int argc, char** argv) {
                    "file over the slide (repeatable)")
         ->option_text("FILE")
         ->check(CLI::ExistingFile.description(""));
+    std::vector<std::string> heatmapSpecs, labelMapSpecs;
+    const auto specCheck = [](bool labels) {
+        return CLI::Validator(
+            [labels](std::string& text) {
+                const iris::Expected<iris::render::LayerSpec> spec = iris::render::parseLayerSpec(text, labels);
+                return spec ? std::string() : spec.error().message();
+            },
+            "");
+    };
+    CLI::Option* heatmapOption =
+        app.add_option("--heatmap", heatmapSpecs,
+                       "Draw a scalar map (PNG, TIFF or NumPy .npy: a heat\n"
+                       "map, a probability) over the slide, spanning it, at\n"
+                       "OPACITY 0..1 (default 0.5) through COLORMAP: viridis\n"
+                       "(default), magma, jet, gray or a 256-entry LUT file\n"
+                       "(repeatable; layers stack in the order given)")
+            ->option_text("FILE[:OPACITY[:COLORMAP]]")
+            ->check(specCheck(false));
+    CLI::Option* labelMapOption =
+        app.add_option("--label-map", labelMapSpecs,
+                       "Draw a label map (class ids in a single-channel\n"
+                       "integer PNG, TIFF or .npy) over the slide in the\n"
+                       "default class colours, class 0 hidden (repeatable)")
+            ->option_text("FILE[:OPACITY]")
+            ->check(specCheck(true));
     app.add_option("--timeout", timeout, "Seconds to wait for the complete frame")
         ->option_text("S")
         ->check(iris::tools::textCheck([](const std::string& v) { double t = 0; return parseNumber(v, t) && t > 0; },
@@ -125,6 +156,25 @@ int main(int argc, char** argv) {
     if (const int status = iris::tools::parseArguments(app, argc, argv); status >= 0) return status;
     auto tuning = iris::tuningFromEnvironment();
     if (!tuning) return iris::tools::usageError(app, tuning.error().message());
+    // The maps are read before the device starts, so that a bad one costs nothing; in the
+    // order the options were given (parse_order lists each option once per value).
+    std::vector<iris::render::LoadedLayer> layers;
+    {
+        size_t nextHeatmap = 0, nextLabelMap = 0;
+        for (const CLI::Option* option : app.parse_order()) {
+            const bool labels = option == labelMapOption;
+            if (option != heatmapOption && !labels) continue;
+            const std::string& text = labels ? labelMapSpecs[nextLabelMap++] : heatmapSpecs[nextHeatmap++];
+            iris::Expected<iris::render::LayerSpec> spec = iris::render::parseLayerSpec(text, labels); // checked above
+            iris::Expected<iris::render::LoadedLayer> layer =
+                spec ? iris::render::loadLayer(*spec) : iris::Expected<iris::render::LoadedLayer>(spec.error());
+            if (!layer) {
+                std::fprintf(stderr, "iris-render: %s\n", layer.error().message().c_str());
+                return 1;
+            }
+            layers.push_back(std::move(layer).value());
+        }
+    }
     double w = 0, h = 0, cx = 0, cy = 0;
     parseSize(size, w, h); // both checked above
     const bool haveCenter = !center.empty() && parsePair(center, ',', cx, cy);
@@ -177,6 +227,16 @@ int main(int argc, char** argv) {
         if (verbose)
             std::fprintf(stderr, "iris-render: %zu annotation objects\n", store->snapshot()->size());
         e.setAnnotations(store);
+    }
+    for (const iris::render::LoadedLayer& layer : layers) {
+        if (iris::Expected<uint64_t> id = e.addLayer(layer.map, layer.style); !id) {
+            std::fprintf(stderr, "iris-render: %s\n", id.error().message().c_str());
+            return 1;
+        }
+        if (verbose)
+            std::fprintf(stderr, "iris-render: layer %s: %s %dx%d, %zu levels, values %g..%g\n",
+                         layer.map->title.c_str(), iris::rasterKindName(layer.map->kind), layer.map->width(),
+                         layer.map->height(), layer.map->levels.size(), layer.map->minValue, layer.map->maxValue);
     }
     if (verbose) {
         const iris::ColorStatus cs = e.colorStatus();

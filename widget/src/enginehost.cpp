@@ -1,6 +1,8 @@
 #include "enginehost_p.h"
 
+#include <algorithm>
 #include <atomic>
+#include <cmath>
 #include <mutex>
 
 #include <QtCore/QFile>
@@ -22,7 +24,40 @@ QString fromStd(const std::string &s)
     return QString::fromUtf8(s.data(), qsizetype(s.size()));
 }
 
+bool sameNumber(double a, double b)
+{
+    return a == b || (std::isnan(a) && std::isnan(b));
+}
+
+bool sameStyle(const iris::LayerStyle &a, const iris::LayerStyle &b)
+{
+    const auto sameClass = [](const iris::LabelClass &x, const iris::LabelClass &y) {
+        return x.name == y.name && x.color == y.color && x.visible == y.visible;
+    };
+    return a.visible == b.visible && sameNumber(a.opacity, b.opacity) && a.colorMap.name == b.colorMap.name
+        && a.colorMap.entries == b.colorMap.entries && sameNumber(a.low, b.low) && sameNumber(a.high, b.high)
+        && sameNumber(a.threshold, b.threshold) && a.sampling == b.sampling
+        && std::equal(a.classes.begin(), a.classes.end(), b.classes.begin(), b.classes.end(), sameClass);
+}
+
+bool samePlacement(const std::optional<iris::Placement> &a, const std::optional<iris::Placement> &b)
+{
+    return a.has_value() == b.has_value() && (!a || a->m == b->m);
+}
+
+void warnLayer(const char *what, quint64 id, const iris::Result &r)
+{
+    if (!r)
+        qCWarning(lcIrisWidget).noquote() << what << "layer" << id << ":" << fromStd(r.message());
+}
+
 } // namespace
+
+const LayerSettings *findLayer(const std::vector<LayerSettings> &layers, quint64 id)
+{
+    const auto it = std::find_if(layers.begin(), layers.end(), [id](const LayerSettings &l) { return l.id == id; });
+    return it == layers.end() ? nullptr : &*it;
+}
 
 std::array<float, 3> toEngineRgb(const QColor &color)
 {
@@ -90,6 +125,8 @@ bool EngineHost::create(QVulkanInstance *vulkan, const EngineSettings &settings,
     m_settings.overlayFont.clear(); // a new engine has no font of the host's yet
     applyOverlays(settings);
     applyAnnotations(settings);
+    m_layerIds.clear(); // a new engine has none of them yet
+    applyLayers(settings);
     g_liveEngines.fetch_add(1, std::memory_order_relaxed); // a counter for tests; orders nothing
 
     std::weak_ptr<Relay> weakRelay = m_relay;
@@ -169,6 +206,50 @@ void EngineHost::applyAnnotations(const EngineSettings &settings)
     m_engine->setSelectedAnnotation(settings.selectedAnnotation);
 }
 
+void EngineHost::applyLayers(const EngineSettings &settings)
+{
+    if (!m_engine)
+        return;
+    for (auto it = m_layerIds.begin(); it != m_layerIds.end();) {
+        if (findLayer(settings.layers, it->first)) {
+            ++it;
+            continue;
+        }
+        m_engine->removeLayer(it->second);
+        it = m_layerIds.erase(it);
+    }
+    std::vector<uint64_t> order; // engine ids, bottom first
+    for (const LayerSettings &layer : settings.layers) {
+        const auto shown = m_layerIds.find(layer.id);
+        const LayerSettings *was = findLayer(m_settings.layers, layer.id);
+        if (shown == m_layerIds.end() || !was) {
+            const iris::Expected<uint64_t> added = m_engine->addLayer(layer.map, layer.style, layer.placement);
+            if (!added) { // the view checks maps first: not expected
+                warnLayer("cannot add", layer.id, added.error());
+                continue;
+            }
+            m_layerIds[layer.id] = *added;
+            order.push_back(*added);
+            continue;
+        }
+        order.push_back(shown->second);
+        if (was->map != layer.map)
+            warnLayer("cannot replace the map of", layer.id, m_engine->setLayerMap(shown->second, layer.map));
+        if (!sameStyle(was->style, layer.style))
+            warnLayer("cannot style", layer.id, m_engine->setLayerStyle(shown->second, layer.style));
+        if (!samePlacement(was->placement, layer.placement))
+            warnLayer("cannot place", layer.id, m_engine->setLayerPlacement(shown->second, layer.placement));
+    }
+    std::vector<uint64_t> stack;
+    for (const iris::Engine::LayerEntry &entry : m_engine->layers())
+        stack.push_back(entry.id);
+    if (stack != order) {
+        for (size_t i = 0; i < order.size(); ++i)
+            warnLayer("cannot move", order[i], m_engine->moveLayer(order[i], i));
+    }
+    m_settings.layers = settings.layers;
+}
+
 void EngineHost::applyColor(const EngineSettings &settings)
 {
     if (!m_engine)
@@ -190,6 +271,7 @@ void EngineHost::destroy()
     m_engine->setFrameCallback({});
     m_engine->setFaultCallback({});
     m_engine.reset(); // joins the engine's threads: no callback runs after this
+    m_layerIds.clear();
     m_vulkan = nullptr;
     g_liveEngines.fetch_sub(1, std::memory_order_relaxed);
 }

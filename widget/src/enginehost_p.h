@@ -9,8 +9,10 @@
 #pragma once
 
 #include <array>
+#include <map>
 #include <memory>
 #include <optional>
+#include <vector>
 
 #include <QtCore/QByteArray>
 #include <QtCore/QObject>
@@ -29,6 +31,15 @@ class QWindow;
 QT_END_NAMESPACE
 
 namespace IrisWidget {
+
+// A raster layer of the view (IrisSlideView::addLayer): the view's own id, which outlives
+// engines (each engine numbers its layers itself), and what the engine is given.
+struct LayerSettings {
+    quint64 id = 0;
+    std::shared_ptr<const iris::RasterMap> map;
+    iris::LayerStyle style;
+    std::optional<iris::Placement> placement; // none: spanning the open slide's level 0
+};
 
 struct EngineSettings {
     // The engine's defaults (EngineConfig), which the widget's properties start from.
@@ -53,7 +64,12 @@ struct EngineSettings {
     std::shared_ptr<iris::AnnotationStore> annotations;
     bool annotationsVisible = true;
     quint64 selectedAnnotation = 0;
+    // Raster layers, bottom first (IrisSlideView::addLayer and its setters).
+    std::vector<LayerSettings> layers;
 };
+
+// The layer of that id in `layers`; null when there is none.
+const LayerSettings *findLayer(const std::vector<LayerSettings> &layers, quint64 id);
 
 // The engine's colour settings for `settings`.
 iris::ColorSettings toEngineColor(const EngineSettings &settings);
@@ -78,6 +94,9 @@ public:
     // Shows, places and re-fonts the overlays as `settings` say (only what changed).
     void applyOverlays(const EngineSettings &settings);
     void applyAnnotations(const EngineSettings &settings);
+    // Brings the engine's layer stack to settings.layers: adds, removes, re-styles and re-orders
+    // only what differs from the stack last applied (a new engine gets them all).
+    void applyLayers(const EngineSettings &settings);
     // Gives the engine the colour settings of `settings` when they differ from its own (a new
     // transform is baked on this thread: milliseconds).
     void applyColor(const EngineSettings &settings);
@@ -104,6 +123,7 @@ private:
     QVulkanInstance *m_vulkan = nullptr;
     std::unique_ptr<iris::Engine> m_engine;
     EngineSettings m_settings;
+    std::map<quint64, uint64_t> m_layerIds; // the view's layer id → this engine's
     bool m_bound = false;
 };
 

@@ -385,6 +385,7 @@ bool IrisSlideViewPrivate::open(const QString &newPath)
     }
     info = toSlideInfo(*slide);
     path = newPath;
+    layersFollowSlide(newPath);
     fitPending = !host.isBound();
     qCInfo(lcIrisWidget).noquote() << "opened" << newPath << info.vendor << info.width << "x" << info.height
                                    << "levels" << info.levels.size();
@@ -401,6 +402,7 @@ void IrisSlideViewPrivate::forgetSlide()
     info = {};
     path.clear();
     fitPending = false;
+    layersFollowSlide(QString());
 }
 
 void IrisSlideViewPrivate::setView(iris::View view)

@@ -62,6 +62,9 @@ public:
     // --- slide and view --------------------------------------------------------------
     bool open(const QString &path);
     void forgetSlide();
+    // Raster layers belong to the slide they are shown over: called with the path now shown
+    // ("" when none), it removes them when that is not the slide they were shown over.
+    void layersFollowSlide(const QString &shownPath);
     void setView(iris::View view);
     void notifyViewChanged();
     double devicePixelRatio() const;
@@ -110,4 +113,6 @@ public:
     std::optional<iris::View> notifiedView;  // last view viewChanged() announced
     bool overviewDragging = false;           // a press on the overview map: moves follow it
     std::optional<QByteArray> hostDisplayProfile; // setDisplayProfile(); none: the screen's
+    quint64 lastLayerId = 0;                 // the view's layer ids count up from 1
+    QString layersSlide;                     // the slide the layers are shown over; "": none yet
 };

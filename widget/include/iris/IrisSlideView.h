@@ -22,6 +22,7 @@
 #include <QtWidgets/QWidget>
 
 #include "iris/IrisFrameMetrics.h"
+#include "iris/IrisLayerInfo.h"
 #include "iris/IrisSlideInfo.h"
 #include "iris/IrisWidgetGlobal.h"
 
@@ -30,6 +31,9 @@ class QUndoStack;
 class QWindow;
 namespace iris {
 class AnnotationStore; // iris/annotations.h (the engine's public API)
+struct LayerStyle;     // iris/layers.h
+struct Placement;
+struct RasterMap;
 }
 QT_END_NAMESPACE
 
@@ -180,6 +184,62 @@ public:
     QString annotationMeasurement() const;
     // The render target's size in device pixels (the widget's size × devicePixelRatio).
     QSize targetSize() const;
+
+    // --- raster layers: heat maps and label maps (iris/layers.h, docs/LAYERS.md) ----------
+    // Maps drawn by the engine over the slide and under the annotations, a later layer over
+    // an earlier one; each spans the slide's level 0 unless placed otherwise.
+    // A model's output belongs to its slide: closing the slide, opening another one (another
+    // path, or an open that fails and so closes the slide shown) removes every layer (one
+    // layersChanged()). Opening the same path again keeps them, and so does the engine being
+    // re-created (budget changes, a lost device): the view keeps its own list and gives it to
+    // each new engine. Layers added while no slide is open wait for the next slide opened.
+    // Ids are the view's own: never 0, never reused, unchanged across engines.
+    // Each setter returns false, changing nothing, for an id the view does not have or a value
+    // it cannot use (a non-finite opacity, a NaN threshold, an unknown colour map, a class
+    // outside the table); a file or map that cannot be used is also reported through
+    // slideError(). Every change emits layersChanged().
+    //
+    // Reads a map file on the calling thread (PNG, TIFF, NumPy .npy, by content: see
+    // iris::loadRasterMap; asLabels: a single-channel integer file holds class ids) and adds it
+    // with the default style. Returns its id, or 0 with slideError() naming the file and the
+    // problem; nothing else changes then.
+    quint64 addLayer(const QString &path, bool asLabels = false);
+    // Adds a map the host made (shared, never copied), with the default style or `style`. A
+    // label map whose style has no class table gets iris::defaultLabelClasses for its ids.
+    // 0 and slideError() for a map that cannot be shown (iris::rasterMapProblem).
+    quint64 addLayer(std::shared_ptr<const iris::RasterMap> map);
+    quint64 addLayer(std::shared_ptr<const iris::RasterMap> map, const iris::LayerStyle &style);
+    QList<quint64> layerIds() const; // bottom first
+    IrisLayerInfo layer(quint64 id) const; // invalid (id 0) for an id the view does not have
+    QList<IrisLayerInfo> layers() const;   // bottom first
+    std::shared_ptr<const iris::RasterMap> layerMap(quint64 id) const; // null for an unknown id
+    iris::LayerStyle layerStyle(quint64 id) const; // the default style for an unknown id
+    // Replaces a layer's map (a model streaming its results); false and slideError() for a map
+    // that cannot be shown.
+    bool setLayerMap(quint64 id, std::shared_ptr<const iris::RasterMap> map);
+    bool setLayerStyle(quint64 id, const iris::LayerStyle &style);
+    // Where the map lies on the slide; resetLayerPlacement: spanning level 0 again.
+    bool setLayerPlacement(quint64 id, const iris::Placement &placement);
+    bool resetLayerPlacement(quint64 id);
+    bool setLayerVisible(quint64 id, bool visible);
+    bool setLayerOpacity(quint64 id, double opacity); // clamped to 0..1
+    // A built-in colour map: "viridis", "magma", "jet", "gray" (iris::ColorMap::builtin).
+    bool setLayerColorMap(quint64 id, const QString &name);
+    // A user LUT file (iris::ColorMap::fromFile: a 256-entry PNG strip or text table); false
+    // and slideError() when it cannot be read.
+    bool loadLayerColorMap(quint64 id, const QString &path);
+    // The values mapped onto the colour map's ends; NaN for either: the map's minimum / maximum.
+    bool setLayerWindow(quint64 id, double low, double high);
+    // Scalar values below it are not drawn; −∞: none.
+    bool setLayerThreshold(quint64 id, double threshold);
+    bool setLayerSampling(quint64 id, IrisLayerInfo::Sampling sampling);
+    // A label map's class (its id, an index into layer(id).classes): colour and visibility.
+    bool setLayerClassColor(quint64 id, int classId, const QColor &color);
+    bool setLayerClassVisible(quint64 id, int classId, bool visible);
+    // Moves a layer to position `index` of the stack (0: the bottom; past the end: the top).
+    bool moveLayer(quint64 id, int index);
+    void removeLayer(quint64 id);
+    void clearLayers();
 
     // --- appearance and resources ----------------------------------------------------
     QColor backgroundColor() const;
@@ -333,6 +393,9 @@ Q_SIGNALS:
     void annotationToolsEnabledChanged(bool on);
     // annotationMeasurement() changed (a shape drawn, a selection, an edit): for a status bar.
     void annotationMeasurementChanged(const QString &text);
+    // A layer was added, removed, moved, or its map, style or placement changed; or the layers
+    // were removed with their slide.
+    void layersChanged();
 
 protected:
     bool event(QEvent *event) override;

@@ -33,6 +33,7 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <map>
 #include <mutex>
 #include <random>
 #include <string>
@@ -100,6 +101,20 @@ uint64_t residentBytes() {
     uint64_t size = 0, resident = 0;
     f >> size >> resident;
     return resident * uint64_t(sysconf(_SC_PAGESIZE));
+}
+
+// What the open descriptors are (readlink of each), for the report when their count is not flat.
+std::string describeDescriptors() {
+    std::map<std::string, int> targets;
+    std::error_code ec;
+    for (fs::directory_iterator it("/proc/self/fd", ec), end; !ec && it != end; it.increment(ec)) {
+        std::error_code rec;
+        const fs::path to = fs::read_symlink(it->path(), rec);
+        ++targets[rec ? std::string("?") : to.string()];
+    }
+    std::string out;
+    for (const auto& [to, n] : targets) out += "\n    " + std::to_string(n) + " × " + to;
+    return out;
 }
 
 int openDescriptors() {
@@ -293,6 +308,8 @@ void TestSoak::soak() {
     };
 
     std::vector<Sample> samples;
+    int peakFds = -1;        // written by the sampler only, read after it is joined
+    std::string peakListing; // the descriptors at that peak
     std::mutex sampleMutex;
     std::condition_variable sampleCv;
     auto sampler = [&] {
@@ -301,6 +318,10 @@ void TestSoak::soak() {
             s.t = std::chrono::duration<double>(Clock::now() - start).count();
             s.rss = residentBytes();
             s.fds = openDescriptors();
+            if (s.fds > peakFds) { // what they are at the peak, for the report
+                peakFds = s.fds;
+                peakListing = describeDescriptors();
+            }
             for (int i = 0; i < kEngines; ++i) {
                 s.mem[i] = walkers[size_t(i)]->engine->memoryStats();
                 s.frames[i] = walkers[size_t(i)]->engine->metrics().frames;
@@ -403,7 +424,11 @@ void TestSoak::soak() {
     QVERIFY2(rssGrowth <= int64_t(kRssGrowthBound),
              qPrintable(QString("RSS peak grew %1 MiB from the first to the second half after the warm-up")
                             .arg(double(rssGrowth) / kMiB)));
-    QVERIFY2(fdHi - fdLo <= kFdRangeBound, qPrintable(QString("open descriptors moved by %1").arg(fdHi - fdLo)));
+    QVERIFY2(fdHi - fdLo <= kFdRangeBound,
+             qPrintable(QString("open descriptors moved by %1; at their peak of %2 they were:%3")
+                            .arg(fdHi - fdLo)
+                            .arg(peakFds)
+                            .arg(QString::fromStdString(peakListing))));
     QVERIFY2(fdGrowth <= kFdGrowthBound,
              qPrintable(QString("open descriptors' peak grew by %1 from the first to the second half").arg(fdGrowth)));
 

@@ -4,8 +4,10 @@
 #include <atomic>
 #include <cmath>
 #include <mutex>
+#include <vector>
 
 #include <QtCore/QFile>
+#include <QtCore/QPointer>
 #include <QtGui/QColor>
 #include <QtGui/QVulkanInstance>
 #include <QtGui/QWindow>
@@ -16,7 +18,7 @@ namespace IrisWidget {
 
 namespace {
 
-constexpr int kMaxPendingFrames = 4;
+constexpr size_t kMaxPendingFrames = 4;
 std::atomic<int> g_liveEngines{0};
 
 QString fromStd(const std::string &s)
@@ -78,9 +80,14 @@ iris::ColorSettings toEngineColor(const EngineSettings &settings)
 struct EngineHost::Relay {
     std::mutex mutex;
     EngineHost *host = nullptr; // guarded by mutex; null once the host is going away
-    // Frames posted but not yet delivered. Only bounds the queue, orders nothing else, so
-    // relaxed: the render thread's fetch_add pairs with the GUI thread's fetch_sub.
-    std::atomic<int> pending{0};
+    // Frames rendered but not yet delivered, oldest first (guarded by mutex); a queued call
+    // to deliver them is outstanding while it is not empty. At most kMaxPendingFrames: a
+    // frame that finds it full takes the last place, so that the frame delivered last is the
+    // last one rendered.
+    // (Dropping the newest instead lost the complete frame that ends a burst of loading, and
+    // a host waiting for it waited for ever: the engine draws nothing more until the view
+    // changes. tst_view_churn found it with eight views opening at once.)
+    std::vector<iris::FrameStats> pending;
 };
 
 EngineHost::EngineHost(QObject *parent)
@@ -137,16 +144,17 @@ bool EngineHost::create(QVulkanInstance *vulkan, const EngineSettings &settings,
         std::lock_guard lock(relay->mutex);
         if (!relay->host)
             return;
-        if (relay->pending.fetch_add(1, std::memory_order_relaxed) >= kMaxPendingFrames) {
-            relay->pending.fetch_sub(1, std::memory_order_relaxed);
+        const bool queued = !relay->pending.empty();
+        if (relay->pending.size() < kMaxPendingFrames)
+            relay->pending.push_back(stats);
+        else
+            relay->pending.back() = stats;
+        if (queued)
             return;
-        }
         EngineHost *host = relay->host;
         // The queued call belongs to host: if host is deleted first, Qt discards it.
-        QMetaObject::invokeMethod(host, [host, relay, stats] {
-            relay->pending.fetch_sub(1, std::memory_order_relaxed);
-            Q_EMIT host->frameRendered(stats);
-        }, Qt::QueuedConnection);
+        QMetaObject::invokeMethod(
+            host, [host, relay] { host->deliverFrames(*relay); }, Qt::QueuedConnection);
     });
 
     m_engine->setFaultCallback([weakRelay](const iris::Result &fault) {
@@ -168,6 +176,26 @@ bool EngineHost::create(QVulkanInstance *vulkan, const EngineSettings &settings,
     qCInfo(lcIrisWidget).noquote() << "engine ready on" << fromStd(device.name) << "with"
                                    << device.atlasSlots << "tile slots";
     return true;
+}
+
+void EngineHost::deliverFrames(Relay &relay)
+{
+    // One at a time from the queue itself, not a copy of it: a receiver that runs a nested
+    // event loop delivers the next frames there, and this loop then goes on after them, in order.
+    const QPointer<EngineHost> alive(this);
+    for (;;) {
+        iris::FrameStats stats;
+        {
+            std::lock_guard lock(relay.mutex);
+            if (relay.pending.empty())
+                return; // a frame rendered from now on queues another call
+            stats = relay.pending.front();
+            relay.pending.erase(relay.pending.begin());
+        }
+        Q_EMIT frameRendered(stats);
+        if (!alive) // a receiver deleted the view
+            return;
+    }
 }
 
 void EngineHost::applyOverlays(const EngineSettings &settings)

@@ -5,7 +5,8 @@
 // engine's frame callback runs on the engine's render thread; it only posts a queued call
 // to this object, through a relay that the destructor disconnects under a lock, so nothing
 // reaches a destroyed host. Posting is bounded: when the GUI thread falls more than a few
-// frames behind, the extra frames' figures are dropped rather than queued.
+// frames behind, the newest frame's figures replace the last ones waiting, so that the last
+// frame rendered is always delivered (a complete frame that ends a burst of loading included).
 #pragma once
 
 #include <array>
@@ -119,6 +120,8 @@ Q_SIGNALS:
 
 private:
     struct Relay;
+    // Emits frameRendered for every frame waiting in relay (GUI thread).
+    void deliverFrames(Relay &relay);
     std::shared_ptr<Relay> m_relay;
     QVulkanInstance *m_vulkan = nullptr;
     std::unique_ptr<iris::Engine> m_engine;

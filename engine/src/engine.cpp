@@ -582,11 +582,19 @@ Result checkMap(const std::shared_ptr<const RasterMap>& map) {
         return Result(Status::InvalidArgument, "The raster map cannot be shown: " + problem);
     return {};
 }
+// A single-level map larger than this a side gets coarser levels (withRasterPyramid), so that a
+// view of the whole slide draws from a small level instead of needing the whole map on the GPU.
+constexpr int32_t kPyramidFromSide = 1024;
+std::shared_ptr<const RasterMap> drawable(std::shared_ptr<const RasterMap> map) {
+    if (map->levels.size() != 1 || std::max(map->width(), map->height()) <= kPyramidFromSide) return map;
+    return std::make_shared<const RasterMap>(withRasterPyramid(*map));
+}
 } // namespace
 
 Expected<uint64_t> Engine::addLayer(std::shared_ptr<const RasterMap> map, const LayerStyle& style,
                                     std::optional<Placement> placement) {
     if (Result r = checkMap(map); !r.ok()) return r;
+    map = drawable(std::move(map));
     uint64_t id = 0;
     impl_->shared.update([&](Snapshot& s) {
         id = ++impl_->layerCounter; // guarded by the update lock
@@ -599,6 +607,7 @@ Expected<uint64_t> Engine::addLayer(std::shared_ptr<const RasterMap> map, const 
 
 Result Engine::setLayerMap(uint64_t id, std::shared_ptr<const RasterMap> map) {
     if (Result r = checkMap(map); !r.ok()) return r;
+    map = drawable(std::move(map));
     return editLayers(impl_->shared, id, [&](Layers&, Layers::iterator it) { it->map = std::move(map); });
 }
 

@@ -162,6 +162,9 @@ class TestLayersRender : public QObject {
             auto id = e_->addLayer(l.map, l.style, l.placement);
             QVERIFY2(id.ok(), describe(id.error()).c_str());
         }
+        // The maps as the engine draws them: a large single-level map was given coarser levels.
+        const std::vector<iris::Engine::LayerEntry> shown = e_->layers();
+        QCOMPARE(shown.size(), layers.size());
         std::vector<iris::Frame> with;
         std::string why;
         for (const iris::View& v : views) {
@@ -173,7 +176,7 @@ class TestLayersRender : public QObject {
         for (size_t i = 0; i < views.size(); ++i) {
             auto base = frameOf(views[i], &why);
             QVERIFY2(base.has_value(), why.c_str());
-            compare(with[i].image, base->image, views[i], layers, what + " view " + std::to_string(i));
+            compare(with[i].image, base->image, views[i], shown, what + " view " + std::to_string(i));
             if (QTest::currentTestFailed()) return;
         }
     }
@@ -230,7 +233,8 @@ private Q_SLOTS:
         check({{0, map, style, std::nullopt}}, views(), "scalar nearest");
     }
 
-    // A map larger than one chunk (several chunks, their seams) placed turned and scaled.
+    // A map larger than one chunk (several chunks, their seams) placed turned and scaled; it has
+    // one level over 1024 pixels, so the engine draws it with the coarser levels it adds.
     void scalarAcrossChunksTurned() {
         auto map = scalarMap(1300, 900, false);
         QVERIFY(map);
@@ -239,6 +243,9 @@ private Q_SLOTS:
         style.colorMap = iris::ColorMap::jet();
         const iris::Placement place = iris::Placement::scaleRotateOffset(2.5, 2.5, 20.0, info_.width * 0.25, info_.height * 0.1);
         check({{0, map, style, place}}, views(), "scalar chunks turned");
+        QVERIFY(e_->layers().empty());
+        QVERIFY(e_->addLayer(map, style, place).ok());
+        QCOMPARE(e_->layers().front().map->levels.size(), size_t(3)); // 1300, 650, 325 wide
     }
 
     // A label checkerboard of 64-pixel squares aligned to the slide's level-0 grid (placement:
@@ -302,10 +309,16 @@ private Q_SLOTS:
         auto none = frameOf(v, &why);
         QVERIFY2(none.has_value(), why.c_str());
         QCOMPARE(compareImages(none->image, plain->image).differing, uint64_t(0));
-        // 6000 × 6000 floats at one level, over the whole slide: the fit view would need 150 MiB
-        // of it, more than half the layer budget: refused with a warning, the frame as without it.
-        auto big = iris::fromHostMemory(std::span<const float>(std::vector<float>(size_t(6000) * 6000, 0.5f)), 6000, 6000);
-        QVERIFY(big.ok());
+        // A map given with two levels, the coarser still 6500 × 6500 floats: the fit view would
+        // need 170 MiB of it, more than half the layer budget: refused with a warning, the
+        // frame as without it.
+        std::vector<iris::RasterLevel> levels(2);
+        levels[0].width = levels[0].height = 7000;
+        levels[0].scalar.assign(size_t(7000) * 7000, 0.5f);
+        levels[1].width = levels[1].height = 6500;
+        levels[1].scalar.assign(size_t(6500) * 6500, 0.5f);
+        auto big = iris::fromHostMemory(iris::RasterKind::Scalar, std::move(levels));
+        QVERIFY2(big.ok(), big.ok() ? "" : big.error().message().c_str());
         QVERIFY(e_->addLayer(std::make_shared<const iris::RasterMap>(std::move(*big)), style).ok());
         auto refused = frameOf(e_->fitView(), &why);
         QVERIFY2(refused.has_value(), why.c_str());

@@ -85,6 +85,47 @@ class TestLayers : public QObject {
     Q_OBJECT
 
 private slots:
+
+    // withRasterPyramid: halves until the coarsest side is at most the bound; scalar means skip
+    // NaN, labels take the most frequent id (the smallest among equals), RGBA averages
+    // premultiplied; odd edges average what they cover; a map with levels is left alone.
+    void pyramidOfOneLevel() {
+        // Scalar 5 × 3: the last column and row cover fewer pixels.
+        const float nan = std::numeric_limits<float>::quiet_NaN();
+        std::vector<float> v{1, 3, nan, nan, 7,   //
+                             5, 7, nan, nan, 9,   //
+                             2, 4, 6, 8, 10};
+        auto m = iris::fromHostMemory(std::span<const float>(v), 5, 3);
+        QVERIFY(m.ok());
+        const iris::RasterMap p = iris::withRasterPyramid(*m, 1);
+        QCOMPARE(int(p.levels.size()), 4); // 5x3, 3x2, 2x1, 1x1
+        QCOMPARE(p.levels[1].width, 3);
+        QCOMPARE(p.levels[1].height, 2);
+        QCOMPARE(p.levels[1].scalar[0], 4.0f);       // (1 + 3 + 5 + 7) / 4
+        QVERIFY(std::isnan(p.levels[1].scalar[1]));  // all four NaN
+        QCOMPARE(p.levels[1].scalar[2], 8.0f);       // (7 + 9) / 2
+        QCOMPARE(p.levels[1].scalar[3], 3.0f);       // (2 + 4) / 2
+        QCOMPARE(p.levels[1].scalar[4], 7.0f);       // (6 + 8) / 2
+        QCOMPARE(p.levels[3].width, 1);
+        QVERIFY(iris::rasterMapProblem(p).empty());
+        QCOMPARE(int(iris::withRasterPyramid(*m, 5).levels.size()), 1); // already within the bound
+        QCOMPARE(int(iris::withRasterPyramid(p, 1).levels.size()), 4);  // levels given: as it is
+        // Labels: 2 × 2 of {1, 2, 2, 1} → 1 (a tie, the smallest); {3, 3, 3, 0} → 3.
+        std::vector<uint16_t> l{1, 2, 3, 3, 2, 1, 3, 0};
+        auto lm = iris::fromHostMemory(std::span<const uint16_t>(l), 4, 2);
+        QVERIFY(lm.ok());
+        const iris::RasterMap lp = iris::withRasterPyramid(*lm, 2);
+        QCOMPARE(int(lp.levels.size()), 2);
+        QCOMPARE(lp.levels[1].label[0], uint16_t(1));
+        QCOMPARE(lp.levels[1].label[1], uint16_t(3));
+        // RGBA: opaque red and transparent anything → red at half alpha (premultiplied mean).
+        std::vector<uint8_t> c{255, 0, 0, 255, 0, 255, 0, 0, 255, 0, 0, 255, 0, 0, 255, 0};
+        auto cm = iris::fromHostMemoryRgba(std::span<const uint8_t>(c), 2, 2);
+        QVERIFY(cm.ok());
+        const iris::RasterMap cp = iris::withRasterPyramid(*cm, 1);
+        const std::vector<uint8_t> want{255, 0, 0, 128};
+        QCOMPARE(cp.levels[1].rgba, want);
+    }
     // ---- colour maps ----
     void builtinColorMaps() {
         const ColorMap v = ColorMap::viridis(), m = ColorMap::magma(), j = ColorMap::jet(), g = ColorMap::gray();

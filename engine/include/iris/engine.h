@@ -243,8 +243,11 @@ public:
     // A map drawn over the tiles and under the annotations, layers in the order added (a later
     // one over an earlier one), each pixel shaded exactly as shadeLayerAt() says and blended as
     // blendOver() says. `placement` std::nullopt: the map spans the open slide's level 0
-    // (Placement::spanning, for whichever slide is open). The map is shared, never copied; the
-    // engine uploads the parts of the level a view needs. Returns the layer's id (never 0);
+    // (Placement::spanning, for whichever slide is open). The map is shared, not copied, unless
+    // it has one level over 1024 pixels a side: then the engine draws a copy with coarser levels
+    // (withRasterPyramid, made on the calling thread; layers() returns that copy), so that a view
+    // of the whole slide needs a small level. Pass a pyramid (a pyramidal TIFF loads as one) to
+    // avoid the copy. The engine uploads the parts of the level a view needs. Returns the layer's id (never 0);
     // an empty or inconsistent map (rasterMapProblem) is InvalidArgument.
     Expected<uint64_t> addLayer(std::shared_ptr<const RasterMap> map, const LayerStyle& style = {},
                                 std::optional<Placement> placement = std::nullopt);

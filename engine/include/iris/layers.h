@@ -89,6 +89,16 @@ IRIS_API Expected<RasterMap> fromHostMemory(RasterKind kind, std::vector<RasterL
 
 // ---- Loading from files --------------------------------------------------------------------------
 
+// A copy of `map` with coarser levels added below its last one, each half the previous (sides
+// rounded up) until both sides are at most `coarsest`, while the whole map stays within
+// kMaxRasterBytes: what the engine draws a large single-level map from at low magnification
+// (Engine::addLayer adds them to maps of one level over 1024 pixels a side). A map that already
+// has more than one level is returned as it is. Each new pixel comes from the 2 × 2 it covers
+// (fewer at an odd edge): Scalar, the mean of its values that are not NaN (NaN when all are);
+// Label, the most frequent id (the smallest among equals); Rgba, the mean of premultiplied
+// colours, unpremultiplied and rounded.
+IRIS_API RasterMap withRasterPyramid(RasterMap map, int32_t coarsest = 512);
+
 struct RasterLoadOptions {
     bool asLabels = false; // a single-channel integer file is a Label map (class ids), not Scalar
     std::string title;     // "" = the file's name without its folder

@@ -62,6 +62,74 @@ uint64_t RasterMap::decodedBytes() const noexcept {
     return n * uint64_t(bytesPerPixel(kind));
 }
 
+RasterMap withRasterPyramid(RasterMap map, int32_t coarsest) {
+    if (map.levels.size() != 1 || coarsest < 1) return map;
+    while (std::max(map.levels.back().width, map.levels.back().height) > coarsest) {
+        const RasterLevel& a = map.levels.back();
+        RasterLevel b;
+        b.width = (a.width + 1) / 2, b.height = (a.height + 1) / 2;
+        const uint64_t add = uint64_t(b.width) * uint64_t(b.height) * (map.kind == RasterKind::Label ? 2 : 4);
+        if (map.decodedBytes() + add > kMaxRasterBytes) break;
+        const size_t n = size_t(b.width) * size_t(b.height);
+        const auto forEach = [&](auto&& f) {
+            for (int32_t y = 0; y < b.height; ++y)
+                for (int32_t x = 0; x < b.width; ++x) {
+                    size_t src[4];
+                    int k = 0;
+                    for (int dy = 0; dy < 2; ++dy)
+                        for (int dx = 0; dx < 2; ++dx) {
+                            const int32_t sx = 2 * x + dx, sy = 2 * y + dy;
+                            if (sx < a.width && sy < a.height) src[k++] = size_t(sy) * size_t(a.width) + size_t(sx);
+                        }
+                    f(size_t(y) * size_t(b.width) + size_t(x), src, k);
+                }
+        };
+        switch (map.kind) {
+        case RasterKind::Scalar:
+            b.scalar.resize(n);
+            forEach([&](size_t out, const size_t* src, int k) {
+                double sum = 0;
+                int m = 0;
+                for (int i = 0; i < k; ++i)
+                    if (!std::isnan(a.scalar[src[i]])) sum += a.scalar[src[i]], ++m;
+                b.scalar[out] = m ? float(sum / m) : std::numeric_limits<float>::quiet_NaN();
+            });
+            break;
+        case RasterKind::Label:
+            b.label.resize(n);
+            forEach([&](size_t out, const size_t* src, int k) {
+                uint16_t best = 0;
+                int bestCount = 0;
+                for (int i = 0; i < k; ++i) {
+                    const uint16_t id = a.label[src[i]];
+                    int c = 0;
+                    for (int j = 0; j < k; ++j) c += a.label[src[j]] == id;
+                    if (c > bestCount || (c == bestCount && id < best)) best = id, bestCount = c;
+                }
+                b.label[out] = best;
+            });
+            break;
+        case RasterKind::Rgba:
+            b.rgba.resize(n * 4);
+            forEach([&](size_t out, const size_t* src, int k) {
+                double rgb[3] = {0, 0, 0}, alpha = 0;
+                for (int i = 0; i < k; ++i) {
+                    const uint8_t* p = &a.rgba[4 * src[i]];
+                    for (int c = 0; c < 3; ++c) rgb[c] += p[c] * (p[3] / 255.0);
+                    alpha += p[3] / 255.0;
+                }
+                uint8_t* q = &b.rgba[4 * out];
+                for (int c = 0; c < 3; ++c)
+                    q[c] = alpha > 0 ? uint8_t(std::clamp(std::floor(rgb[c] / alpha + 0.5), 0.0, 255.0)) : 0;
+                q[3] = uint8_t(std::clamp(std::floor(255.0 * alpha / k + 0.5), 0.0, 255.0));
+            });
+            break;
+        }
+        map.levels.push_back(std::move(b));
+    }
+    return map;
+}
+
 std::string rasterMapProblem(const RasterMap& map) {
     if (map.levels.empty()) return "the map has no level";
     for (size_t i = 0; i < map.levels.size(); ++i) {

@@ -586,7 +586,8 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
                                       .flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT,
                                       .pInheritanceInfo = nullptr};
     IRIS_VK_TRY(vkBeginCommandBuffer(cmd, &bi));
-    const uint32_t query = uint32_t(serial % kFramesInFlight) * 2;
+    // The frame slot's own pair: waitSlot(f) reads exactly these once f's fence has passed.
+    const uint32_t query = uint32_t(&f - frames_.data()) * 2;
     if (timestamps_) {
         vkCmdResetQueryPool(cmd, timestamps_.get(), query, 2);
         vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_TOP_OF_PIPE_BIT, timestamps_.get(), query);

@@ -291,6 +291,7 @@ void MainWindow::createMenus()
         {IrisSlideView::ScaleBar, tr("&Scale Bar"), QStringLiteral("scaleBar")},
         {IrisSlideView::MagnificationLabel, tr("&Magnification Readout"), QStringLiteral("magnification")},
         {IrisSlideView::Overview, tr("&Overview Map"), QStringLiteral("overview")},
+        {IrisSlideView::Legend, tr("&Legend"), QStringLiteral("legend")},
     };
     const std::pair<IrisSlideView::OverlayCorner, QString> corners[] = {
         {IrisSlideView::TopLeft, tr("Top &Left")},

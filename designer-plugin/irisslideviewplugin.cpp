@@ -58,8 +58,9 @@ QString IrisSlideViewPlugin::whatsThis() const
     return QStringLiteral(
         "Shows a digital pathology whole-slide image (any format OpenSlide reads, or .iris) "
         "rendered with Vulkan: drag to pan, wheel or pinch to zoom, arrow keys move one field, "
-        "0 fits the slide, 1-4 jump to 5x, 10x, 20x and 40x. A scale bar, the magnification "
-        "and an overview map (click it to go there) are drawn over the slide; each can be "
+        "0 fits the slide, 1-4 jump to 5x, 10x, 20x and 40x. A scale bar, the magnification, "
+        "an overview map (click it to go there) and a heat map's legend are drawn over the "
+        "slide; each can be "
         "switched off or moved to another corner.");
 }
 
@@ -143,6 +144,12 @@ QString IrisSlideViewPlugin::domXml() const
     </property>
     <property name="overviewCorner">
       <enum>IrisSlideView::TopRight</enum>
+    </property>
+    <property name="legendVisible">
+      <bool>true</bool>
+    </property>
+    <property name="legendCorner">
+      <enum>IrisSlideView::BottomRight</enum>
     </property>
     <property name="colorManaged">
       <bool>%6</bool>

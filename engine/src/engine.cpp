@@ -527,7 +527,7 @@ ColorStatus Engine::colorStatus() const {
 
 namespace {
 bool validOverlay(Overlay o) { return int(o) >= 0 && int(o) < kOverlayCount; }
-bool labelled(Overlay o) { return o == Overlay::ScaleBar || o == Overlay::Magnification; }
+bool labelled(Overlay o) { return o != Overlay::Overview; }
 } // namespace
 
 void Engine::setAnnotations(std::shared_ptr<AnnotationStore> store) {

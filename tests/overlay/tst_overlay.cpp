@@ -57,6 +57,7 @@ const char* name(Overlay o) {
     case Overlay::ScaleBar: return "scale bar";
     case Overlay::Magnification: return "magnification";
     case Overlay::Overview: return "overview";
+    case Overlay::Legend: return "legend"; // (tst_legend tests it)
     }
     return "?";
 }

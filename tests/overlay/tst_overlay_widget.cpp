@@ -23,6 +23,7 @@
 
 #include <iris/IrisSlideView.h>
 #include <iris/engine.h>
+#include <iris/layers.h>
 
 #include "enginehost_p.h"
 #include "widget_test_support.h"
@@ -88,6 +89,7 @@ private Q_SLOTS:
     void badFontIsReported();
     void presentedOverlaysMatchHeadless();
     void clickingTheOverviewMovesTheView();
+    void legendShowsWithAHeatMap();
     void overlaysFollowTheDevicePixelRatio();
 
 private:
@@ -247,6 +249,41 @@ void TstOverlayWidget::presentedOverlaysMatchHeadless()
         saveArtefact(presented, QStringLiteral("overlays-presented"));
         saveArtefact(headless, QStringLiteral("overlays-headless"));
     }
+}
+
+// The legend is on by default but drawn only while a heat map (Scalar layer) is shown; its
+// properties switch and move it like the others'.
+void TstOverlayWidget::legendShowsWithAHeatMap()
+{
+    IrisSlideView *view = m_w->view;
+    QVERIFY(view->isLegendVisible());
+    QCOMPARE(view->legendCorner(), IrisSlideView::BottomRight);
+    const QMetaObject *mo = view->metaObject();
+    for (const char *name : {"legendVisible", "legendCorner"}) {
+        const QMetaProperty p = mo->property(mo->indexOfProperty(name));
+        QVERIFY2(p.isValid() && p.isWritable() && p.isDesignable() && p.hasNotifySignal(), name);
+    }
+    showSample();
+    QVERIFY(view->overlayRect(IrisSlideView::Legend).isEmpty());
+
+    const std::vector<float> values{0, 0.5f, 1, 0.25f};
+    auto map = iris::fromHostMemory(std::span<const float>(values), 2, 2, "probability");
+    QVERIFY(map);
+    QVERIFY(view->addLayer(std::make_shared<const iris::RasterMap>(std::move(map).value())) != 0);
+    QTRY_VERIFY(!view->overlayRect(IrisSlideView::Legend).isEmpty());
+    const QSizeF size = view->size();
+    const QRectF legend = view->overlayRect(IrisSlideView::Legend);
+    QVERIFY2(std::abs(legend.right() - (size.width() - kMargin)) < 1e-9
+                 && std::abs(legend.bottom() - (size.height() - kMargin)) < 1e-9,
+             qPrintable(rectText(legend)));
+
+    QSignalSpy changed(view, &IrisSlideView::overlaysChanged);
+    QVERIFY(view->setProperty("legendCorner", QVariant::fromValue(IrisSlideView::BottomLeft)));
+    QTRY_VERIFY(std::abs(view->overlayRect(IrisSlideView::Legend).left() - kMargin) < 1e-9);
+    QVERIFY(view->setProperty("legendVisible", false));
+    QCOMPARE(changed.count(), 2);
+    QTRY_VERIFY(view->overlayRect(IrisSlideView::Legend).isEmpty());
+    QVERIFY(m_w->frames->waitForCompleteFrame());
 }
 
 void TstOverlayWidget::clickingTheOverviewMovesTheView()

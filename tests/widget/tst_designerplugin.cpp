@@ -139,7 +139,8 @@ void TstDesignerPlugin::domXmlParsesAndMatchesTheWidget()
     }
     for (const char* expected : {"backgroundColor", "enhance", "ramBudgetMB", "vramBudgetMB", "scaleBarVisible",
                                  "scaleBarCorner", "magnificationLabelVisible", "magnificationLabelCorner",
-                                 "overviewVisible", "overviewCorner", "colorManaged", "renderingIntent"})
+                                 "overviewVisible", "overviewCorner", "legendVisible", "legendCorner", "colorManaged",
+                                 "renderingIntent"})
         QVERIFY2(properties.contains(QLatin1String(expected)), expected);
 }
 

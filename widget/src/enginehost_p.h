@@ -50,9 +50,10 @@ struct EngineSettings {
     std::array<float, 3> background = iris::EngineConfig{}.background;
     bool enhance = true;
     // The widget shows every overlay by default (the engine's own default is none).
-    std::array<bool, iris::kOverlayCount> overlayVisible{true, true, true};
+    // (The legend shows only while a heat map is: on, it appears with the first one.)
+    std::array<bool, iris::kOverlayCount> overlayVisible{true, true, true, true};
     std::array<iris::Corner, iris::kOverlayCount> overlayCorner{iris::Corner::BottomLeft, iris::Corner::TopLeft,
-                                                                iris::Corner::TopRight};
+                                                                iris::Corner::TopRight, iris::Corner::BottomRight};
     QString overlayFont; // empty: the engine's default
     std::optional<QPointF> crosshair; // level-0 position; none: hidden
     // Colour management; displayProfile is the one in use (the host's or the screen's).

@@ -657,13 +657,13 @@ void IrisSlideView::setVramBudgetMB(int mb)
 bool IrisSlideView::isOverlayVisible(Overlay overlay) const
 {
     Q_D(const IrisSlideView);
-    return overlay >= ScaleBar && overlay <= Overview && d->settings.overlayVisible[size_t(overlay)];
+    return overlay >= ScaleBar && overlay <= Legend && d->settings.overlayVisible[size_t(overlay)];
 }
 
 void IrisSlideView::setOverlayVisible(Overlay overlay, bool visible)
 {
     Q_D(IrisSlideView);
-    if (overlay < ScaleBar || overlay > Overview || d->settings.overlayVisible[size_t(overlay)] == visible)
+    if (overlay < ScaleBar || overlay > Legend || d->settings.overlayVisible[size_t(overlay)] == visible)
         return;
     d->settings.overlayVisible[size_t(overlay)] = visible;
     d->host.applyOverlays(d->settings);
@@ -673,7 +673,7 @@ void IrisSlideView::setOverlayVisible(Overlay overlay, bool visible)
 IrisSlideView::OverlayCorner IrisSlideView::overlayCorner(Overlay overlay) const
 {
     Q_D(const IrisSlideView);
-    if (overlay < ScaleBar || overlay > Overview)
+    if (overlay < ScaleBar || overlay > Legend)
         return TopLeft;
     return OverlayCorner(int(d->settings.overlayCorner[size_t(overlay)]));
 }
@@ -681,7 +681,7 @@ IrisSlideView::OverlayCorner IrisSlideView::overlayCorner(Overlay overlay) const
 void IrisSlideView::setOverlayCorner(Overlay overlay, OverlayCorner corner)
 {
     Q_D(IrisSlideView);
-    if (overlay < ScaleBar || overlay > Overview || corner < TopLeft || corner > BottomRight
+    if (overlay < ScaleBar || overlay > Legend || corner < TopLeft || corner > BottomRight
         || d->settings.overlayCorner[size_t(overlay)] == iris::Corner(int(corner))) {
         return;
     }
@@ -693,7 +693,7 @@ void IrisSlideView::setOverlayCorner(Overlay overlay, OverlayCorner corner)
 QRectF IrisSlideView::overlayRect(Overlay overlay) const
 {
     Q_D(const IrisSlideView);
-    if (!d->engine() || overlay < ScaleBar || overlay > Overview)
+    if (!d->engine() || overlay < ScaleBar || overlay > Legend)
         return {};
     const iris::PixelRect r = d->engine()->overlayLayout().rect(iris::Overlay(int(overlay)));
     if (r.empty())

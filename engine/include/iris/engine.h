@@ -196,19 +196,22 @@ public:
     ColorStatus colorStatus() const;
 
     // --- overlays ------------------------------------------------------------------
-    // The render thread draws the scale bar, the magnification readout and the overview map
-    // over the tiles, alpha-blended on a semi-transparent plate, each in a corner of the
+    // The render thread draws the scale bar, the magnification readout, the overview map and
+    // the legend over the tiles, alpha-blended on a semi-transparent plate, each in a corner of the
     // target (several in one corner stack inwards, in the order of `Overlay`). All are off
     // by default, so frames hold slide pixels only; nothing is drawn while no slide is open,
     // the scale bar is hidden when the slide states no mpp, the readout when it states
     // neither objective power nor mpp (with mpp alone the objective is taken as 10 µm / mpp,
     // as IrisSlideView's magnification() does), and an overlay that does not fit into the
     // target is left out.
-    // Turning on a labelled overlay (scale bar, magnification) before any font was chosen
+    // The legend describes the topmost layer (raster layers, below) that is visible, has an
+    // opacity above 0 and a Scalar map: its colour map as a bar from the window's low end to its
+    // high end, both numbers and the map's title; hidden while no layer qualifies.
+    // Turning on a labelled overlay (scale bar, magnification, legend) before any font was chosen
     // looks up the default font on the calling thread (fontconfig; see setOverlayFont).
     void setOverlayVisible(Overlay overlay, bool visible);
     bool overlayVisible(Overlay overlay) const;
-    // Defaults: scale bar BottomLeft, magnification TopLeft, overview TopRight.
+    // Defaults: scale bar BottomLeft, magnification TopLeft, overview TopRight, legend BottomRight.
     void setOverlayCorner(Overlay overlay, Corner corner);
     Corner overlayCorner(Overlay overlay) const;
     // Device pixels per logical pixel of the host's window (Qt's devicePixelRatio; 1 by

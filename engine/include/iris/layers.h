@@ -166,6 +166,10 @@ struct IRIS_API ColorMap {
     std::string name;
     std::array<Rgba8, 256> entries{};
 
+    // The map at t (clamped to [0, 1]; NaN: 0): p = 255·t, linear between entries floor(p) and the next
+    // (R, G, B, A as codes 0..255, reals), as the layer pass and the legend colour with it.
+    std::array<double, 4> at(double t) const noexcept;
+
     // matplotlib's viridis and magma (CC0): the published float tables, each value v as the
     // code round(255·v) (viridis[0] = #440154, [128] = #21918c, [255] = #fde725).
     static ColorMap viridis();

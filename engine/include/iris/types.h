@@ -284,8 +284,9 @@ enum class Overlay : int {
     ScaleBar = 0,      // a bar of a round physical length (1, 2 or 5 × 10^n µm), labelled
     Magnification = 1, // the objective magnification of the view ("20.0×")
     Overview = 2,      // a thumbnail of the whole slide with the current field outlined
+    Legend = 3,        // the topmost visible Scalar layer's colour bar, window and title
 };
-inline constexpr int kOverlayCount = 3;
+inline constexpr int kOverlayCount = 4;
 enum class Corner : int { TopLeft = 0, TopRight = 1, BottomLeft = 2, BottomRight = 3 };
 
 // Target pixels [x, x + width) × [y, y + height). Empty (width or height 0): nothing there.
@@ -326,6 +327,13 @@ struct OverlayLayout {
     // bounding box (x0, y0, x1, y1).
     std::array<double, 8> overviewFieldCorners{};
     std::array<double, 4> overviewField{};
+    // Legend: the colour bar's pixels (its columns run from the window's low end to its high
+    // end), the layer it describes (0: none) and its labels.
+    PixelRect legendBar;
+    uint64_t legendLayer = 0;
+    std::string legendTitle;
+    std::string legendLowLabel;
+    std::string legendHighLabel;
 };
 
 // A rendered frame read back from the offscreen target.

@@ -9,6 +9,15 @@
 
 namespace iris {
 
+std::array<double, 4> ColorMap::at(double t) const noexcept {
+    const double p = 255.0 * (t > 0 ? std::min(t, 1.0) : 0.0); // NaN: the low end
+    const int i0 = int(std::floor(p));
+    const int i1 = std::min(i0 + 1, 255);
+    const double f = p - i0;
+    const Rgba8 a = entries[size_t(i0)], b = entries[size_t(i1)];
+    return {(1 - f) * a.r + f * b.r, (1 - f) * a.g + f * b.g, (1 - f) * a.b + f * b.b, (1 - f) * a.a + f * b.a};
+}
+
 Placement Placement::spanning(int64_t mapWidth, int64_t mapHeight, int64_t slideWidth, int64_t slideHeight) noexcept {
     Placement p;
     p.m = {mapWidth > 0 ? double(slideWidth) / double(mapWidth) : 0, 0, 0,
@@ -83,16 +92,6 @@ std::array<uint8_t, 4> finish(const std::array<double, 4>& colour, double opacit
     return {code(colour[0]), code(colour[1]), code(colour[2]), code(255.0 * alpha)};
 }
 
-// The colour map at t in [0, 1]: linear between the two nearest of its 256 entries.
-std::array<double, 4> lookup(const ColorMap& cm, double t) {
-    const double p = 255.0 * std::clamp(t, 0.0, 1.0);
-    const int i0 = int(std::floor(p));
-    const int i1 = std::min(i0 + 1, 255);
-    const double f = p - i0;
-    const Rgba8 a = cm.entries[size_t(i0)], b = cm.entries[size_t(i1)];
-    return {(1 - f) * a.r + f * b.r, (1 - f) * a.g + f * b.g, (1 - f) * a.b + f * b.b, (1 - f) * a.a + f * b.a};
-}
-
 struct Taps {
     int x[2], y[2];   // columns and rows of the taps, clamped into the level
     double fx, fy;    // the second column's and row's weights
@@ -134,7 +133,7 @@ std::array<uint8_t, 4> shadeScalar(const RasterMap& map, const RasterLevel& l, c
     const double low = std::isnan(style.low) ? map.minValue : style.low;
     const double high = std::isnan(style.high) ? map.maxValue : style.high;
     const double t = high > low ? std::clamp((value - low) / (high - low), 0.0, 1.0) : (value >= high ? 1.0 : 0.0);
-    return finish(lookup(style.colorMap, t), style.opacity);
+    return finish(style.colorMap.at(t), style.opacity);
 }
 
 std::array<uint8_t, 4> shadeRgba(const RasterLevel& l, const LayerStyle& style, double u, double v) {

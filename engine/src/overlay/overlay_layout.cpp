@@ -23,6 +23,8 @@ void shift(OverlayDraw& d, int dx, int dy) {
     d.rect.y += dy;
     d.thumbnailRect.x += dx;
     d.thumbnailRect.y += dy;
+    d.legendBar.x += dx;
+    d.legendBar.y += dy;
     for (auto* quads : {&d.under, &d.over}) {
         for (Quad& q : *quads) {
             q.x0 += dx;
@@ -93,7 +95,8 @@ std::u32string decodeUtf8(const std::string& s) {
 }
 
 OverlayPlan layoutOverlays(const SlideInfo* slide, const Viewport& vp, const OverlaySettings& s,
-                           const MeasureText& measure, const std::array<float, 3>& background) {
+                           const MeasureText& measure, const std::array<float, 3>& background,
+                           const LegendContent* legend) {
     OverlayPlan plan;
     const View& v = vp.view;
     if (!slide || !s.visibleAny() || vp.width == 0 || vp.height == 0 || slide->width <= 0 || slide->height <= 0 ||
@@ -182,6 +185,46 @@ OverlayPlan layoutOverlays(const SlideInfo* slide, const Viewport& vp, const Ove
         }
     }
 
+    // Legend: the title above a colour bar, the window's low and high numbers under its ends.
+    // The bar is drawn one device-pixel column at a time, each the colour map at its centre's
+    // t (opaque: the layer's opacity and the map's alpha are not shown), so it is the ramp the
+    // layer pass uses; the text lines are left out without a font.
+    if (s.visible[size_t(Overlay::Legend)] && legend) {
+        const std::string lowLabel = legendNumber(legend->low), highLabel = legendNumber(legend->high);
+        const TextMetrics title = legend->title.empty() ? TextMetrics{} : measure(legend->title);
+        const TextMetrics lo = measure(lowLabel), hi = measure(highLabel);
+        const auto lineHeight = [](const TextMetrics& tm) {
+            return tm.ok ? int(std::ceil(tm.ascent)) + int(std::ceil(tm.descent)) + Metrics::kBarLabelGap : 0;
+        };
+        const auto textWidth = [](const TextMetrics& tm) { return tm.ok ? int(std::ceil(tm.width)) : 0; };
+        const bool numbers = lo.ok && hi.ok;
+        const int titleH = lineHeight(title), numbersH = numbers ? lineHeight(lo) : 0;
+        const int contentW = std::max({Metrics::kLegendBarWidth, textWidth(title),
+                                       numbers ? textWidth(lo) + Metrics::kLegendNumberGap + textWidth(hi) : 0});
+        const int w = contentW + 2 * Metrics::kPad;
+        const int h = titleH + Metrics::kLegendBarHeight + numbersH + 2 * Metrics::kPad;
+        OverlayDraw d;
+        d.which = Overlay::Legend;
+        d.rect = {0, 0, px(w), px(h)};
+        d.under.push_back(quad(d.rect, kPlateColour));
+        const PixelRect bar{px(Metrics::kPad), px(Metrics::kPad + titleH), px(Metrics::kPad + contentW) - px(Metrics::kPad),
+                            px(Metrics::kPad + titleH + Metrics::kLegendBarHeight) - px(Metrics::kPad + titleH)};
+        for (int32_t i = 0; i < bar.width; ++i) {
+            const std::array<double, 4> c = legend->colorMap.at((i + 0.5) / bar.width);
+            d.over.push_back(quad({bar.x + i, bar.y, 1, bar.height},
+                                  {float(c[0] / 255), float(c[1] / 255), float(c[2] / 255), 1.0f}));
+        }
+        if (title.ok) d.labels.push_back(Label{legend->title, px(Metrics::kPad), px(Metrics::kPad + int(std::ceil(title.ascent)))});
+        if (numbers) {
+            const int baseline = Metrics::kPad + titleH + Metrics::kLegendBarHeight + Metrics::kBarLabelGap +
+                                 int(std::ceil(lo.ascent));
+            d.labels.push_back(Label{lowLabel, px(Metrics::kPad), px(baseline)});
+            d.labels.push_back(Label{highLabel, px(Metrics::kPad + contentW - textWidth(hi)), px(baseline)});
+        }
+        d.legendBar = bar;
+        items[size_t(Overlay::Legend)] = std::move(d);
+    }
+
     // Placement: per corner, in the order of Overlay, from the corner inwards (downwards from
     // a top corner, upwards from a bottom one). An overlay that does not fit is left out.
     const int32_t margin = px(Metrics::kMargin), gap = px(Metrics::kGap);
@@ -201,6 +244,13 @@ OverlayPlan layoutOverlays(const SlideInfo* slide, const Viewport& vp, const Ove
         shift(d, x, y);
         out.rects[i] = d.rect;
         if (!d.labels.empty()) out.text = true;
+        if (d.which == Overlay::Legend) {
+            out.legendBar = d.legendBar;
+            out.legendLayer = legend->layer;
+            out.legendTitle = legend->title;
+            out.legendLowLabel = legendNumber(legend->low);
+            out.legendHighLabel = legendNumber(legend->high);
+        }
         if (d.which == Overlay::Overview) {
             const PixelRect& img = d.thumbnailRect;
             out.overviewImage = img;

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "iris/types.h"
+#include "overlay/legend.h"
 #include "overlay/overlay_settings.h"
 #include "view/view_model.h"
 
@@ -36,6 +37,9 @@ struct Metrics {
     static constexpr int kFieldLine = 2;      // the field outline's width
     static constexpr int kFieldMin = 4;       // the outline is at least this big
     static constexpr int kCrosshairArm = 12;  // the cross-hair's arms, from its centre
+    static constexpr int kLegendBarWidth = 160; // the legend's colour bar, at least
+    static constexpr int kLegendBarHeight = 10;
+    static constexpr int kLegendNumberGap = 12; // between its low and high numbers, at least
 };
 
 // Colours, straight alpha.
@@ -85,6 +89,7 @@ struct OverlayDraw {
                               // thumbnailRect's top-left corner
     std::vector<Quad> over;
     std::vector<Label> labels;
+    PixelRect legendBar;      // the legend's colour bar (legend only)
 };
 
 struct OverlayPlan {
@@ -93,8 +98,10 @@ struct OverlayPlan {
 };
 
 // Lays out the visible overlays for a slide (null: none) shown in viewport. `measure` is
-// called for the labels; `background` colours the thumbnail's area outside the slide.
+// called for the labels; `background` colours the thumbnail's area outside the slide;
+// `legend` is what the legend shows (null: no layer qualifies, no legend).
 OverlayPlan layoutOverlays(const SlideInfo* slide, const Viewport& viewport, const OverlaySettings& settings,
-                           const MeasureText& measure, const std::array<float, 3>& background);
+                           const MeasureText& measure, const std::array<float, 3>& background,
+                           const LegendContent* legend = nullptr);
 
 } // namespace iris::overlay

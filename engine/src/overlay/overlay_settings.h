@@ -2,6 +2,7 @@
 // copies): which are on, where, the host's device pixel ratio and the loaded font.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <memory>
 #include <optional>
@@ -13,13 +14,16 @@ namespace iris::overlay {
 
 struct OverlaySettings {
     std::array<bool, kOverlayCount> visible{};
-    std::array<Corner, kOverlayCount> corner{Corner::BottomLeft, Corner::TopLeft, Corner::TopRight};
+    std::array<Corner, kOverlayCount> corner{Corner::BottomLeft, Corner::TopLeft, Corner::TopRight,
+                                                 Corner::BottomRight};
     double devicePixelRatio = 1;
     std::shared_ptr<const FontData> font; // null: no usable font, labels are not drawn
     // A cross-hair at this level-0 slide position (Engine::setCrosshair); none: not drawn.
     std::optional<std::array<double, 2>> crosshair;
 
-    bool visibleAny() const { return visible[0] || visible[1] || visible[2] || crosshair.has_value(); }
+    bool visibleAny() const {
+        return std::find(visible.begin(), visible.end(), true) != visible.end() || crosshair.has_value();
+    }
 };
 
 } // namespace iris::overlay

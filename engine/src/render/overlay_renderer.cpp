@@ -40,6 +40,9 @@ OverlayFrame OverlayRenderer::prepare(uint32_t slot, const Snapshot& snap, VkExt
     vp.width = extent.width;
     vp.height = extent.height;
     bool atlasFull = false;
+    const std::optional<overlay::LegendContent> legend =
+        settings.visible[size_t(Overlay::Legend)] ? overlay::legendFor(*snap.layers) : std::nullopt;
+    const overlay::LegendContent* legendPtr = legend ? &*legend : nullptr;
     const overlay::MeasureText measure = [&](const std::string& text) {
         overlay::TextMetrics m;
         const overlay::ShapedText shaped = glyphs_.shape(overlay::decodeUtf8(text), pixelSize);
@@ -53,12 +56,12 @@ OverlayFrame OverlayRenderer::prepare(uint32_t slot, const Snapshot& snap, VkExt
         m.descent = shaped.descent / ratio;
         return m;
     };
-    out.plan = overlay::layoutOverlays(&snap.slide->info, vp, settings, measure, snap.background);
+    out.plan = overlay::layoutOverlays(&snap.slide->info, vp, settings, measure, snap.background, legendPtr);
     if (atlasFull) {
         // Glyphs of earlier sizes filled the atlas: start it again with this frame's labels.
         glyphs_.clear();
         atlasFull = false;
-        out.plan = overlay::layoutOverlays(&snap.slide->info, vp, settings, measure, snap.background);
+        out.plan = overlay::layoutOverlays(&snap.slide->info, vp, settings, measure, snap.background, legendPtr);
     }
 
     Slot& s = slots_[slot];

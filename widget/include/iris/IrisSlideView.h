@@ -65,6 +65,8 @@ class IRIS_WIDGET_EXPORT IrisSlideView : public QWidget {
                    NOTIFY overlaysChanged)
     Q_PROPERTY(bool overviewVisible READ isOverviewVisible WRITE setOverviewVisible NOTIFY overlaysChanged)
     Q_PROPERTY(OverlayCorner overviewCorner READ overviewCorner WRITE setOverviewCorner NOTIFY overlaysChanged)
+    Q_PROPERTY(bool legendVisible READ isLegendVisible WRITE setLegendVisible NOTIFY overlaysChanged)
+    Q_PROPERTY(OverlayCorner legendCorner READ legendCorner WRITE setLegendCorner NOTIFY overlaysChanged)
     Q_PROPERTY(QString overlayFont READ overlayFont WRITE setOverlayFont RESET resetOverlayFont NOTIFY overlaysChanged)
     // Colour management (docs/COLOR.md): on by default.
     Q_PROPERTY(bool colorManaged READ colorManaged WRITE setColorManaged NOTIFY colorManagementChanged)
@@ -87,8 +89,10 @@ class IRIS_WIDGET_EXPORT IrisSlideView : public QWidget {
 public:
     // The overlays: a scale bar (hidden when the slide states no mpp), the magnification
     // readout (hidden when it states no objective power) and the overview map, a thumbnail
-    // of the whole slide with the current field outlined; clicking it moves the view there.
-    enum Overlay { ScaleBar, MagnificationLabel, Overview };
+    // of the whole slide with the current field outlined; clicking it moves the view there;
+    // the legend, the colour bar, window and title of the topmost visible heat map (Scalar
+    // layer; hidden while there is none).
+    enum Overlay { ScaleBar, MagnificationLabel, Overview, Legend };
     Q_ENUM(Overlay)
     enum OverlayCorner { TopLeft, TopRight, BottomLeft, BottomRight };
     Q_ENUM(OverlayCorner)
@@ -275,6 +279,10 @@ public:
     void setOverviewVisible(bool visible) { setOverlayVisible(Overview, visible); }
     OverlayCorner overviewCorner() const { return overlayCorner(Overview); }
     void setOverviewCorner(OverlayCorner corner) { setOverlayCorner(Overview, corner); }
+    bool isLegendVisible() const { return isOverlayVisible(Legend); }
+    void setLegendVisible(bool visible) { setOverlayVisible(Legend, visible); }
+    OverlayCorner legendCorner() const { return overlayCorner(Legend); }
+    void setLegendCorner(OverlayCorner corner) { setOverlayCorner(Legend, corner); }
     // A font file for the overlays' labels; empty: the system's sans-serif (fontconfig's
     // DejaVu Sans). A file that cannot be used is reported through slideError() and the
     // labels are left out until a usable font is set.

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Packs what tests/fuzz/fork-run.sh needs to fuzz on another machine of the same architecture
 # (tests/fuzz/README.md, "Fuzzing on many cores") into DIR (default .fuzzbundle, which
-# .git/info/exclude should ignore): bundle.tar.xz with the 11 fuzzers of build/fuzz (debug info
+# .git/info/exclude should ignore): bundle.tar.xz with the 12 fuzzers of build/fuzz (FZ_TARGETS: some) (debug info
 # stripped; reproduce with the build here), the libraries they load (this machine's Debian 12
 # ones, found with ldd; glibc stays the host's), DCMTK's data dictionary and the seed corpora of
 # `ctest --preset fuzz` (run it first); the dictionaries, the committed regressions, and
@@ -11,7 +11,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 dir=$(realpath -m "${1:-.fuzzbundle}")
-targets="iris_reader tiff_reader jp2k pyramid icc_profile dicom_file multipart dicom_json geojson asap_xml qido"
+targets="${FZ_TARGETS:-iris_reader tiff_reader jp2k pyramid icc_profile dicom_file multipart dicom_json geojson asap_xml qido raster_map}"
 stage=$(mktemp -d)
 trap 'rm -rf "$stage"' EXIT
 mkdir -p "$stage"/{bin,lib,seeds,share}

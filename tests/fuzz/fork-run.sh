@@ -18,7 +18,7 @@ out=${3:-$OUT}
 D=$(cd "$(dirname "$0")" && pwd)
 B=/tmp/fzb
 W=/tmp/fz
-if [ ! -x $B/bin/fuzz_qido ]; then
+if [ ! -d $B/bin ]; then
   rm -rf $B && mkdir -p $B && tar xJf "$D/bundle.tar.xz" -C $B || exit 3
 fi
 mkdir -p $W/log $W/art
@@ -41,7 +41,8 @@ multipart - 7
 dicom_json - 7
 geojson geojson.dict 7
 asap_xml asap_xml.dict 7
-qido - 7"
+qido - 7
+raster_map raster.dict 7"
 [ -n "${FZ_ONLY:-}" ] && TABLE=$(grep -wE "^(${FZ_ONLY// /|})" <<<"$TABLE")
 [ -n "${FZ_N:-}" ] && TABLE=$(awk -v n="$FZ_N" '{print $1, $2, n}' <<<"$TABLE")
 args() { # TARGET DICTIONARY

@@ -94,8 +94,8 @@ void TestTileMap::concurrentPinAndReclaim() {
     // slot's identity and unpin. A reader must never hold a pin on a slot that the writer
     // refilled: the writer marks each fill with a "generation" in a shadow array and readers
     // check it did not change while pinned. The readers stop after kPinsEach pins each (a pin
-    // succeeds for about one probe in 128: 32 of 4096 keys are resident), the writer when they
-    // are done.
+    // succeeds for about one probe in 128: 32 of 4096 keys are resident) once the writer has
+    // refilled the slots 100 times over, the writer when they are done.
     constexpr uint32_t kSlots = 32;
     constexpr uint64_t kPinsEach = 500;
     TileMap m(kSlots);
@@ -121,7 +121,13 @@ void TestTileMap::concurrentPinAndReclaim() {
         readers.emplace_back([&, r] {
             std::mt19937_64 rng(100 + r);
             uint64_t frame = 0;
-            for (uint64_t mine = 0; mine < kPinsEach;) {
+            // Until both: this reader's pins, and the writer's refills of every slot many times
+            // over (on a loaded machine the readers can finish their pins before the writer
+            // has been scheduled much). Bounded: a writer that makes no progress fails below.
+            const auto limit = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+            for (uint64_t mine = 0;
+                 (mine < kPinsEach || fills.load(std::memory_order_relaxed) <= kSlots * 100) &&
+                 std::chrono::steady_clock::now() < limit;) {
                 const uint64_t probe = 1 + rng() % 4096;
                 const int s = m.pin(probe, ++frame);
                 if (s < 0) continue;

@@ -1035,11 +1035,10 @@ void TstIrisSlideView::survivesLostSurfacesAndDevices()
 {
     showSample();
     IrisSlideView *view = m_w->view;
-    IrisSlideViewPrivate *d = IrisSlideViewPrivate::get(view);
-    iris::Engine *engine = d->engine();
+    iris::Engine *engine = IrisWidget::engineOf(view);
     QVERIFY(engine);
     const int engines = IrisWidget::EngineHost::liveEngineCount();
-    const int replacedBefore = d->surfaceReplacements;
+    const int replacedBefore = IrisWidget::surfaceReplacementsOf(view);
     const uint32_t recoveredBefore = engine->device().recoveries;
     QSignalSpy errors(view, &IrisSlideView::slideError);
     constexpr int kRounds = 3;
@@ -1047,7 +1046,7 @@ void TstIrisSlideView::survivesLostSurfacesAndDevices()
         engine->injectFault(iris::Engine::InjectedFault::SurfaceLostAtPresent);
         view->setCentre(QPointF(1500 + 400 * round, 1200));
         view->setDownsample(2.0 + round);
-        QTRY_COMPARE_WITH_TIMEOUT(d->surfaceReplacements, replacedBefore + round + 1, 20000);
+        QTRY_COMPARE_WITH_TIMEOUT(IrisWidget::surfaceReplacementsOf(view), replacedBefore + round + 1, 20000);
         QTRY_VERIFY_WITH_TIMEOUT(view->surfaceWindow()->isExposed(), 20000);
         QVERIFY(m_w->frames->waitForCompleteFrame());
         QTRY_COMPARE(grabPresented(view).size(), view->targetSize());
@@ -1059,7 +1058,7 @@ void TstIrisSlideView::survivesLostSurfacesAndDevices()
         QVERIFY(m_w->frames->waitForCompleteFrame());
         checkPresentedMatchesHeadless(view, m_sample, QStringLiteral("after a lost device %1").arg(round));
     }
-    QCOMPARE(d->engine(), engine); // recovered in place, not recreated by the widget
+    QCOMPARE(IrisWidget::engineOf(view), engine); // recovered in place, not recreated by the widget
     QCOMPARE(IrisWidget::EngineHost::liveEngineCount(), engines);
     QCOMPARE(errors.count(), kRounds); // once per lost device; a replaced surface is no error
     for (const QList<QVariant> &e : errors)

@@ -1,7 +1,7 @@
 // tst_layers_widget: IrisSlideView's raster layers (heat maps, label maps; issue 19) on an X
 // display (Xvfb in CI) with lavapipe and the validation layers on. The engine's layer pass is
 // not what is tested here (no pixels of a layer are checked): the widget's API is, against the
-// engine's own stack (Engine::layers(), reached through IrisSlideViewPrivate::get):
+// engine's own stack (Engine::layers(), reached through IrisWidget::engineOf):
 //   * layers added from files the test writes (grey PNG, float32 .npy, a PNG as class ids) and
 //     from host maps; every setter reaches the engine's style, bad values change nothing;
 //   * order (moveLayer) and removal in the engine's stack as in the view's;
@@ -54,7 +54,7 @@ struct ViewWindow {
 
 iris::Engine *engineOf(IrisSlideView *view)
 {
-    return IrisSlideViewPrivate::get(view)->engine();
+    return IrisWidget::engineOf(view);
 }
 
 // The engine's entry showing the view's layer `id` (matched by its map, which is shared).

@@ -37,10 +37,17 @@ IrisSlideViewPrivate::IrisSlideViewPrivate(IrisSlideView *q)
 
 IrisSlideViewPrivate::~IrisSlideViewPrivate() = default;
 
-IrisSlideViewPrivate *IrisSlideViewPrivate::get(IrisSlideView *view)
+namespace IrisWidget {
+iris::Engine *engineOf(IrisSlideView *view)
 {
-    return view ? view->d_func() : nullptr;
+    return view ? IrisSlideViewPrivate::dOf(view)->engine() : nullptr;
 }
+
+int surfaceReplacementsOf(IrisSlideView *view)
+{
+    return view ? IrisSlideViewPrivate::dOf(view)->surfaceReplacements : 0;
+}
+} // namespace IrisWidget
 
 void IrisSlideViewPrivate::init()
 {

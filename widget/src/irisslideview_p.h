@@ -34,8 +34,7 @@ class IrisSlideViewPrivate final : public IrisWidget::NavigationTarget {
 public:
     explicit IrisSlideViewPrivate(IrisSlideView *q);
     ~IrisSlideViewPrivate() override;
-    // The widget's own tests reach the engine through this (fault injection).
-    IRIS_WIDGET_AUTOTEST_EXPORT static IrisSlideViewPrivate *get(IrisSlideView *view);
+    static IrisSlideViewPrivate *dOf(IrisSlideView *view) { return view->d_func(); }
 
     void init();
     void teardown();
@@ -116,3 +115,11 @@ public:
     quint64 lastLayerId = 0;                 // the view's layer ids count up from 1
     QString layersSlide;                     // the slide the layers are shown over; "": none yet
 };
+
+namespace IrisWidget {
+// For the widget's own tests (fault injection, the engine's layer stack): free functions rather
+// than access through IrisSlideViewPrivate, whose typeinfo is not exported (UBSan's vptr check in
+// the asan build needs it for any member access through a pointer to it).
+IRIS_WIDGET_AUTOTEST_EXPORT iris::Engine *engineOf(IrisSlideView *view);
+IRIS_WIDGET_AUTOTEST_EXPORT int surfaceReplacementsOf(IrisSlideView *view);
+} // namespace IrisWidget

@@ -106,6 +106,21 @@ EngineHost::~EngineHost()
     destroy();
 }
 
+namespace {
+// An engine callback's way to its host, from an engine thread: f(relay) runs under the relay's
+// mutex, and only while the relay and its host are both alive.
+template <class Relay, class F>
+void withLiveHost(const std::weak_ptr<Relay> &weakRelay, F &&f)
+{
+    const std::shared_ptr<Relay> relay = weakRelay.lock();
+    if (!relay)
+        return;
+    std::lock_guard lock(relay->mutex);
+    if (relay->host)
+        f(relay);
+}
+} // namespace
+
 bool EngineHost::create(QVulkanInstance *vulkan, const EngineSettings &settings, QString *error)
 {
     destroy();
@@ -138,38 +153,30 @@ bool EngineHost::create(QVulkanInstance *vulkan, const EngineSettings &settings,
 
     std::weak_ptr<Relay> weakRelay = m_relay;
     m_engine->setFrameCallback([weakRelay](const iris::FrameStats &stats) {
-        const std::shared_ptr<Relay> relay = weakRelay.lock();
-        if (!relay)
-            return;
-        std::lock_guard lock(relay->mutex);
-        if (!relay->host)
-            return;
-        const bool queued = !relay->pending.empty();
-        if (relay->pending.size() < kMaxPendingFrames)
-            relay->pending.push_back(stats);
-        else
-            relay->pending.back() = stats;
-        if (queued)
-            return;
-        EngineHost *host = relay->host;
-        // The queued call belongs to host: if host is deleted first, Qt discards it.
-        QMetaObject::invokeMethod(
-            host, [host, relay] { host->deliverFrames(*relay); }, Qt::QueuedConnection);
+        withLiveHost(weakRelay, [&](const std::shared_ptr<Relay> &relay) {
+            const bool queued = !relay->pending.empty();
+            if (relay->pending.size() < kMaxPendingFrames)
+                relay->pending.push_back(stats);
+            else
+                relay->pending.back() = stats;
+            if (queued)
+                return;
+            EngineHost *host = relay->host;
+            // The queued call belongs to host: if host is deleted first, Qt discards it.
+            QMetaObject::invokeMethod(
+                host, [host, relay] { host->deliverFrames(*relay); }, Qt::QueuedConnection);
+        });
     });
 
     m_engine->setFaultCallback([weakRelay](const iris::Result &fault) {
-        const std::shared_ptr<Relay> relay = weakRelay.lock();
-        if (!relay)
-            return;
-        std::lock_guard lock(relay->mutex);
-        if (!relay->host)
-            return;
-        EngineHost *host = relay->host;
-        const iris::Status status = fault.status();
-        const QString message = fromStd(fault.message());
-        QMetaObject::invokeMethod(host, [host, status, message] {
-            Q_EMIT host->engineFault(status, message);
-        }, Qt::QueuedConnection);
+        withLiveHost(weakRelay, [&](const std::shared_ptr<Relay> &relay) {
+            EngineHost *host = relay->host;
+            const iris::Status status = fault.status();
+            const QString message = fromStd(fault.message());
+            QMetaObject::invokeMethod(host, [host, status, message] {
+                Q_EMIT host->engineFault(status, message);
+            }, Qt::QueuedConnection);
+        });
     });
 
     const iris::DeviceInfo device = m_engine->device();

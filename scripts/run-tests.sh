@@ -19,17 +19,37 @@
 # Exits non-zero if anything fails.
 set -euo pipefail
 cd "$(dirname "$0")/.."
+
+# Each stage's wall time, printed at the end (also when a stage fails), so that CI's output
+# says where its time went (CI must stay under 45 minutes on a warm machine).
+stage_name="" stage_start=$SECONDS stage_log=""
+stage() {
+  [ -z "$stage_name" ] || stage_log+="$(printf '%6d s  %s' $((SECONDS - stage_start)) "$stage_name")"$'\n'
+  stage_name="$1" stage_start=$SECONDS
+  [ -z "$1" ] || echo "== $1"
+}
+stage_report() {
+  stage ""
+  printf '== stage times\n%s%6d s  in all\n' "$stage_log" "$SECONDS"
+}
+trap stage_report EXIT
+
+# Five build trees (dev, asan, tsan, fuzz, release) share one compiler cache: clones at other
+# paths hit it too, and it holds all five (ccache's default 5 GB evicted some between runs).
+export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$PWD}" CCACHE_MAXSIZE="${CCACHE_MAXSIZE:-10G}"
+
+stage "install dependencies"
 scripts/install-deps.sh
 
 export XDG_RUNTIME_DIR="${XDG_RUNTIME_DIR:-$(mktemp -d)}"
 JOBS="$(nproc)"
 
-echo "== dev build"
+stage "dev build"
 cmake --preset dev >/dev/null
 cmake --build --preset dev -j "$JOBS"
-echo "== dependency check"
+stage "dependency check"
 scripts/check-deps.py
-echo "== dev tests"
+stage "dev tests"
 xvfb-run -a -s "-screen 0 1920x1080x24" ctest --preset dev -j 1
 
 # The programs the suites labelled $2 run in build tree $1, read from the CTestTestfile.cmake
@@ -57,30 +77,31 @@ print(" ".join(sorted(names)))
 PY
 }
 
-echo "== asan build"
+stage "asan build"
 cmake --preset asan >/dev/null
 # Only what the "asan" suites run (and their fixtures), to keep CI short.
 asan_targets=$(suite_targets build/asan asan)
 cmake --build --preset asan -j "$JOBS" --target iris_no_dlclose iris-sample $asan_targets
-echo "== asan tests"
+stage "asan tests"
 # (the sanitizer options and the LeakSanitizer suppressions come from tests/CMakeLists.txt)
 xvfb-run -a -s "-screen 0 1920x1080x24" ctest --preset asan -L asan -j 1
 
-echo "== tsan build"
+stage "tsan build"
 cmake --preset tsan >/dev/null
 tsan_targets=$(suite_targets build/tsan tsan)
 cmake --build --preset tsan -j "$JOBS" --target iris-sample $tsan_targets
-echo "== tsan tests"
+stage "tsan tests"
 ctest --preset tsan -L tsan -j 1
 
-echo "== fuzz build"
+stage "fuzz build"
 cmake --preset fuzz >/dev/null
 cmake --build --preset fuzz -j "$JOBS"
-echo "== fuzz tests"
+stage "fuzz tests"
 # fuzz.seeds writes each target's seed corpus to build/fuzz/tests/fuzz/seeds/<target> (the seed
 # tools, iris-encode of the dev build above, the small shared slides); the replays run it and
 # tests/fuzz/regressions/<target> through the target once.
 ctest --preset fuzz -L fuzz -j 1
+stage "fuzzing"
 FUZZ_SECONDS="${IRIS_FUZZ_SECONDS:-120}"
 FUZZ=build/fuzz
 # TARGET DICTIONARY SHARE (- for no dictionary): each fuzzed for SHARE × FUZZ_SECONDS (every
@@ -153,8 +174,8 @@ if [ -n "$fuzz_failed" ]; then
   exit 1
 fi
 
-echo "== Debian packages"
+stage "Debian packages"
 scripts/test-deb.sh
 
-echo "== dependency check of the sanitizer, fuzz and release builds"
+stage "dependency check of the sanitizer, fuzz and release builds"
 scripts/check-deps.py --preset asan --preset tsan --preset fuzz --preset release --no-runtime

@@ -2,8 +2,11 @@
 // on lavapipe with the validation layers on, measured from the rendered frames:
 //
 //   * off by default, BottomRight by default; its rectangle is in its corner and moves with
-//     it; it is absent without a visible Scalar layer (none, only a label map, hidden, opacity
-//     0) and describes the topmost visible Scalar layer when there are several;
+//     it; it is absent without a layer to describe (none, a label map with every class hidden,
+//     hidden, opacity 0) and describes the topmost visible one when there are several;
+//   * a label map's legend: a swatch of each class's colour (within one code) with its name
+//     beside it, by id, only classes the map draws, at most 12 rows then "+N more", at device
+//     pixel ratio 1 and 2; an RGBA layer above it is passed over;
 //   * the window's numbers are the layer's resolved window (NaN → the map's range);
 //   * the colour bar's pixel columns are the colour map at each column centre's t (within two
 //     codes), at device pixel ratio 1 and 2; the title and the numbers are drawn (white ink
@@ -125,16 +128,27 @@ private slots:
         e_->setOverlayVisible(Overlay::Legend, true);
         QVERIFY(e_->overlayVisible(Overlay::Legend));
 
-        // No layer, then only a label map: no legend.
+        // No layer, then only a label map whose classes are all hidden: no legend; with its
+        // classes shown, the label map is described.
         auto none = render(kView);
         QVERIFY(none);
         QVERIFY(none->overlays.rect(Overlay::Legend).empty());
         iris::LayerStyle labels;
         labels.classes = iris::defaultLabelClasses(3);
-        QVERIFY(addLayer(labelMap(), labels) != 0);
-        auto onlyLabels = render(iris::View{kView.centerX + 1, kView.centerY, kView.downsample});
+        for (iris::LabelClass& c : labels.classes) c.visible = false;
+        const uint64_t label = addLayer(labelMap(), labels);
+        QVERIFY(label != 0);
+        auto hiddenLabels = render(iris::View{kView.centerX + 1, kView.centerY, kView.downsample});
+        QVERIFY(hiddenLabels);
+        QVERIFY(hiddenLabels->overlays.rect(Overlay::Legend).empty());
+        labels.classes = iris::defaultLabelClasses(3);
+        QVERIFY(e_->setLayerStyle(label, labels).ok());
+        auto onlyLabels = render(kView);
         QVERIFY(onlyLabels);
-        QVERIFY(onlyLabels->overlays.rect(Overlay::Legend).empty());
+        QVERIFY(!onlyLabels->overlays.rect(Overlay::Legend).empty());
+        QCOMPARE(onlyLabels->overlays.legendLayer, label);
+        QVERIFY(onlyLabels->overlays.legendBar.empty());
+        QCOMPARE(onlyLabels->overlays.legendClassIds, (std::vector<uint16_t>{1, 2}));
 
         // A Scalar layer: the legend in each corner, at the margin.
         const uint64_t heat = addLayer(scalarMap(0.1f, 0.9f, "tumour probability"));
@@ -188,7 +202,7 @@ private slots:
         QVERIFY(transparent);
         QCOMPARE(transparent->overlays.legendLayer, heat);
 
-        // Switched off, and with no Scalar layer left: no legend.
+        // Switched off, and with no layer left to describe: no legend.
         e_->setOverlayVisible(Overlay::Legend, false);
         auto off = render(kView);
         QVERIFY(off);
@@ -196,10 +210,121 @@ private slots:
         e_->setOverlayVisible(Overlay::Legend, true);
         e_->removeLayer(score);
         e_->removeLayer(heat);
+        auto labelsLeft = render(kView);
+        QVERIFY(labelsLeft);
+        QCOMPARE(labelsLeft->overlays.legendLayer, label);
+        e_->removeLayer(label);
         auto gone = render(kView);
         QVERIFY(gone);
         QVERIFY(gone->overlays.rect(Overlay::Legend).empty());
         QCOMPARE(gone->overlays.legendLayer, uint64_t(0));
+    }
+
+    // A label map's legend: a row per class it draws, by id (visible, not transparent, within
+    // the map's ids and the table), each an opaque swatch of the class's colour with its name
+    // to the right; at most 12 rows, then "+N more"; an Rgba layer above is passed over;
+    // nothing outside the legend's rectangle changes.
+    void labelClassesAsSwatches_data() {
+        QTest::addColumn<double>("ratio");
+        QTest::addRow("ratio 1") << 1.0;
+        QTest::addRow("ratio 2") << 2.0;
+    }
+    void labelClassesAsSwatches() {
+        QFETCH(double, ratio);
+        openEngine();
+        e_->setDevicePixelRatio(ratio);
+        const std::vector<uint16_t> ids{0, 1, 2, 3, 3, 2, 1, 0};
+        auto map = iris::fromHostMemory(std::span<const uint16_t>(ids), 4, 2, "tissue classes");
+        QVERIFY(map.ok());
+        iris::LayerStyle style;
+        style.opacity = 0.6;
+        style.classes = iris::defaultLabelClasses(6); // ids 4 and 5 are not in the map
+        style.classes[1] = {"tumour", {200, 30, 40, 255}, true};
+        style.classes[2] = {"stroma", {40, 90, 210, 128}, true}; // half transparent: an opaque swatch
+        style.classes[3].name.clear();                           // unnamed: "class 3"
+        const uint64_t id = addLayer(std::make_shared<const iris::RasterMap>(std::move(map).value()), style);
+        QVERIFY(id != 0);
+        // An RGBA map on top has no legend: the label map below is described.
+        const std::vector<uint8_t> rgba(4 * 4, 128);
+        auto coloured = iris::fromHostMemoryRgba(std::span<const uint8_t>(rgba), 2, 2, "rgba");
+        QVERIFY(coloured.ok());
+        QVERIFY(addLayer(std::make_shared<const iris::RasterMap>(std::move(coloured).value())) != 0);
+        auto without = render(kView);
+        QVERIFY(without);
+        e_->setOverlayVisible(Overlay::Legend, true);
+        auto f = render(kView);
+        QVERIFY(f);
+        const iris::OverlayLayout& l = f->overlays;
+        save(f->image, std::string("classes.") + QTest::currentDataTag());
+        QCOMPARE(l.legendLayer, id);
+        QCOMPARE(l.legendTitle, std::string("tissue classes"));
+        QCOMPARE(l.legendClassIds, (std::vector<uint16_t>{1, 2, 3}));
+        QCOMPARE(l.legendClassNames, (std::vector<std::string>{"tumour", "stroma", "class 3"}));
+        QCOMPARE(l.legendMoreClasses, 0);
+        QVERIFY(l.legendBar.empty() && l.legendLowLabel.empty() && l.legendHighLabel.empty());
+        QVERIFY(l.text);
+        const PixelRect r = l.rect(Overlay::Legend);
+        QCOMPARE(l.legendSwatches.size(), size_t(3));
+        for (size_t i = 0; i < l.legendSwatches.size(); ++i) {
+            const PixelRect sw = l.legendSwatches[i];
+            QCOMPARE(sw.width, int(std::lround(12 * ratio)));
+            QCOMPARE(sw.height, sw.width);
+            QVERIFY2(sw.x > r.x && sw.y > r.y && sw.x + sw.width < r.x + r.width && sw.y + sw.height < r.y + r.height,
+                     (str(sw) + " in " + str(r)).c_str());
+            if (i > 0) QVERIFY(sw.y >= l.legendSwatches[i - 1].y + l.legendSwatches[i - 1].height);
+            // Every swatch pixel is the class's colour, opaque.
+            const iris::Rgba8 want = style.classes[l.legendClassIds[i]].color;
+            int worst = 0;
+            for (int y = sw.y; y < sw.y + sw.height; ++y)
+                for (int x = sw.x; x < sw.x + sw.width; ++x) {
+                    const uint8_t* p = pixel(f->image, uint32_t(x), uint32_t(y));
+                    worst = std::max({worst, std::abs(p[0] - want.r), std::abs(p[1] - want.g), std::abs(p[2] - want.b)});
+                }
+            QVERIFY2(worst <= 1, qPrintable(QString("swatch %1 is %2 codes off its class colour").arg(i).arg(worst)));
+            // Its name, in white ink, to its right on the same row.
+            const PixelRect name{sw.x + sw.width, sw.y - int(2 * ratio), r.x + r.width - (sw.x + sw.width), sw.height + int(4 * ratio)};
+            QVERIFY2(whitePixels(f->image, name) > 10, qPrintable(QString("no name beside swatch %1").arg(i)));
+        }
+        QVERIFY2(whitePixels(f->image, {r.x, r.y, r.width, l.legendSwatches[0].y - r.y}) > 20, "no title drawn");
+        int outside = 0;
+        for (uint32_t y = 0; y < kH; ++y)
+            for (uint32_t x = 0; x < kW; ++x)
+                if (!r.contains(x + 0.5, y + 0.5) && std::memcmp(pixel(f->image, x, y), pixel(without->image, x, y), 4) != 0)
+                    ++outside;
+        QCOMPARE(outside, 0);
+
+        // A class hidden, or made transparent, leaves the list.
+        style.classes[2].visible = false;
+        style.classes[3].color.a = 0;
+        QVERIFY(e_->setLayerStyle(id, style).ok());
+        auto fewer = render(iris::View{kView.centerX + 1, kView.centerY, kView.downsample});
+        QVERIFY(fewer);
+        QCOMPARE(fewer->overlays.legendClassIds, (std::vector<uint16_t>{1}));
+        QVERIFY(fewer->overlays.rect(Overlay::Legend).height < r.height);
+    }
+
+    // A map of 20 classes lists the first 12 it draws, then "+N more" under them.
+    void manyClassesEndWithMore() {
+        openEngine();
+        std::vector<uint16_t> ids(20);
+        for (uint16_t i = 0; i < 20; ++i) ids[i] = i;
+        auto map = iris::fromHostMemory(std::span<const uint16_t>(ids), 20, 1, "classes");
+        QVERIFY(map.ok());
+        iris::LayerStyle style;
+        style.classes = iris::defaultLabelClasses(20); // id 0 hidden: 19 drawn
+        QVERIFY(addLayer(std::make_shared<const iris::RasterMap>(std::move(map).value()), style) != 0);
+        e_->setOverlayVisible(Overlay::Legend, true);
+        auto f = render(kView);
+        QVERIFY(f);
+        const iris::OverlayLayout& l = f->overlays;
+        save(f->image, "many");
+        QCOMPARE(l.legendClassIds.size(), size_t(12));
+        QCOMPARE(l.legendClassIds.front(), uint16_t(1));
+        QCOMPARE(l.legendClassIds.back(), uint16_t(12));
+        QCOMPARE(l.legendMoreClasses, 7);
+        const PixelRect r = l.rect(Overlay::Legend), last = l.legendSwatches.back();
+        QVERIFY2(whitePixels(f->image, {r.x, last.y + last.height, r.width, r.y + r.height - (last.y + last.height)}) > 10,
+                 "no \"+7 more\" line drawn");
     }
 
     // Stacked with the scale bar in one corner, each in its own rectangle.

@@ -205,8 +205,11 @@ public:
     // as IrisSlideView's magnification() does), and an overlay that does not fit into the
     // target is left out.
     // The legend describes the topmost layer (raster layers, below) that is visible, has an
-    // opacity above 0 and a Scalar map: its colour map as a bar from the window's low end to its
-    // high end, both numbers and the map's title; hidden while no layer qualifies.
+    // opacity above 0 and something to show, under the map's title: for a Scalar map, its colour
+    // map as a bar from the window's low end to its high end and both numbers; for a Label map,
+    // a swatch and the name of each class it draws (visible, not transparent, an id within the
+    // map's range), at most 12 rows and then "+N more". Rgba maps are passed over; hidden while
+    // no layer qualifies.
     // Turning on a labelled overlay (scale bar, magnification, legend) before any font was chosen
     // looks up the default font on the calling thread (fontconfig; see setOverlayFont).
     void setOverlayVisible(Overlay overlay, bool visible);

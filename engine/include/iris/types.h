@@ -284,7 +284,8 @@ enum class Overlay : int {
     ScaleBar = 0,      // a bar of a round physical length (1, 2 or 5 × 10^n µm), labelled
     Magnification = 1, // the objective magnification of the view ("20.0×")
     Overview = 2,      // a thumbnail of the whole slide with the current field outlined
-    Legend = 3,        // the topmost visible Scalar layer's colour bar, window and title
+    Legend = 3,        // the topmost visible layer's key: a heat map's colour bar and window, or a
+                       // label map's classes (swatch and name), under the map's title
 };
 inline constexpr int kOverlayCount = 4;
 enum class Corner : int { TopLeft = 0, TopRight = 1, BottomLeft = 2, BottomRight = 3 };
@@ -327,13 +328,19 @@ struct OverlayLayout {
     // bounding box (x0, y0, x1, y1).
     std::array<double, 8> overviewFieldCorners{};
     std::array<double, 4> overviewField{};
-    // Legend: the colour bar's pixels (its columns run from the window's low end to its high
-    // end), the layer it describes (0: none) and its labels.
-    PixelRect legendBar;
+    // Legend: the layer it describes (0: none) and the map's title. For a Scalar layer, the
+    // colour bar's pixels (its columns run from the window's low end to its high end) and the
+    // window's ends as written. For a Label layer, one row per class drawn, by id: the swatch's
+    // pixels, the class id and its name; legendMoreClasses classes were left out ("+N more").
     uint64_t legendLayer = 0;
     std::string legendTitle;
+    PixelRect legendBar;
     std::string legendLowLabel;
     std::string legendHighLabel;
+    std::vector<PixelRect> legendSwatches;
+    std::vector<uint16_t> legendClassIds;
+    std::vector<std::string> legendClassNames;
+    int legendMoreClasses = 0;
 };
 
 // A rendered frame read back from the offscreen target.

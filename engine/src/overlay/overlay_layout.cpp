@@ -25,6 +25,10 @@ void shift(OverlayDraw& d, int dx, int dy) {
     d.thumbnailRect.y += dy;
     d.legendBar.x += dx;
     d.legendBar.y += dy;
+    for (PixelRect& r : d.legendSwatches) {
+        r.x += dx;
+        r.y += dy;
+    }
     for (auto* quads : {&d.under, &d.over}) {
         for (Quad& q : *quads) {
             q.x0 += dx;
@@ -189,7 +193,58 @@ OverlayPlan layoutOverlays(const SlideInfo* slide, const Viewport& vp, const Ove
     // The bar is drawn one device-pixel column at a time, each the colour map at its centre's
     // t (opaque: the layer's opacity and the map's alpha are not shown), so it is the ramp the
     // layer pass uses; the text lines are left out without a font.
-    if (s.visible[size_t(Overlay::Legend)] && legend) {
+    if (s.visible[size_t(Overlay::Legend)] && legend && legend->kind == RasterKind::Label) {
+        // A label map's legend: the title, then a row per class drawn: an opaque swatch of the
+        // class's colour (the layer's opacity and the class's alpha are not shown, as the bar
+        // does not show them), its name to the right, then "+N more" for classes left out.
+        // Without a font only the swatches are drawn, one under the other.
+        const auto lineHeight = [](const TextMetrics& tm) {
+            return tm.ok ? int(std::ceil(tm.ascent)) + int(std::ceil(tm.descent)) : 0;
+        };
+        const auto textWidth = [](const TextMetrics& tm) { return tm.ok ? int(std::ceil(tm.width)) : 0; };
+        const TextMetrics title = legend->title.empty() ? TextMetrics{} : measure(legend->title);
+        const std::string moreLabel = legend->moreClasses > 0 ? legendMoreLabel(legend->moreClasses) : std::string();
+        const TextMetrics more = moreLabel.empty() ? TextMetrics{} : measure(moreLabel);
+        std::vector<TextMetrics> names;
+        int nameW = 0, rowH = Metrics::kLegendSwatch;
+        for (const LegendClass& c : legend->classes) {
+            names.push_back(measure(c.name));
+            nameW = std::max(nameW, textWidth(names.back()));
+            rowH = std::max(rowH, lineHeight(names.back()));
+        }
+        const int titleH = title.ok ? lineHeight(title) + Metrics::kBarLabelGap : 0;
+        const int moreH = more.ok ? lineHeight(more) + Metrics::kLegendRowGap : 0;
+        const int rows = int(legend->classes.size());
+        const int contentW = std::max({Metrics::kLegendSwatch + (nameW > 0 ? Metrics::kLegendSwatchGap + nameW : 0),
+                                       textWidth(title), textWidth(more)});
+        const int w = contentW + 2 * Metrics::kPad;
+        const int h = titleH + rows * rowH + (rows - 1) * Metrics::kLegendRowGap + moreH + 2 * Metrics::kPad;
+        OverlayDraw d;
+        d.which = Overlay::Legend;
+        d.rect = {0, 0, px(w), px(h)};
+        d.under.push_back(quad(d.rect, kPlateColour));
+        if (title.ok) d.labels.push_back(Label{legend->title, px(Metrics::kPad), px(Metrics::kPad + int(std::ceil(title.ascent)))});
+        for (int i = 0; i < rows; ++i) {
+            const int top = Metrics::kPad + titleH + i * (rowH + Metrics::kLegendRowGap);
+            const int swatchTop = top + (rowH - Metrics::kLegendSwatch) / 2;
+            const PixelRect swatch{px(Metrics::kPad), px(swatchTop), px(Metrics::kPad + Metrics::kLegendSwatch) - px(Metrics::kPad),
+                                   px(swatchTop + Metrics::kLegendSwatch) - px(swatchTop)};
+            const Rgba8 c = legend->classes[size_t(i)].color;
+            d.over.push_back(quad(swatch, {c.r / 255.0f, c.g / 255.0f, c.b / 255.0f, 1.0f}));
+            d.legendSwatches.push_back(swatch);
+            const TextMetrics& tm = names[size_t(i)];
+            if (tm.ok) {
+                const int baseline = top + (rowH - lineHeight(tm)) / 2 + int(std::ceil(tm.ascent));
+                d.labels.push_back(Label{legend->classes[size_t(i)].name,
+                                         px(Metrics::kPad + Metrics::kLegendSwatch + Metrics::kLegendSwatchGap), px(baseline)});
+            }
+        }
+        if (more.ok) {
+            const int top = Metrics::kPad + titleH + rows * rowH + (rows - 1) * Metrics::kLegendRowGap + Metrics::kLegendRowGap;
+            d.labels.push_back(Label{moreLabel, px(Metrics::kPad), px(top + int(std::ceil(more.ascent)))});
+        }
+        items[size_t(Overlay::Legend)] = std::move(d);
+    } else if (s.visible[size_t(Overlay::Legend)] && legend) {
         const std::string lowLabel = legendNumber(legend->low), highLabel = legendNumber(legend->high);
         const TextMetrics title = legend->title.empty() ? TextMetrics{} : measure(legend->title);
         const TextMetrics lo = measure(lowLabel), hi = measure(highLabel);
@@ -245,11 +300,20 @@ OverlayPlan layoutOverlays(const SlideInfo* slide, const Viewport& vp, const Ove
         out.rects[i] = d.rect;
         if (!d.labels.empty()) out.text = true;
         if (d.which == Overlay::Legend) {
-            out.legendBar = d.legendBar;
             out.legendLayer = legend->layer;
             out.legendTitle = legend->title;
-            out.legendLowLabel = legendNumber(legend->low);
-            out.legendHighLabel = legendNumber(legend->high);
+            if (legend->kind == RasterKind::Label) {
+                out.legendSwatches = d.legendSwatches;
+                for (const LegendClass& c : legend->classes) {
+                    out.legendClassIds.push_back(c.id);
+                    out.legendClassNames.push_back(c.name);
+                }
+                out.legendMoreClasses = legend->moreClasses;
+            } else {
+                out.legendBar = d.legendBar;
+                out.legendLowLabel = legendNumber(legend->low);
+                out.legendHighLabel = legendNumber(legend->high);
+            }
         }
         if (d.which == Overlay::Overview) {
             const PixelRect& img = d.thumbnailRect;

@@ -40,6 +40,9 @@ struct Metrics {
     static constexpr int kLegendBarWidth = 160; // the legend's colour bar, at least
     static constexpr int kLegendBarHeight = 10;
     static constexpr int kLegendNumberGap = 12; // between its low and high numbers, at least
+    static constexpr int kLegendSwatch = 12;    // a label legend's class swatch (square)
+    static constexpr int kLegendSwatchGap = 6;  // between a swatch and its class's name
+    static constexpr int kLegendRowGap = 3;     // between class rows
 };
 
 // Colours, straight alpha.
@@ -89,7 +92,8 @@ struct OverlayDraw {
                               // thumbnailRect's top-left corner
     std::vector<Quad> over;
     std::vector<Label> labels;
-    PixelRect legendBar;      // the legend's colour bar (legend only)
+    PixelRect legendBar;      // the legend's colour bar (a Scalar layer's legend only)
+    std::vector<PixelRect> legendSwatches; // a Label layer's legend: one per class row
 };
 
 struct OverlayPlan {

@@ -90,8 +90,8 @@ public:
     // The overlays: a scale bar (hidden when the slide states no mpp), the magnification
     // readout (hidden when it states no objective power) and the overview map, a thumbnail
     // of the whole slide with the current field outlined; clicking it moves the view there;
-    // the legend, the colour bar, window and title of the topmost visible heat map (Scalar
-    // layer; hidden while there is none).
+    // the legend, the key of the topmost visible layer: a heat map's colour bar, window and
+    // title, or a label map's classes (swatch and name); hidden while there is none.
     enum Overlay { ScaleBar, MagnificationLabel, Overview, Legend };
     Q_ENUM(Overlay)
     enum OverlayCorner { TopLeft, TopRight, BottomLeft, BottomRight };

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <mutex>
 #include <shared_mutex>
 
 #include "buffer/buffer_thread.h"
@@ -585,9 +586,41 @@ Result checkMap(const std::shared_ptr<const RasterMap>& map) {
 // A single-level map larger than this a side gets coarser levels (withRasterPyramid), so that a
 // view of the whole slide draws from a small level instead of needing the whole map on the GPU.
 constexpr int32_t kPyramidFromSide = 1024;
+// The pyramids made so far, by the map they were made from, for as long as both live: a map
+// shown twice (in two layers, or in the two engines of a synchronised pair of views) gets one
+// copy, not one per layer. The key is the map's identity, which is safe because a RasterMap
+// behind a shared_ptr<const> never changes, and the source's weak_ptr tells a live map from a
+// new one that reuses a freed address.
+struct PyramidCache {
+    std::mutex mutex;
+    std::vector<std::pair<std::weak_ptr<const RasterMap>, std::weak_ptr<const RasterMap>>> made;
+
+    std::shared_ptr<const RasterMap> find(const std::shared_ptr<const RasterMap>& source) {
+        std::lock_guard lock(mutex);
+        std::erase_if(made, [](const auto& e) { return e.first.expired() || e.second.expired(); });
+        for (const auto& [from, pyramid] : made)
+            if (from.lock() == source) return pyramid.lock();
+        return nullptr;
+    }
+    std::shared_ptr<const RasterMap> keep(const std::shared_ptr<const RasterMap>& source,
+                                          std::shared_ptr<const RasterMap> pyramid) {
+        std::lock_guard lock(mutex);
+        for (const auto& [from, other] : made) // another thread made one meanwhile: share it
+            if (from.lock() == source)
+                if (auto p = other.lock()) return p;
+        made.emplace_back(source, pyramid);
+        return pyramid;
+    }
+};
+PyramidCache& pyramidCache() {
+    static PyramidCache cache; // process-wide: engines share maps
+    return cache;
+}
 std::shared_ptr<const RasterMap> drawable(std::shared_ptr<const RasterMap> map) {
     if (map->levels.size() != 1 || std::max(map->width(), map->height()) <= kPyramidFromSide) return map;
-    return std::make_shared<const RasterMap>(withRasterPyramid(*map));
+    if (auto made = pyramidCache().find(map)) return made;
+    // Made outside the lock: a large map takes a while, and other maps need not wait for it.
+    return pyramidCache().keep(map, std::make_shared<const RasterMap>(withRasterPyramid(*map)));
 }
 } // namespace
 

@@ -246,6 +246,16 @@ private Q_SLOTS:
         QVERIFY(e_->layers().empty());
         QVERIFY(e_->addLayer(map, style, place).ok());
         QCOMPARE(e_->layers().front().map->levels.size(), size_t(3)); // 1300, 650, 325 wide
+        // The same map added again, or set on another layer, shares the first one's pyramid;
+        // a copy of it (another map) gets its own.
+        QVERIFY(e_->addLayer(map, style).ok());
+        const auto second = e_->layers().back().map;
+        QCOMPARE(second.get(), e_->layers().front().map.get());
+        auto copy = std::make_shared<const iris::RasterMap>(*map);
+        QVERIFY(e_->setLayerMap(e_->layers().back().id, copy).ok());
+        QVERIFY(e_->layers().back().map.get() != e_->layers().front().map.get());
+        QVERIFY(e_->setLayerMap(e_->layers().back().id, map).ok());
+        QCOMPARE(e_->layers().back().map.get(), e_->layers().front().map.get());
     }
 
     // A label checkerboard of 64-pixel squares aligned to the slide's level-0 grid (placement:

@@ -37,6 +37,42 @@ FieldProgress progress(bool lr, bool hr, uint64_t newestUpload) {
 class TestMetricsBoard : public QObject {
     Q_OBJECT
 private slots:
+    // The stage log: a field's stage times are the events between its move and its end, as
+    // offsets from the move (first, median, last, count); events before the move (the last
+    // field's) are left out; a stage with no event has none.
+    void stageTimesOfAField() {
+        using namespace std::chrono_literals;
+        UploadCounters counters;
+        iris::StageLog log;
+        MetricsBoard board(counters, &log);
+        Snapshot s = field(1, 0);
+        const auto t0 = s.fieldStart; // 20 ms ago
+        log.stamp(iris::TileStage::DecodeStart, 5, t0 - 5ms); // the previous field's
+        log.stamp(iris::TileStage::DecodeStart, 1, t0 + 1ms);
+        log.stamp(iris::TileStage::DecodeStart, 1, t0 + 2ms);
+        log.stamp(iris::TileStage::DecodeStart, 1, t0 + 4ms);
+        log.stamp(iris::TileStage::Submitted, 3, t0 + 10ms); // a transaction of three tiles
+        board.frameDrawn(s, progress(true, true, 3));
+        QCOMPARE(board.read().fields.size(), size_t(0)); // published by frameFinished
+        (void)board.frameFinished(s, 1, true, 4, 0.1, 0.1);
+        QCOMPARE(board.read().fields.size(), size_t(1));
+        const iris::FieldStats f = board.read().fields.back();
+        const iris::StageTimes d = f.stages[size_t(iris::TileStage::DecodeStart)];
+        QCOMPARE(d.tiles, 3u);
+        QVERIFY(std::abs(d.firstMs - 1) < 1e-6 && std::abs(d.medianMs - 2) < 1e-6 && std::abs(d.lastMs - 4) < 1e-6);
+        const iris::StageTimes sub = f.stages[size_t(iris::TileStage::Submitted)];
+        QCOMPARE(sub.tiles, 3u);
+        QVERIFY(std::abs(sub.firstMs - 10) < 1e-6 && std::abs(sub.lastMs - 10) < 1e-6);
+        const iris::StageTimes none = f.stages[size_t(iris::TileStage::Shown)];
+        QCOMPARE(none.tiles, 0u);
+        QCOMPARE(none.firstMs, -1.0);
+        QCOMPARE(std::string(iris::tileStageName(iris::TileStage::GpuDone)), std::string("gpu_done"));
+
+        // The ring keeps the newest kSlots events of a stage.
+        for (size_t i = 0; i < iris::StageLog::kSlots + 10; ++i) log.stamp(iris::TileStage::Staged, 1, t0 + 3ms);
+        QCOMPARE(log.summarise(iris::TileStage::Staged, t0, t0 + 1s).tiles, uint32_t(iris::StageLog::kSlots));
+    }
+
     void revisitsAndFastFields() {
         UploadCounters counters;
         counters.tiles = 100;

@@ -55,6 +55,18 @@ void TestMetrics::scriptedMoves() {
     QVERIFY(f.lrTeFovMs > 0 && f.lrTeFovMs <= f.hrTeFovMs);
     QVERIFY(std::abs(f.hrTptUs - f.hrTeFovMs * 1000.0 / 5) < 1e-6);
     QCOMPARE(f.view.centerX, b.centerX);
+    // Its tiles' way, stage by stage (issue 20's timeline): every stage saw them, in order,
+    // within the field's time; the five uploads completed and were shown.
+    for (int s = 0; s < iris::kTileStageCount; ++s) {
+        const iris::StageTimes& t = f.stages[size_t(s)];
+        const QByteArray name = iris::tileStageName(iris::TileStage(s));
+        QVERIFY2(t.tiles >= 1, name);
+        QVERIFY2(0 <= t.firstMs && t.firstMs <= t.medianMs && t.medianMs <= t.lastMs, name);
+        QVERIFY2(t.lastMs <= f.hrTeFovMs + 1e-3, name);
+        if (s > 0) QVERIFY2(t.lastMs + 1e-3 >= f.stages[size_t(s - 1)].firstMs, name);
+    }
+    QCOMPARE(f.stages[size_t(iris::TileStage::GpuDone)].tiles, 5u);
+    QVERIFY(f.stages[size_t(iris::TileStage::Shown)].tiles >= 5u);
 
     // Back to A: its tiles are still resident (a revisit): no new sample.
     e.setView(a);

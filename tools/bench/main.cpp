@@ -9,6 +9,8 @@
 //
 // Without --size it runs 2774×1750 (the paper's window) and 1920×1080. --views runs linked
 // views instead (linked.h): the window split into N cells, one engine each, gliding together.
+#include <algorithm>
+#include <array>
 #include <charconv>
 #include <chrono>
 #include <cmath>
@@ -105,6 +107,7 @@ struct SizeResult {
     std::vector<double> settledGpuMs; // GPU time of frames redrawing a loaded field (nothing to upload)
     std::vector<std::string> condition; // per field: magnification label
     std::vector<double> condHr, condTpt;
+    std::vector<iris::FieldStats> timed; // every timed field, for its stage times
     BaselineResult osr, osrMt, floor;
     std::vector<TracePoint> trace;
     int movesDone = 0, movesWanted = 0, timeouts = 0;
@@ -216,6 +219,7 @@ SizeResult runSize(const Options& o, uint32_t W, uint32_t H, bool colorManaged) 
                     res.condition.push_back(label);
                     res.condHr.push_back(f.hrTeFovMs);
                     res.condTpt.push_back(f.hrTptUs);
+                    res.timed.push_back(f);
                     done = true;
                     break;
                 }
@@ -293,6 +297,41 @@ Json jsonQuartiles(const Quartiles& q) {
     return {{"p25", jsonNumber(q.p25)}, {"median", jsonNumber(q.median)}, {"p75", jsonNumber(q.p75)}};
 }
 
+// Where the fields' time went (issue 20): for each tile stage, the median over the timed fields
+// of its first, median and last event's offset from the move, and of its event count.
+struct StageRow {
+    double first = NAN, median = NAN, last = NAN, tiles = NAN;
+};
+std::array<StageRow, iris::kTileStageCount> stageTimeline(const std::vector<iris::FieldStats>& fields) {
+    std::array<StageRow, iris::kTileStageCount> rows{};
+    for (int s = 0; s < iris::kTileStageCount; ++s) {
+        std::vector<double> first, median, last, tiles;
+        for (const iris::FieldStats& f : fields) {
+            const iris::StageTimes& t = f.stages[size_t(s)];
+            tiles.push_back(t.tiles);
+            if (t.tiles == 0) continue;
+            first.push_back(t.firstMs);
+            median.push_back(t.medianMs);
+            last.push_back(t.lastMs);
+        }
+        rows[size_t(s)] = {quartiles(first).median, quartiles(median).median, quartiles(last).median,
+                           quartiles(tiles).median};
+    }
+    return rows;
+}
+// The field whose HR-TeFOV is the median of the run's (the "typical field" plotted); null when none.
+const iris::FieldStats* typicalField(const std::vector<iris::FieldStats>& fields) {
+    if (fields.empty()) return nullptr;
+    std::vector<const iris::FieldStats*> sorted;
+    for (const iris::FieldStats& f : fields) sorted.push_back(&f);
+    std::sort(sorted.begin(), sorted.end(), [](auto* a, auto* b) { return a->hrTeFovMs < b->hrTeFovMs; });
+    return sorted[sorted.size() / 2];
+}
+Json stageJson(double first, double median, double last, double tiles) {
+    return {{"first_ms", jsonNumber(first)}, {"median_ms", jsonNumber(median)}, {"last_ms", jsonNumber(last)},
+            {"tiles", jsonNumber(tiles)}};
+}
+
 Json resultJson(const Options& o, const SizeResult& r) {
     const Quartiles hr = quartiles(r.hrTefov), osr = quartiles(r.osr.ms), flo = quartiles(r.floor.ms);
     std::vector<double> fps;
@@ -334,6 +373,27 @@ Json resultJson(const Options& o, const SizeResult& r) {
                                     : o.tuning.colorLookup == iris::EngineTuning::ColorLookup::Nodes ? "nodes"
                                                                                                      : "auto"},
                    {"device_filter", o.tuning.deviceName}};
+    // Per stage, medians over the timed fields; then the typical field's own (see stageTimeline).
+    Json timeline;
+    const auto rows = stageTimeline(r.timed);
+    for (int s = 0; s < iris::kTileStageCount; ++s) {
+        const StageRow& row = rows[size_t(s)];
+        timeline[iris::tileStageName(iris::TileStage(s))] = stageJson(row.first, row.median, row.last, row.tiles);
+    }
+    j["stage_timeline_ms"] = timeline;
+    if (const iris::FieldStats* f = typicalField(r.timed)) {
+        Json stages;
+        for (int s = 0; s < iris::kTileStageCount; ++s) {
+            const iris::StageTimes& t = f->stages[size_t(s)];
+            stages[iris::tileStageName(iris::TileStage(s))] =
+                t.tiles ? stageJson(t.firstMs, t.medianMs, t.lastMs, t.tiles) : stageJson(NAN, NAN, NAN, 0);
+        }
+        j["typical_field"] = {{"hr_tefov_ms", jsonNumber(f->hrTeFovMs)},
+                              {"lr_tefov_ms", jsonNumber(f->lrTeFovMs)},
+                              {"hr_tiles", f->hrTiles},
+                              {"tiles_buffered", f->tilesBuffered},
+                              {"stages", stages}};
+    }
     j["mip_us_per_tile"] = jsonNumber(r.mipUsPerTile);
     j["mip_share_of_hr_tpt"] = jsonNumber(r.mipUsPerTile / quartiles(r.hrTpt).median);
     j["timeouts"] = r.timeouts;
@@ -367,6 +427,15 @@ void printTable(const SizeResult& r) {
     std::printf("  mip pass (%s schedule, GPU timestamps): %.2f us per tile = %.1f%% of the HR time per tile\n",
                 r.mipSchedule.c_str(), r.mipUsPerTile,
                 100.0 * r.mipUsPerTile / quartiles(r.hrTpt).median);
+    // Where a field's time goes: each stage's events from the move to HR completion.
+    const auto rows = stageTimeline(r.timed);
+    std::printf("  tile stages, ms after the move (medians over %zu fields): %10s %10s %10s %8s\n", r.timed.size(),
+                "first", "median", "last", "tiles");
+    for (int s = 0; s < iris::kTileStageCount; ++s) {
+        const StageRow& row = rows[size_t(s)];
+        std::printf("    %-54s %10.3f %10.3f %10.3f %8.0f\n", iris::tileStageName(iris::TileStage(s)), row.first, row.median,
+                    row.last, row.tiles);
+    }
     if (!r.floor.note.empty()) std::printf("  decode floor: %s\n", r.floor.note.c_str());
     if (!r.notes.empty()) std::printf("  notes: %s\n", r.notes.c_str());
 }
@@ -394,24 +463,53 @@ bool writePlots(const std::string& dir, const std::vector<SizeResult>& results, 
     for (const TracePoint& t : first.trace)
         trace << t.tMs << " " << (t.intervalMs > 0 ? 1000.0 / t.intervalMs : 0) << " " << t.rateGBps << " "
               << (t.gpuMs >= 0 ? t.gpuMs : 0) << "\n";
+    // The typical field's stages, one bar each from its first to its last event (the median
+    // event marked), in the order a tile passes them.
+    std::ofstream stages(dir + "/stages.dat");
+    stages << "# index stage first_ms median_ms last_ms tiles\n";
+    const iris::FieldStats* typical = typicalField(first.timed);
+    if (typical)
+        for (int s = 0; s < iris::kTileStageCount; ++s) {
+            const iris::StageTimes& t = typical->stages[size_t(s)];
+            if (t.tiles)
+                stages << s << " \"" << iris::tileStageName(iris::TileStage(s)) << "\" " << t.firstMs << " " << t.medianMs
+                       << " " << t.lastMs << " " << t.tiles << "\n";
+        }
+    stages.close();
     fields.close();
     trace.close();
     std::ofstream gp(dir + "/plots.gp");
     gp << "set terminal pngcairo size 1200,700 font 'DejaVu Sans,11'\nset grid\nset logscale y\n"
        << "set style fill solid 0.4 border -1\nset style boxplot outliers pointtype 7\nset style data boxplot\n"
-       << "set xtics rotate by -20\nunset key\n"
+       << "set xtics rotate by -20\nunset key\nset xrange [0.3:*]\n"
        << "set output '" << dir << "/tefov.png'\nset title 'HR TeFOV per field (ms, log scale)'\nset ylabel 'ms'\n"
        << "plot '" << dir << "/fields.dat' using (1):2:(0.5):1\n"
        << "set output '" << dir << "/tpt.png'\nset title 'HR time per tile (µs, log scale)'\nset ylabel 'µs'\n"
        << "plot '" << dir << "/fields.dat' using (1):3:(0.5):1\n"
-       << "unset logscale y\nunset title\nset xtics auto norotate\nset style data lines\nset output '" << dir << "/trace.png'\n"
+       << "unset logscale y\nunset title\nset autoscale x\nset xtics auto norotate\nset style data lines\nset output '" << dir << "/trace.png'\n"
        << "set multiplot layout 3,1 title 'Time trace, " << first.w << "x" << first.h << "'\nset xlabel 't (ms)'\n"
        << "set ylabel 'FPS'\nplot '" << dir << "/trace.dat' using 1:2 with lines\n"
        << "set ylabel 'GB/s'\nplot '" << dir << "/trace.dat' using 1:3 with lines\n"
        << "set ylabel 'GPU ms'\nplot '" << dir << "/trace.dat' using 1:4 with lines\nunset multiplot\n";
     gp.close();
+    // Its own script, so that a failure of the plots above does not take it along.
+    if (typical) {
+        std::ofstream sg(dir + "/stages.gp");
+        sg << "set terminal pngcairo noenhanced size 1200,500 font 'DejaVu Sans,11'\nset output '" << dir << "/stages.png'\n"
+           << "set title 'Tile stages of a typical field, " << first.w << "x" << first.h << ": HR TeFOV "
+           << shortNumber(typical->hrTeFovMs) << " ms, " << typical->tilesBuffered
+           << " tiles buffered (bar: first to last event; dot: median)'\n"
+           << "set xlabel 'ms after the move'\nset yrange [" << iris::kTileStageCount - 0.4 << ":-0.6]\n"
+           << "set grid x\nunset key\nset xrange [0:*]\n"
+           << "set arrow from " << typical->hrTeFovMs << ", graph 0 to " << typical->hrTeFovMs
+           << ", graph 1 nohead dt 2 lc rgb 'red'\n"
+           << "plot '" << dir << "/stages.dat' using 3:1:3:5:($1-0.3):($1+0.3):ytic(2) with boxxyerror fill solid 0.5, "
+           << "'' using 4:1 with points pointtype 7 pointsize 1.2 lc rgb 'black'\n";
+    }
     const std::string cmd = "gnuplot '" + dir + "/plots.gp' 2>&1";
-    if (std::system(cmd.c_str()) != 0) {
+    const std::string stagesCmd = "gnuplot '" + dir + "/stages.gp' 2>&1";
+    const bool stagesOk = !typical || std::system(stagesCmd.c_str()) == 0;
+    if (std::system(cmd.c_str()) != 0 || !stagesOk) {
         err = "gnuplot failed or is not installed (apt-get install gnuplot-nox); data left in " + dir;
         return false;
     }

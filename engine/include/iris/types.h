@@ -370,6 +370,30 @@ struct FrameStats {
 // the way the reference paper defines it: from the move call until every LR (resp. HR) tile
 // of the new field is drawable on the GPU, as observed by the render thread. Fields whose
 // tiles were already resident when the move was made (revisits) are not recorded.
+// The stages of a tile's way from the slide to the screen, in order (FieldStats::stages).
+enum class TileStage : uint8_t {
+    DecodeStart = 0, // a loader thread started reading and decoding the tile
+    Decoded = 1,     // its pixels are in the RAM cache
+    Staged = 2,      // the buffer thread copied them into staging memory
+    Submitted = 3,   // its upload (copy, then the mip pass) was submitted to the GPU
+    GpuDone = 4,     // the buffer thread saw that upload and its mips complete
+    Drawable = 5,    // frames may draw it (at GpuDone on one queue family; with several, once
+                     // the render thread has taken the compute → graphics ownership transfer)
+    Shown = 6,       // a frame drew it for the first time (when that frame was submitted)
+};
+inline constexpr int kTileStageCount = 7;
+IRIS_API const char* tileStageName(TileStage stage) noexcept; // "decode_start", "decoded", …
+
+// When the tiles of one field passed one stage: the events between the move and the field's
+// completion (HR, or its being superseded), as offsets from the move. tiles = 0: none (the
+// times are then -1). Every tile the engine moved meanwhile counts, the perimeter's included.
+struct StageTimes {
+    uint32_t tiles = 0;
+    double firstMs = -1;
+    double medianMs = -1;
+    double lastMs = -1;
+};
+
 struct FieldStats {
     uint64_t id = 0;
     View view;
@@ -380,6 +404,7 @@ struct FieldStats {
     uint32_t tilesBuffered = 0; // tiles uploaded between the move and HR completion, perimeter included
     double lrTptUs = -1;       // TeFOV / tiles buffered by then
     double hrTptUs = -1;
+    std::array<StageTimes, kTileStageCount> stages{}; // by TileStage: where the field's time went
 };
 
 struct EngineMetrics {

@@ -245,6 +245,9 @@ bool BufferThread::pollCompleted() {
         // Each tile's sequence number: the counter's value once it is counted (the stamp that
         // tells metrics whether a tile was uploaded after a move).
         uint64_t seq = counters_.tiles.fetch_add(t.slots.size(), std::memory_order_relaxed);
+        const auto now = StageLog::Clock::now();
+        shared_.tileStages.stamp(TileStage::GpuDone, uint32_t(t.slots.size()), now);
+        if (!handover_.needed) shared_.tileStages.stamp(TileStage::Drawable, uint32_t(t.slots.size()), now);
         counters_.bytes.fetch_add(t.slots.size() * gpu::TileAtlas::bytesPerSlot(), std::memory_order_relaxed);
         // Single family: the compute submission made the tiles visible to fragment reads, so
         // they can be drawn now. Separate families: the render thread must first record the
@@ -301,6 +304,7 @@ bool BufferThread::submitNew(const Snapshot& snap) {
             continue;
         }
         freeStaging_.pop_back();
+        shared_.tileStages.stamp(TileStage::Staged);
         tx.slots.push_back(slot);
         tx.staging.push_back(st);
     }
@@ -330,6 +334,7 @@ bool BufferThread::submitNew(const Snapshot& snap) {
         return false;
     }
     submittedValue_ = tx.signalValue;
+    shared_.tileStages.stamp(TileStage::Submitted, uint32_t(tx.slots.size()));
     return true;
 }
 

@@ -98,6 +98,7 @@ void LoaderPool::decode(const Snapshot& snap, Plan& plan, const TileRef& t) {
     SlideSource& source = *snap.slide->source;
     std::unique_ptr<uint8_t[]> buf = cache_.acquireBuffer();
     reads_.fetch_add(1, std::memory_order_relaxed);
+    shared_.tileStages.stamp(TileStage::DecodeStart);
     const Result r = source.readTile(t.level, t.tx, t.ty, buf.get());
     reads_.fetch_sub(1, std::memory_order_relaxed);
     const bool failed = !r.ok();
@@ -124,6 +125,7 @@ void LoaderPool::decode(const Snapshot& snap, Plan& plan, const TileRef& t) {
         if (!source.keepsPartialTiles(t.level)) fillFailedTilePlaceholder(buf.get());
     }
     cache_.publish(t.key, std::move(buf), failed);
+    shared_.tileStages.stamp(TileStage::Decoded);
     shared_.bump(); // the buffer thread may now upload it
 }
 

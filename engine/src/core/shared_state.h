@@ -16,6 +16,7 @@
 
 #include "color/color_lut.h"
 #include "core/published.h"
+#include "core/stage_log.h"
 #include "iris/annotations.h"
 #include "iris/engine.h"
 #include "iris/types.h"
@@ -103,6 +104,10 @@ public:
     // loads it (acquire) before it drains the hand-over, so a frame of that view drawn after the
     // load shows every tile (Engine::waitForSettled).
     std::atomic<uint64_t> bufferedView{0};
+
+    // When tiles pass each stage of their way to the screen (the loaders, the buffer thread and
+    // the render thread stamp it; the metrics summarise it per field). Wait-free, statistics only.
+    StageLog tileStages;
 
     // First error wins and sticks (until cleared).
     void setError(const Result& r) {

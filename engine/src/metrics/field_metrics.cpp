@@ -5,6 +5,23 @@
 #include <algorithm>
 #include <utility>
 
+namespace iris {
+
+const char* tileStageName(TileStage stage) noexcept {
+    switch (stage) {
+    case TileStage::DecodeStart: return "decode_start";
+    case TileStage::Decoded: return "decoded";
+    case TileStage::Staged: return "staged";
+    case TileStage::Submitted: return "submitted";
+    case TileStage::GpuDone: return "gpu_done";
+    case TileStage::Drawable: return "drawable";
+    case TileStage::Shown: return "shown";
+    }
+    return "?";
+}
+
+} // namespace iris
+
 namespace iris::metrics {
 
 bool isNewField(const View& a, const View& b, double w, double h) {
@@ -19,6 +36,11 @@ bool isNewField(const View& a, const View& b, double w, double h) {
 void MetricsBoard::finishField(bool superseded) {
     if (!field_.active) return;
     if (superseded) field_.stats.hrTeFovMs = -1;
+    if (stages_) {
+        const auto now = std::chrono::steady_clock::now();
+        for (int s = 0; s < kTileStageCount; ++s)
+            field_.stats.stages[size_t(s)] = stages_->summarise(TileStage(s), field_.start, now);
+    }
     // A new list (boards already published keep theirs); a field finishes at most once a frame.
     auto next = std::make_shared<std::vector<FieldStats>>();
     const std::vector<FieldStats>& prev = *fields_;

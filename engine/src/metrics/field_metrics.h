@@ -42,11 +42,14 @@ struct FieldProgress {
     bool hasLr = false, lrComplete = false, hrComplete = false;
     uint32_t lrTiles = 0, hrTiles = 0;
     uint64_t newestUpload = 0; // the highest upload sequence number of the LR and HR tiles drawn
+    uint32_t newlyShown = 0;   // tiles this frame draws that no frame drew before (TileStage::Shown)
 };
 
 class MetricsBoard {
 public:
-    explicit MetricsBoard(const UploadCounters& counters) : counters_(counters) {}
+    // `stages` (may be null: no stage times) is summarised into each finished field.
+    explicit MetricsBoard(const UploadCounters& counters, const StageLog* stages = nullptr)
+        : counters_(counters), stages_(stages) {}
 
     // --- render thread -------------------------------------------------------------------
     // A frame of `snap` was drawn and showed `p` of its field.
@@ -65,6 +68,7 @@ private:
     void finishField(bool superseded);
 
     const UploadCounters& counters_;
+    const StageLog* stages_;
     // Render thread only.
     struct Field {
         bool active = false, lrDone = false, firstFrame = false;

@@ -42,7 +42,7 @@ RenderThread::RenderThread(SharedState& shared, gpu::Device& device, gpu::TileAt
                            Handover& handover, const UploadCounters& counters, const Log& log,
                            const EngineTuning& tuning)
     : shared_(shared), device_(device), atlas_(atlas), pipeline_(pipeline), handover_(handover), counters_(counters),
-      log_(log), metrics_(counters), tuning_(tuning) {
+      log_(log), metrics_(counters, &shared.tileStages), tuning_(tuning) {
     if (tuning_.drawCovered) log_.info("draw covered: coarse tiles are drawn also under resident finer tiles");
 }
 
@@ -539,6 +539,7 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
             atlas_.map().activatePinned(h.slot, serial, h.uploadSeq);
             f.pinned.push_back(h.slot); // held until this frame's fence
         });
+        if (!acquires.empty()) shared_.tileStages.stamp(TileStage::Drawable, uint32_t(acquires.size()));
     }
 
     // The passes prepare on the CPU: what each draws, in the frame slot's own buffers.
@@ -576,6 +577,7 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
         if (Result r = resolvePass_->prepare(frame, passes_->tile.drawList(), bg, target.view); !r.ok()) return r;
     }
     if (passes_->tile.progress().lrComplete) lrWholeViewSerial_ = snap.viewSerial;
+    if (const uint32_t n = passes_->tile.progress().newlyShown) shared_.tileStages.stamp(TileStage::Shown, n);
     metrics_.frameDrawn(snap, passes_->tile.progress());
 
     // Recording: uploads, then one render pass with every pass's draws in order.

@@ -1,6 +1,7 @@
 #include "render/tile_pass.h"
 
 #include <cstring>
+#include <utility>
 
 namespace iris::render {
 
@@ -46,12 +47,23 @@ Result TilePass::prepare(FrameContext& frame) {
     count_ = drawList_.instanceCount();
     drawList_.copyInstances(frame.instances.mapped + first_);
     frame.instances.used += count_;
+    // Tiles drawn for the first time: an atlas layer whose upload this pass has not drawn yet
+    // (each upload has its own sequence number; 0, unknown, is never counted).
+    uint32_t newlyShown = 0;
+    for (const LevelDraw& d : drawList_.levels)
+        for (const int32_t layer : d.layers) {
+            if (layer < 0) continue;
+            if (size_t(layer) >= shownUploads_.size()) shownUploads_.resize(size_t(layer) + 1, 0);
+            const uint64_t seq = frame.tiles.uploadSeq(layer);
+            if (seq != 0 && std::exchange(shownUploads_[size_t(layer)], seq) != seq) ++newlyShown;
+        }
     progress_ = metrics::FieldProgress{.hasLr = drawList_.hasLr,
                                        .lrComplete = drawList_.lrComplete,
                                        .hrComplete = drawList_.hrComplete,
                                        .lrTiles = drawList_.lrTiles,
                                        .hrTiles = drawList_.hrTiles,
-                                       .newestUpload = drawList_.newestUpload};
+                                       .newestUpload = drawList_.newestUpload,
+                                       .newlyShown = newlyShown};
     if (!drawList_.hrComplete) frame.complete = false;
     return colorError;
 }

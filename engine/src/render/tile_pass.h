@@ -45,6 +45,7 @@ private:
     bool drawLevels_ = true;
     DrawList drawList_; // reused from frame to frame
     metrics::FieldProgress progress_;
+    std::vector<uint64_t> shownUploads_; // by atlas layer: the upload sequence number last drawn there
     uint32_t first_ = 0, count_ = 0;                               // this frame's span of the arena
     VkPipeline pipe_ = VK_NULL_HANDLE, seamPipe_ = VK_NULL_HANDLE; // for this frame's format
 };

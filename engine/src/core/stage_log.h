@@ -1,0 +1,69 @@
+// The tile stage log (issue 20, "measure first"): when tiles pass each stage of their way from
+// the slide to the screen — a loader starts reading one, has decoded it, the buffer thread has
+// copied it into staging, submitted its upload, seen the upload and its mips complete, the tile
+// became drawable, a frame first drew it. Each stage keeps the times of its last kSlots events
+// in a ring; the render thread's metrics summarise the events that fall within a timed field
+// (from the move to the field's completion) into FieldStats::stages.
+//
+// Writers are any engine thread and never wait: an event is one fetch_add on the stage's
+// cursor and one relaxed store of the time. The reader (the render thread, once per finished
+// field) scans the rings: an event being written while it scans is read as its old or its new
+// time, and either lies outside the field's window or inside it as it should; a field with
+// more than kSlots events of one stage loses its oldest (stated in the summary's count).
+// Statistics only: nothing is ordered by it.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <vector>
+
+#include "iris/types.h"
+
+namespace iris {
+
+class StageLog {
+public:
+    static constexpr size_t kSlots = 4096; // events kept per stage
+
+    using Clock = std::chrono::steady_clock;
+
+    // `count` tiles passed `stage` at `at` (now by default).
+    void stamp(TileStage stage, uint32_t count = 1, Clock::time_point at = Clock::now()) noexcept {
+        Ring& r = rings_[size_t(stage)];
+        const int64_t t = at.time_since_epoch().count();
+        for (uint32_t i = 0; i < count; ++i) r.times[r.next.fetch_add(1, std::memory_order_relaxed) % kSlots].store(t, std::memory_order_relaxed);
+    }
+
+    // The events of `stage` at or after `from` and at or before `to`, as offsets from `from`.
+    StageTimes summarise(TileStage stage, Clock::time_point from, Clock::time_point to) const {
+        const Ring& r = rings_[size_t(stage)];
+        const int64_t a = from.time_since_epoch().count(), b = to.time_since_epoch().count();
+        std::vector<int64_t> in;
+        const size_t n = std::min<uint64_t>(r.next.load(std::memory_order_relaxed), kSlots);
+        for (size_t i = 0; i < n; ++i) {
+            const int64_t t = r.times[i].load(std::memory_order_relaxed);
+            if (t >= a && t <= b) in.push_back(t - a);
+        }
+        StageTimes s;
+        if (in.empty()) return s;
+        std::sort(in.begin(), in.end());
+        const auto ms = [](int64_t d) { return std::chrono::duration<double, std::milli>(Clock::duration(d)).count(); };
+        s.tiles = uint32_t(in.size());
+        s.firstMs = ms(in.front());
+        s.medianMs = ms(in[in.size() / 2]);
+        s.lastMs = ms(in.back());
+        return s;
+    }
+
+private:
+    struct Ring {
+        std::atomic<uint64_t> next{0};
+        std::array<std::atomic<int64_t>, kSlots> times{};
+    };
+    std::array<Ring, kTileStageCount> rings_{};
+};
+
+} // namespace iris

@@ -60,12 +60,17 @@ public:
         return true;
     }
 
-    // The frame of the view's current pose with its current layers; null and *error on failure.
+    // The frame of the view's current pose and size with its current layers; null and *error on
+    // failure.
     QImage render(const IrisSlideView *view, QString *error)
     {
-        if (!m_engine || view->targetSize() != m_size) {
-            *error = QStringLiteral("the twin was not started at the view's size");
+        if (!m_engine) {
+            *error = QStringLiteral("the twin was not started");
             return {};
+        }
+        if (view->targetSize() != m_size) { // the window's layout changed since
+            m_size = view->targetSize();
+            m_engine->resize(uint32_t(m_size.width()), uint32_t(m_size.height()));
         }
         m_engine->clearLayers();
         for (quint64 id : view->layerIds()) {
@@ -93,6 +98,11 @@ public:
             return {};
         }
         const iris::Image &image = frame->image;
+        if (QSize(int(image.width), int(image.height)) != m_size) {
+            *error
+                = QStringLiteral("the headless frame is %1x%2, not the view's size").arg(image.width).arg(image.height);
+            return {};
+        }
         QImage out(int(image.width), int(image.height), QImage::Format_RGBA8888);
         for (int y = 0; y < out.height(); ++y)
             std::memcpy(out.scanLine(y), image.rgba.data() + size_t(y) * image.width * 4, size_t(image.width) * 4);

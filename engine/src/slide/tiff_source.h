@@ -59,6 +59,9 @@ private:
     std::unique_ptr<Handle> acquire(size_t level, Result* error);
     void release(size_t level, std::unique_ptr<Handle> handle);
     Expected<std::shared_ptr<const DecodedTile>> fileTile(size_t level, uint32_t col, uint32_t row);
+    // A JPEG level's tile through libjpeg-turbo directly (Decoder::JpegYCbCr/JpegRgb) into
+    // tile.rgba; false when it cannot (the caller then reads it through TIFFRGBAImage).
+    bool decodeJpegTile(Handle& hd, const Level& level, uint32_t tileIndex, DecodedTile& tile);
 
     std::unique_ptr<SlideSource> meta_; // the OpenSlide reader: associated images
     SlideInfo info_;                    // OpenSlide's, plus the ICC profile OpenSlide 3.4 does not read

@@ -467,7 +467,8 @@ void TiffTileSource::release(size_t level, std::unique_ptr<Handle> handle) {
     pool_[level].push_back(std::move(handle));
 }
 
-bool TiffTileSource::decodeJpegTile(Handle& hd, const Level& L, uint32_t tileIndex, DecodedTile& tile) {
+bool TiffTileSource::decodeJpegTile(Handle& hd, const Level& L, uint32_t tileIndex, uint32_t w, uint32_t h, uint8_t* dst,
+                                    size_t pitch) {
     int errorFlag = 0;
     const uint64_t bytes = TIFFGetStrileByteCountWithErr(hd.tif, tileIndex, &errorFlag);
     if (errorFlag || bytes < 4 || bytes > kMaxRawTileBytes || bytes > fileSize_) return false;
@@ -487,14 +488,13 @@ bool TiffTileSource::decodeJpegTile(Handle& hd, const Level& L, uint32_t tileInd
         size -= 2;
     }
     const JpegColour colour = L.decoder == Decoder::JpegYCbCr ? JpegColour::YCbCr : JpegColour::Rgb;
-    if (tile.width == L.tileW && tile.height == L.tileH)
-        return decodeJpegFrameRgba(data, size, int(L.tileW), int(L.tileH), colour, tile.rgba.data(), size_t(L.tileW) * 4).ok();
-    thread_local std::vector<uint8_t> full;
+    if (w == L.tileW && h == L.tileH)
+        return decodeJpegFrameRgba(data, size, int(L.tileW), int(L.tileH), colour, dst, pitch).ok();
+    thread_local std::vector<uint8_t> full; // an edge tile: the file tile is whole, the level ends inside it
     full.resize(size_t(L.tileW) * L.tileH * 4);
     if (!decodeJpegFrameRgba(data, size, int(L.tileW), int(L.tileH), colour, full.data(), size_t(L.tileW) * 4).ok())
         return false;
-    for (uint32_t y = 0; y < tile.height; ++y)
-        std::memcpy(tile.rgba.data() + size_t(y) * tile.width * 4, full.data() + size_t(y) * L.tileW * 4, size_t(tile.width) * 4);
+    for (uint32_t y = 0; y < h; ++y) std::memcpy(dst + size_t(y) * pitch, full.data() + size_t(y) * L.tileW * 4, size_t(w) * 4);
     return true;
 }
 
@@ -529,7 +529,7 @@ Expected<std::shared_ptr<const TiffTileSource::DecodedTile>> TiffTileSource::fil
     };
 
     bool decoded = false;
-    if (L.decoder == Decoder::JpegYCbCr || L.decoder == Decoder::JpegRgb) decoded = decodeJpegTile(*hd, L, tileIndex, *tile);
+    if (L.decoder == Decoder::JpegYCbCr || L.decoder == Decoder::JpegRgb) decoded = decodeJpegTile(*hd, L, tileIndex, w, h, tile->rgba.data(), size_t(w) * 4);
     if (decoded) {
         // done
     } else if (L.decoder == Decoder::LibTiff || L.decoder == Decoder::JpegYCbCr || L.decoder == Decoder::JpegRgb) {
@@ -623,6 +623,24 @@ Result TiffTileSource::readTile(int level, int64_t tx, int64_t ty, uint8_t* dst)
     const int64_t x0 = tx * kTileSize, y0 = ty * kTileSize;
     const int w = int(std::min<int64_t>(kTileSize, li.width - x0));
     const int h = int(std::min<int64_t>(kTileSize, li.height - y0));
+    if ((L.decoder == Decoder::JpegYCbCr || L.decoder == Decoder::JpegRgb) && L.tileW == uint32_t(kTileSize) &&
+        L.tileH == uint32_t(kTileSize)) {
+        // The file's tile grid is the engine's: file tile (tx, ty) is this tile and no other
+        // engine tile needs it, so it is decoded straight into dst, past the file-tile cache and
+        // its copy (issue 20). A tile that does not decode so takes the way below.
+        Result error;
+        if (std::unique_ptr<Handle> hd = acquire(size_t(level), &error)) {
+            hd->lastError.clear();
+            const bool ok = decodeJpegTile(*hd, L, uint32_t(ty) * L.across + uint32_t(tx), uint32_t(w), uint32_t(h), dst,
+                                           size_t(kTileSize) * 4);
+            hd->lastError.clear();
+            release(size_t(level), std::move(hd));
+            if (ok) {
+                padTileEdges(dst, w, h);
+                return {};
+            }
+        }
+    }
     const uint32_t col0 = uint32_t(x0 / L.tileW), col1 = uint32_t((x0 + w - 1) / L.tileW);
     const uint32_t row0 = uint32_t(y0 / L.tileH), row1 = uint32_t((y0 + h - 1) / L.tileH);
     for (uint32_t row = row0; row <= row1; ++row) {

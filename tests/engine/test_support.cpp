@@ -86,10 +86,20 @@ std::vector<fs::path> filesUnder(const fs::path& dir, bool recursive) {
 
 // ---- engine ---------------------------------------------------------------------------
 
+std::size_t LogSink::warningsContaining(std::string_view needle) const {
+    std::lock_guard lock(mutex_);
+    return std::size_t(std::count_if(warnings_.begin(), warnings_.end(),
+                                     [&](const std::string& w) { return w.find(needle) != std::string::npos; }));
+}
+
 void LogSink::add(iris::LogLevel level, std::string_view line) {
     if (level == iris::LogLevel::Error) {
         std::lock_guard lock(mutex_);
         errors_.emplace_back(line);
+    }
+    if (level == iris::LogLevel::Warning) {
+        std::lock_guard lock(mutex_);
+        warnings_.emplace_back(line);
     }
     // Everything at Warning and above goes to stderr, so a failing run's log explains itself.
     static const bool verbose = std::getenv("IRIS_TEST_VERBOSE") != nullptr;

@@ -55,10 +55,12 @@ public:
     std::vector<std::string> errors() const;        // Error-level lines so far
     std::vector<std::string> takeErrors();          // ... and forget them
     std::size_t errorCount() const;
+    std::size_t warningsContaining(std::string_view needle) const; // Warning-level lines so far
 
 private:
     mutable std::mutex mutex_;
     std::vector<std::string> errors_;
+    std::vector<std::string> warnings_;
 };
 
 // The colour the suites ask the engine to draw outside the slide. Not grey, so that it

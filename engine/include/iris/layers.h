@@ -12,6 +12,7 @@
 #include <array>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
@@ -33,22 +34,43 @@ enum class RasterKind : uint8_t {
 };
 IRIS_API const char* rasterKindName(RasterKind k) noexcept;
 
-// One resolution of a map: width × height pixels, row-major, top row first. Only the vector of
-// the map's kind is filled: `scalar` (width·height), `label` (width·height) or `rgba`
-// (4·width·height, R G B A per pixel).
+// The pixels of a level that is not held in memory but read when needed: a large map streamed
+// from its file (loadRasterMap streams TIFF levels over RasterLoadOptions::streamAbove), or a
+// coarser level made from a finer one on demand. The engine reads it on a worker thread, never
+// on the render thread; the CPU reference reads it too. Implementations are thread-safe.
+class IRIS_API RasterPixelSource {
+public:
+    virtual ~RasterPixelSource();
+    // The rectangle [x, x + w) × [y, y + h) of the level (the caller keeps it inside the level)
+    // into `out`: w·h pixels of the map's kind, rows tightly packed, top row first (float for
+    // Scalar, uint16_t for Label, 4 bytes R G B A for Rgba). An error (the file changed or went
+    // away since it was opened, a tile that no longer decodes) names the file and the place.
+    virtual Result read(int32_t x, int32_t y, int32_t w, int32_t h, void* out) const = 0;
+};
+
+// One resolution of a map: width × height pixels, row-major, top row first. Held in memory:
+// only the vector of the map's kind is filled, `scalar` (width·height), `label` (width·height)
+// or `rgba` (4·width·height, R G B A per pixel). Streamed: `source` is set and every vector is
+// empty.
 struct RasterLevel {
     int32_t width = 0;
     int32_t height = 0;
     std::vector<float> scalar;
     std::vector<uint16_t> label;
     std::vector<uint8_t> rgba;
+    std::shared_ptr<const RasterPixelSource> source;
+
+    bool streamed() const noexcept { return source != nullptr; }
 };
 
 // Hard limits of a map, whatever the source (file or host memory): a side over kMaxRasterSide
-// pixels, or more than kMaxRasterBytes of decoded pixels over all levels (4 bytes a Scalar or
-// Rgba pixel, 2 a Label pixel), is refused before anything that large is allocated.
+// pixels, or more than kMaxRasterBytes of decoded pixels held in memory over all levels (4 bytes
+// a Scalar or Rgba pixel, 2 a Label pixel), is refused before anything that large is
+// allocated. Streamed levels are not held: all levels together, streamed or not, may need up
+// to kMaxStreamedRasterBytes decoded (a load reads each streamed level once, to check it).
 inline constexpr int32_t kMaxRasterSide = 131072;
 inline constexpr uint64_t kMaxRasterBytes = uint64_t(1) << 30;
+inline constexpr uint64_t kMaxStreamedRasterBytes = uint64_t(32) << 30;
 
 // A map: one or more levels, finest first. Each level stores its own size, any ratio to the
 // one before (a pyramid of ≈ /2 levels, or levels a writer rounded differently); each level
@@ -66,12 +88,20 @@ struct IRIS_API RasterMap {
 
     int32_t width() const { return levels.empty() ? 0 : levels.front().width; }
     int32_t height() const { return levels.empty() ? 0 : levels.front().height; }
-    uint64_t decodedBytes() const noexcept;
+    uint64_t decodedBytes() const noexcept;  // every level's pixels, streamed or held
+    uint64_t residentBytes() const noexcept; // the held levels' pixels
+    bool streamed() const noexcept;          // any level is streamed
 };
+
+// Reads the rectangle [x, x + w) × [y, y + h) of `level` (held or streamed) into `out`, as
+// RasterPixelSource::read does; InvalidArgument for a rectangle outside the level.
+IRIS_API Result readRasterRegion(const RasterMap& map, int level, int32_t x, int32_t y, int32_t w, int32_t h,
+                                 void* out);
 
 // Why `map` is not a usable map ("" when it is): no level, a level of zero or negative size or
 // over kMaxRasterSide, a level not smaller than the one before, pixel vectors of the wrong
-// length or of another kind, an infinite Scalar value, more than kMaxRasterBytes in all.
+// length or of another kind (none for a streamed level), an infinite Scalar value held, more
+// than kMaxRasterBytes held or kMaxStreamedRasterBytes in all. Streamed levels are not read.
 IRIS_API std::string rasterMapProblem(const RasterMap& map);
 
 // ---- From host memory (a model streaming results through the API) -------------------------------
@@ -96,7 +126,9 @@ IRIS_API Expected<RasterMap> fromHostMemory(RasterKind kind, std::vector<RasterL
 // has more than one level is returned as it is. Each new pixel comes from the 2 × 2 it covers
 // (fewer at an odd edge): Scalar, the mean of its values that are not NaN (NaN when all are);
 // Label, the most frequent id (the smallest among equals); Rgba, the mean of premultiplied
-// colours, unpremultiplied and rounded.
+// colours, unpremultiplied and rounded. When the last level is streamed, the new levels of
+// over 32 MiB are streamed too (each pixel made from the finer level when it is read, by the same
+// rule) and the first one within it is made here, reading the finer levels once.
 IRIS_API RasterMap withRasterPyramid(RasterMap map, int32_t coarsest = 512);
 
 struct RasterLoadOptions {
@@ -105,6 +137,12 @@ struct RasterLoadOptions {
     // Limits below the hard ones (never above: larger values are clamped to kMaxRaster*).
     int32_t maxSide = kMaxRasterSide;
     uint64_t maxBytes = kMaxRasterBytes;
+    // A tiled or stripped TIFF whose levels need more than this decoded (all levels together)
+    // is streamed, not read into memory: its levels over streamAbove / 8 (at most 32 MiB) stay
+    // in the file and are read a region at a time when a view needs them; the smaller ones,
+    // and the coarser levels made down to 512 pixels a side when the file has none, are held.
+    // The load still reads every pixel once, to check the values and find the range.
+    uint64_t streamAbove = uint64_t(256) << 20;
 };
 
 // Reads a map, choosing the reader by the file's first bytes (never its extension):
@@ -116,6 +154,8 @@ struct RasterLoadOptions {
 //     RGB/RGBA 8-bit contiguous, or a palette → Rgba. A pyramid: the first image, then every
 //     SubIFD and further IFD, in file order, that is smaller than the last level taken and of
 //     the same kind becomes a level; others (a mask, a thumbnail of another kind) are skipped.
+//     Over options.streamAbove decoded, the file is streamed (see there): the map's large
+//     levels read from the file, which stays open, when a view needs them.
 //   NumPy .npy (versions 1.0, 2.0, 3.0): a 2-D array of <f4 >f4 <f8 >f8 (and f2), b1, i1 i2 i4
 //     i8, u1 u2 u4 u8 in either byte order, C or Fortran order → Scalar (Label with asLabels:
 //     integers 0..65535 only).
@@ -125,7 +165,7 @@ struct RasterLoadOptions {
 // over the limits (UnsupportedFormat), truncated or inconsistent data (CorruptData), an
 // infinite value (CorruptData; NaN is "no data" and fine), a Label value outside 0..65535.
 IRIS_API Expected<RasterMap> loadRasterMap(const std::string& path, const RasterLoadOptions& options = {});
-// The same over bytes already in memory; `name` stands for the file in messages.
+// The same over bytes already in memory (never streamed); `name` stands for the file in messages.
 IRIS_API Expected<RasterMap> loadRasterMapFromMemory(std::span<const uint8_t> bytes, const std::string& name,
                                                      const RasterLoadOptions& options = {});
 

@@ -8,6 +8,7 @@
 #include <cstring>
 
 #include "layers/raster_readers.h"
+#include "layers/streamed_raster.h"
 
 namespace iris {
 
@@ -76,6 +77,8 @@ Expected<RasterMap> loadRasterMap(const std::string& path, const RasterLoadOptio
     // The largest file a map within the limits can come from: an .npy of 8-byte values of
     // every pixel (twice the decoded float32 bytes), plus headers. Compressed formats are
     // smaller; a larger file is refused before it is read.
+    // A TIFF over options.streamAbove decoded is streamed: its large levels stay in the file.
+    if (auto streamed = streamTiffRaster(path, options)) return std::move(*streamed);
     const uint64_t maxFile = 2 * Limits::of(options).maxBytes + (1u << 20);
     auto bytes = readWholeFile(path, maxFile);
     if (!bytes) return bytes.error();

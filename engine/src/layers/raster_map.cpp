@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 
 #include "layers/raster_readers.h"
+#include "layers/streamed_raster.h"
 
 namespace iris {
 
@@ -62,72 +64,48 @@ uint64_t RasterMap::decodedBytes() const noexcept {
     return n * uint64_t(bytesPerPixel(kind));
 }
 
+uint64_t RasterMap::residentBytes() const noexcept {
+    uint64_t n = 0;
+    for (const RasterLevel& l : levels)
+        if (!l.streamed()) n += uint64_t(std::max(l.width, 0)) * uint64_t(std::max(l.height, 0));
+    return n * uint64_t(bytesPerPixel(kind));
+}
+
+bool RasterMap::streamed() const noexcept {
+    return std::any_of(levels.begin(), levels.end(), [](const RasterLevel& l) { return l.streamed(); });
+}
+
 RasterMap withRasterPyramid(RasterMap map, int32_t coarsest) {
     if (map.levels.size() != 1 || coarsest < 1) return map;
-    while (std::max(map.levels.back().width, map.levels.back().height) > coarsest) {
-        const RasterLevel& a = map.levels.back();
-        RasterLevel b;
-        b.width = (a.width + 1) / 2, b.height = (a.height + 1) / 2;
-        const uint64_t add = uint64_t(b.width) * uint64_t(b.height) * (map.kind == RasterKind::Label ? 2 : 4);
-        if (map.decodedBytes() + add > kMaxRasterBytes) break;
-        const size_t n = size_t(b.width) * size_t(b.height);
-        const auto forEach = [&](auto&& f) {
-            for (int32_t y = 0; y < b.height; ++y)
-                for (int32_t x = 0; x < b.width; ++x) {
-                    size_t src[4];
-                    int k = 0;
-                    for (int dy = 0; dy < 2; ++dy)
-                        for (int dx = 0; dx < 2; ++dx) {
-                            const int32_t sx = 2 * x + dx, sy = 2 * y + dy;
-                            if (sx < a.width && sy < a.height) src[k++] = size_t(sy) * size_t(a.width) + size_t(sx);
-                        }
-                    f(size_t(y) * size_t(b.width) + size_t(x), src, k);
-                }
-        };
-        switch (map.kind) {
-        case RasterKind::Scalar:
-            b.scalar.resize(n);
-            forEach([&](size_t out, const size_t* src, int k) {
-                double sum = 0;
-                int m = 0;
-                for (int i = 0; i < k; ++i)
-                    if (!std::isnan(a.scalar[src[i]])) sum += a.scalar[src[i]], ++m;
-                b.scalar[out] = m ? float(sum / m) : std::numeric_limits<float>::quiet_NaN();
-            });
-            break;
-        case RasterKind::Label:
-            b.label.resize(n);
-            forEach([&](size_t out, const size_t* src, int k) {
-                uint16_t best = 0;
-                int bestCount = 0;
-                for (int i = 0; i < k; ++i) {
-                    const uint16_t id = a.label[src[i]];
-                    int c = 0;
-                    for (int j = 0; j < k; ++j) c += a.label[src[j]] == id;
-                    if (c > bestCount || (c == bestCount && id < best)) best = id, bestCount = c;
-                }
-                b.label[out] = best;
-            });
-            break;
-        case RasterKind::Rgba:
-            b.rgba.resize(n * 4);
-            forEach([&](size_t out, const size_t* src, int k) {
-                double rgb[3] = {0, 0, 0}, alpha = 0;
-                for (int i = 0; i < k; ++i) {
-                    const uint8_t* p = &a.rgba[4 * src[i]];
-                    for (int c = 0; c < 3; ++c) rgb[c] += p[c] * (p[3] / 255.0);
-                    alpha += p[3] / 255.0;
-                }
-                uint8_t* q = &b.rgba[4 * out];
-                for (int c = 0; c < 3; ++c)
-                    q[c] = alpha > 0 ? uint8_t(std::clamp(std::floor(rgb[c] / alpha + 0.5), 0.0, 255.0)) : 0;
-                q[3] = uint8_t(std::clamp(std::floor(255.0 * alpha / k + 0.5), 0.0, 255.0));
-            });
-            break;
-        }
-        map.levels.push_back(std::move(b));
-    }
+    // A read error of a streamed level leaves the levels made so far (the map is still whole).
+    (void)extendPyramid(map, coarsest, kHeldLevelBytes);
     return map;
+}
+
+Result readRasterRegion(const RasterMap& map, int level, int32_t x, int32_t y, int32_t w, int32_t h, void* out) {
+    if (level < 0 || size_t(level) >= map.levels.size())
+        return Result(Status::InvalidArgument, "no level " + std::to_string(level) + " in a map of " +
+                                                   std::to_string(map.levels.size()));
+    const RasterLevel& l = map.levels[size_t(level)];
+    if (x < 0 || y < 0 || w <= 0 || h <= 0 || int64_t(x) + w > l.width || int64_t(y) + h > l.height)
+        return Result(Status::InvalidArgument, "a read of " + std::to_string(w) + "x" + std::to_string(h) + " at (" +
+                                                   std::to_string(x) + ", " + std::to_string(y) + ") outside level " +
+                                                   std::to_string(level) + " of " + std::to_string(l.width) + "x" +
+                                                   std::to_string(l.height));
+    if (l.streamed()) return l.source->read(x, y, w, h, out);
+    const size_t bpp = size_t(bytesPerPixel(map.kind));
+    const uint8_t* src = map.kind == RasterKind::Scalar  ? reinterpret_cast<const uint8_t*>(l.scalar.data())
+                         : map.kind == RasterKind::Label ? reinterpret_cast<const uint8_t*>(l.label.data())
+                                                         : l.rgba.data();
+    if (expectedElements(map.kind, l) != (map.kind == RasterKind::Scalar  ? l.scalar.size()
+                                          : map.kind == RasterKind::Label ? l.label.size()
+                                                                          : l.rgba.size()))
+        return Result(Status::InvalidArgument, "level " + std::to_string(level) + " does not hold its pixels");
+    auto* dst = static_cast<uint8_t*>(out);
+    for (int32_t r = 0; r < h; ++r)
+        std::memcpy(dst + size_t(r) * size_t(w) * bpp, src + (size_t(y + r) * size_t(l.width) + size_t(x)) * bpp,
+                    size_t(w) * bpp);
+    return {};
 }
 
 std::string rasterMapProblem(const RasterMap& map) {
@@ -147,8 +125,12 @@ std::string rasterMapProblem(const RasterMap& map) {
                        ") is not smaller than level " + std::to_string(i - 1) + " (" + std::to_string(p.width) + "x" +
                        std::to_string(p.height) + ")";
         }
-        const uint64_t n = expectedElements(map.kind, l);
         const size_t s = l.scalar.size(), b = l.label.size(), r = l.rgba.size();
+        if (l.streamed()) {
+            if (s || b || r) return which + " is streamed and holds pixels too";
+            continue;
+        }
+        const uint64_t n = expectedElements(map.kind, l);
         const bool sizesOk = map.kind == RasterKind::Scalar ? (s == n && b == 0 && r == 0)
                              : map.kind == RasterKind::Label ? (b == n && s == 0 && r == 0)
                                                              : (r == n && s == 0 && b == 0);
@@ -165,9 +147,13 @@ std::string rasterMapProblem(const RasterMap& map) {
                 return which + " holds an infinite value at (" + std::to_string(k % size_t(l.width)) + ", " +
                        std::to_string(k / size_t(l.width)) + ") (NaN marks no data; infinity is refused)";
     }
-    if (map.decodedBytes() > kMaxRasterBytes)
-        return "the map needs " + std::to_string(map.decodedBytes()) + " bytes decoded, over the limit of " +
+    if (map.residentBytes() > kMaxRasterBytes)
+        return "the map needs " + std::to_string(map.residentBytes()) + " bytes decoded, over the limit of " +
                std::to_string(kMaxRasterBytes);
+    if (map.decodedBytes() > kMaxStreamedRasterBytes)
+        return "the map's levels need " + std::to_string(map.decodedBytes()) +
+               " bytes decoded in all, over the limit of " + std::to_string(kMaxStreamedRasterBytes) +
+               " for a streamed map";
     return {};
 }
 
@@ -180,6 +166,15 @@ Expected<RasterMap> fromLevels(RasterKind kind, std::vector<RasterLevel> levels,
     map.title = std::move(title);
     if (std::string p = rasterMapProblem(map); !p.empty()) return Result(Status::InvalidArgument, p);
     setRange(map);
+    if (map.streamed() && kind != RasterKind::Rgba) {
+        // A host's streamed levels are read once for their range (and their values checked).
+        ValueRange range;
+        if (!std::isnan(map.minValue)) range.add(map.minValue), range.add(map.maxValue);
+        for (size_t i = 0; i < map.levels.size(); ++i)
+            if (Result r = scanLevel(kind, map.levels[i], range); !r.ok())
+                return Result(r.status(), "level " + std::to_string(i) + ": " + r.message());
+        if (!range.empty()) map.minValue = range.lo, map.maxValue = range.hi;
+    }
     return map;
 }
 

@@ -42,17 +42,25 @@ Result finishMap(RasterMap& map, const std::string& name, const std::string& tit
 // value or one beyond float32 (Scalar) and a value outside 0..65535 or not whole (Label),
 // naming the pixel. Shared by the readers whose files hold numbers (TIFF, .npy).
 Result valueProblem(RasterKind kind, double v, uint64_t x, uint64_t y, const std::string& name);
-inline Result storeValue(RasterKind kind, RasterLevel& l, uint64_t x, uint64_t y, double v, const std::string& name) {
-    const size_t i = size_t(y) * size_t(l.width) + size_t(x);
+// The same into one pixel's bytes at `dst` (a float or a uint16_t); (x, y) names it.
+inline Result storeValueTo(RasterKind kind, uint8_t* dst, uint64_t x, uint64_t y, double v, const std::string& name) {
     if (kind == RasterKind::Label) {
         if (!(v >= 0 && v <= 65535 && v == std::floor(v))) return valueProblem(kind, v, x, y, name);
-        l.label[i] = uint16_t(v);
+        const uint16_t id = uint16_t(v);
+        std::memcpy(dst, &id, 2);
     } else {
         if (std::isinf(v) || std::fabs(v) > double(std::numeric_limits<float>::max()))
             return valueProblem(kind, v, x, y, name);
-        l.scalar[i] = float(v);
+        const float f = float(v);
+        std::memcpy(dst, &f, 4);
     }
     return {};
+}
+inline Result storeValue(RasterKind kind, RasterLevel& l, uint64_t x, uint64_t y, double v, const std::string& name) {
+    const size_t i = size_t(y) * size_t(l.width) + size_t(x);
+    uint8_t* dst = kind == RasterKind::Label ? reinterpret_cast<uint8_t*>(&l.label[i])
+                                             : reinterpret_cast<uint8_t*>(&l.scalar[i]);
+    return storeValueTo(kind, dst, x, y, v, name);
 }
 
 // The readers, each over a whole file in memory. `name` names it in messages.

@@ -3,6 +3,8 @@
 // Tests of the GPU pass compare its frames to these functions.
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <limits>
 #include <numbers>
 
 #include "iris/layers.h"
@@ -112,18 +114,41 @@ size_t nearestIndex(double u, double v, int w, int h) {
     return size_t(y) * size_t(w) + size_t(x);
 }
 
+// One pixel of a level, held or streamed (a streamed level's read goes through its source's
+// block cache; a failed read is "no pixel": the reference draws nothing there).
+bool pixel(RasterKind kind, const RasterLevel& l, size_t index, void* out) {
+    const size_t bpp = kind == RasterKind::Label ? 2 : 4;
+    if (l.streamed()) {
+        const int32_t x = int32_t(index % size_t(l.width)), y = int32_t(index / size_t(l.width));
+        return l.source->read(x, y, 1, 1, out).ok();
+    }
+    const uint8_t* src = kind == RasterKind::Scalar  ? reinterpret_cast<const uint8_t*>(l.scalar.data())
+                         : kind == RasterKind::Label ? reinterpret_cast<const uint8_t*>(l.label.data())
+                                                     : l.rgba.data();
+    std::memcpy(out, src + index * bpp, bpp);
+    return true;
+}
+float scalarAt(const RasterLevel& l, size_t index) {
+    float v = std::numeric_limits<float>::quiet_NaN();
+    return pixel(RasterKind::Scalar, l, index, &v) ? v : std::numeric_limits<float>::quiet_NaN();
+}
+std::array<uint8_t, 4> rgbaAt(const RasterLevel& l, size_t index) {
+    std::array<uint8_t, 4> p{0, 0, 0, 0};
+    return pixel(RasterKind::Rgba, l, index, p.data()) ? p : std::array<uint8_t, 4>{0, 0, 0, 0};
+}
+
 std::array<uint8_t, 4> shadeScalar(const RasterMap& map, const RasterLevel& l, const LayerStyle& style, double u,
                                    double v) {
     double value;
     if (style.sampling == LayerSampling::Nearest) {
-        value = l.scalar[nearestIndex(u, v, l.width, l.height)];
+        value = scalarAt(l, nearestIndex(u, v, l.width, l.height));
         if (std::isnan(value)) return kNothing;
     } else {
         const Taps t = bilinearTaps(u, v, l.width, l.height);
         double tap[2][2];
         for (int r = 0; r < 2; ++r)
             for (int c = 0; c < 2; ++c) {
-                tap[r][c] = l.scalar[size_t(t.y[r]) * size_t(l.width) + size_t(t.x[c])];
+                tap[r][c] = scalarAt(l, size_t(t.y[r]) * size_t(l.width) + size_t(t.x[c]));
                 if (std::isnan(tap[r][c])) return kNothing;
             }
         value = (1 - t.fy) * ((1 - t.fx) * tap[0][0] + t.fx * tap[0][1]) +
@@ -138,7 +163,7 @@ std::array<uint8_t, 4> shadeScalar(const RasterMap& map, const RasterLevel& l, c
 
 std::array<uint8_t, 4> shadeRgba(const RasterLevel& l, const LayerStyle& style, double u, double v) {
     if (style.sampling == LayerSampling::Nearest) {
-        const uint8_t* p = &l.rgba[4 * nearestIndex(u, v, l.width, l.height)];
+        const std::array<uint8_t, 4> p = rgbaAt(l, nearestIndex(u, v, l.width, l.height));
         return finish({double(p[0]), double(p[1]), double(p[2]), double(p[3])}, style.opacity);
     }
     const Taps t = bilinearTaps(u, v, l.width, l.height);
@@ -146,7 +171,7 @@ std::array<uint8_t, 4> shadeRgba(const RasterLevel& l, const LayerStyle& style, 
     for (int r = 0; r < 2; ++r)
         for (int c = 0; c < 2; ++c) {
             const double w = (r ? t.fy : 1 - t.fy) * (c ? t.fx : 1 - t.fx);
-            const uint8_t* p = &l.rgba[4 * (size_t(t.y[r]) * size_t(l.width) + size_t(t.x[c]))];
+            const std::array<uint8_t, 4> p = rgbaAt(l, size_t(t.y[r]) * size_t(l.width) + size_t(t.x[c]));
             const double a = p[3] / 255.0;
             for (int ch = 0; ch < 3; ++ch) sum[size_t(ch)] += w * p[ch] * a;
             sum[3] += w * a;
@@ -156,7 +181,8 @@ std::array<uint8_t, 4> shadeRgba(const RasterLevel& l, const LayerStyle& style, 
 }
 
 std::array<uint8_t, 4> shadeLabel(const RasterLevel& l, const LayerStyle& style, double u, double v) {
-    const uint16_t id = l.label[nearestIndex(u, v, l.width, l.height)];
+    uint16_t id = 0;
+    if (!pixel(RasterKind::Label, l, nearestIndex(u, v, l.width, l.height), &id)) return kNothing;
     if (id >= style.classes.size() || !style.classes[id].visible) return kNothing;
     const Rgba8 c = style.classes[id].color;
     return finish({double(c.r), double(c.g), double(c.b), double(c.a)}, style.opacity);
@@ -179,7 +205,7 @@ std::array<uint8_t, 4> shadeLayerAt(const RasterMap& map, const Placement& place
     const size_t have = map.kind == RasterKind::Scalar ? l.scalar.size()
                         : map.kind == RasterKind::Label ? l.label.size()
                                                         : l.rgba.size() / 4;
-    if (n == 0 || have < n) return kNothing;
+    if (n == 0 || (have < n && !l.streamed())) return kNothing;
     const double u = x * l.width / l0.width, v = y * l.height / l0.height;
     switch (map.kind) {
     case RasterKind::Scalar: return shadeScalar(map, l, style, u, v);

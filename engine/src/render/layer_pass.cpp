@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <optional>
 #include <unordered_set>
 
 #include <iris_shaders/layer_float_frag.h>
@@ -59,12 +60,6 @@ Result poolOf(VkDevice dev, uint32_t sets, vk::DescriptorPool& out) {
 }
 
 } // namespace
-
-size_t LayerPass::ChunkKeyHash::operator()(const ChunkKey& k) const noexcept {
-    size_t h = std::hash<const void*>()(k.map);
-    for (int v : {k.level, k.cx, k.cy}) h = h * 1000003u ^ std::hash<int>()(v);
-    return h;
-}
 
 LayerPass::~LayerPass() {
     // The render thread waited for the device before its passes go (RenderThread::releaseGpu).
@@ -272,58 +267,141 @@ Result LayerPass::prepare(FrameContext& frame) {
     shown_.clear();
     if (snap.slide)
         for (const Engine::LayerEntry& e : *snap.layers) shown_.insert(e.map.get());
+    // The streamed chunks read since the last frame.
+    if (streamer_) {
+        std::vector<LayerStreamer::Result_> got;
+        if (streamer_->collect(got)) {
+            for (LayerStreamer::Result_& g : got) {
+                if (!g.error.ok()) {
+                    if (warnedRead_.insert(g.key.map).second)
+                        log_.warn("layers: '" + g.map->title + "': " + g.error.message() +
+                                  "; the part of the layer it holds is not drawn");
+                    failed_[g.key] = g.map;
+                } else {
+                    const ChunkKey key = g.key;
+                    ready_[key] = std::move(g);
+                }
+            }
+        } else {
+            frame.redraw = true; // the reader was handing one over: take it next frame
+        }
+    }
     if (shown_.empty()) {
         if (!chunks_.empty()) evict(frame.serial);
+        ready_.clear();
+        failed_.clear();
+        if (streamer_ && !streamer_->want({})) frame.redraw = true;
         return {};
     }
     const ViewTransform view = ViewTransform::of(frame.viewport.view, frame.viewport.width, frame.viewport.height);
     const double w = frame.viewport.width, h = frame.viewport.height;
+    std::vector<LayerStreamer::Request> wanted;
+    std::unordered_set<ChunkKey, ChunkKeyHash> needed; // streamed chunks this frame looks at
     for (const Engine::LayerEntry& e : *snap.layers) {
         if (!e.map || !e.style.visible || !(e.style.opacity > 0) || e.map->levels.empty()) continue;
         const RasterMap& map = *e.map;
         const Placement place = e.placement ? *e.placement
                                             : Placement::spanning(map.width(), map.height(), snap.slide->info.width,
                                                                   snap.slide->info.height);
-        const int k = chooseRasterLevel(map, place, frame.viewport.view.downsample);
-        const RasterLevel& lv = map.levels[size_t(k)];
-        const double sx = double(lv.width) / map.width(), sy = double(lv.height) / map.height();
-        // Target position → level-k position (screen → slide → map → level), affine.
-        bool singular = false;
-        const auto toLevel = [&](double x, double y) {
-            const auto s = view.toSlide(x, y);
-            const auto m = place.toMap(s[0], s[1]);
-            if (!m) singular = true;
-            return m ? std::array<double, 2>{(*m)[0] * sx, (*m)[1] * sy} : std::array<double, 2>{0, 0};
-        };
-        const auto o = toLevel(0, 0), ex = toLevel(1, 0), ey = toLevel(0, 1);
-        if (singular) continue;
-        const double a = ex[0] - o[0], b = ey[0] - o[0], d = ex[1] - o[1], f = ey[1] - o[1];
-        const double det = a * f - b * d;
-        if (!std::isfinite(det) || det == 0) continue;
-        // The level pixels the target covers, and the chunks that hold them.
-        double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
-        for (auto [cx, cy] : {std::array<double, 2>{0, 0}, {w, 0}, {0, h}, {w, h}}) {
-            const auto p = toLevel(cx, cy);
-            x0 = std::min(x0, p[0]), x1 = std::max(x1, p[0]), y0 = std::min(y0, p[1]), y1 = std::max(y1, p[1]);
-        }
-        x0 = std::max(x0 - 1, 0.0), y0 = std::max(y0 - 1, 0.0);
-        x1 = std::min(x1 + 1, double(lv.width)), y1 = std::min(y1 + 1, double(lv.height));
-        if (!(x1 > x0 && y1 > y0)) continue;
-        const int cx0 = int(x0) / kChunk, cy0 = int(y0) / kChunk;
-        const int cx1 = (int(std::ceil(x1)) - 1) / kChunk, cy1 = (int(std::ceil(y1)) - 1) / kChunk;
         const size_t bpt = texelBytes(map.kind);
-        const VkDeviceSize need = VkDeviceSize(cx1 - cx0 + 1) * VkDeviceSize(cy1 - cy0 + 1) *
-                                  VkDeviceSize(kChunk + 2) * VkDeviceSize(kChunk + 2) * bpt;
-        if (need > kBudgetBytes / 2) {
-            if (!warnedBudget_) {
-                warnedBudget_ = true;
-                log_.warn("layers: '" + map.title + "' needs " + std::to_string(need >> 20) + " MiB of its level " +
-                          std::to_string(k) + " for this view, more than half the layer budget (" +
-                          std::to_string(kBudgetBytes >> 20) + " MiB); it is not drawn. A map with coarser levels "
-                          "(a pyramid) is drawn at every magnification");
+        // Where level k lies under the target: the affine map target → level pixels, and the
+        // chunks the target covers (none when the placement is singular or misses the view;
+        // none, with one warning, when they are over half the budget).
+        struct Plan {
+            int k = 0;
+            double a = 0, b = 0, d = 0, f = 0, det = 0;
+            std::array<double, 2> o{}, centre{};
+            int cx0 = 0, cy0 = 0, cx1 = -1, cy1 = -1;
+        };
+        const auto planFor = [&](int k) -> std::optional<Plan> {
+            const RasterLevel& lv = map.levels[size_t(k)];
+            const double sx = double(lv.width) / map.width(), sy = double(lv.height) / map.height();
+            bool singular = false;
+            const auto toLevel = [&](double x, double y) {
+                const auto s = view.toSlide(x, y);
+                const auto m = place.toMap(s[0], s[1]);
+                if (!m) singular = true;
+                return m ? std::array<double, 2>{(*m)[0] * sx, (*m)[1] * sy} : std::array<double, 2>{0, 0};
+            };
+            Plan p;
+            p.k = k;
+            p.o = toLevel(0, 0);
+            const auto ex = toLevel(1, 0), ey = toLevel(0, 1);
+            p.centre = toLevel(w / 2, h / 2);
+            if (singular) return std::nullopt;
+            p.a = ex[0] - p.o[0], p.b = ey[0] - p.o[0], p.d = ex[1] - p.o[1], p.f = ey[1] - p.o[1];
+            p.det = p.a * p.f - p.b * p.d;
+            if (!std::isfinite(p.det) || p.det == 0) return std::nullopt;
+            double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
+            for (auto [cx, cy] : {std::array<double, 2>{0, 0}, {w, 0}, {0, h}, {w, h}}) {
+                const auto q = toLevel(cx, cy);
+                x0 = std::min(x0, q[0]), x1 = std::max(x1, q[0]), y0 = std::min(y0, q[1]), y1 = std::max(y1, q[1]);
             }
-            continue;
+            x0 = std::max(x0 - 1, 0.0), y0 = std::max(y0 - 1, 0.0);
+            x1 = std::min(x1 + 1, double(lv.width)), y1 = std::min(y1 + 1, double(lv.height));
+            if (!(x1 > x0 && y1 > y0)) return std::nullopt;
+            p.cx0 = int(x0) / kChunk, p.cy0 = int(y0) / kChunk;
+            p.cx1 = (int(std::ceil(x1)) - 1) / kChunk, p.cy1 = (int(std::ceil(y1)) - 1) / kChunk;
+            const VkDeviceSize need = VkDeviceSize(p.cx1 - p.cx0 + 1) * VkDeviceSize(p.cy1 - p.cy0 + 1) *
+                                      VkDeviceSize(kChunk + 2) * VkDeviceSize(kChunk + 2) * bpt;
+            if (need > kBudgetBytes / 2) {
+                if (!warnedBudget_) {
+                    warnedBudget_ = true;
+                    log_.warn("layers: '" + map.title + "' needs " + std::to_string(need >> 20) + " MiB of its level " +
+                              std::to_string(k) + " for this view, more than half the layer budget (" +
+                              std::to_string(kBudgetBytes >> 20) + " MiB); it is not drawn. A map with coarser levels "
+                              "(a pyramid) is drawn at every magnification");
+                }
+                return std::nullopt;
+            }
+            return p;
+        };
+        // Whether every chunk of a plan can be drawn now (streamed levels: uploaded, read, or
+        // failed); the streamed ones it still needs go into `missing`.
+        const auto whole = [&](const Plan& p, std::vector<LayerStreamer::Request>* missing) {
+            const RasterLevel& lv = map.levels[size_t(p.k)];
+            if (!lv.streamed()) return true;
+            bool all = true;
+            for (int cy = p.cy0; cy <= p.cy1; ++cy)
+                for (int cx = p.cx0; cx <= p.cx1; ++cx) {
+                    const ChunkKey key{&map, p.k, cx, cy};
+                    if (missing) needed.insert(key);
+                    if (chunks_.count(key) || ready_.count(key) || failed_.count(key)) continue;
+                    all = false;
+                    if (!missing) return false;
+                    const int ox = cx * kChunk, oy = cy * kChunk;
+                    const int tx = std::max(ox - 1, 0), ty = std::max(oy - 1, 0);
+                    missing->push_back(LayerStreamer::Request{key, e.map, tx, ty,
+                                                              std::min(ox + kChunk + 1, lv.width) - tx,
+                                                              std::min(oy + kChunk + 1, lv.height) - ty});
+                }
+            return all;
+        };
+        std::optional<Plan> plan = planFor(chooseRasterLevel(map, place, frame.viewport.view.downsample));
+        if (!plan) continue;
+        std::vector<LayerStreamer::Request> missing;
+        if (!whole(*plan, &missing)) {
+            // Nearest the view's centre first; meanwhile the finest coarser level that is whole.
+            const auto dist = [&](const LayerStreamer::Request& r) {
+                const double dx = (r.key.cx + 0.5) * kChunk - plan->centre[0], dy = (r.key.cy + 0.5) * kChunk - plan->centre[1];
+                return dx * dx + dy * dy;
+            };
+            std::stable_sort(missing.begin(), missing.end(),
+                             [&](const auto& l, const auto& r) { return dist(l) < dist(r); });
+            for (auto& m : missing) wanted.push_back(std::move(m));
+            frame.complete = false;
+            std::optional<Plan> coarser;
+            for (int j = plan->k + 1; j < int(map.levels.size()) && !coarser; ++j)
+                if (auto pj = planFor(j); pj && whole(*pj, nullptr)) coarser = pj;
+            if (!coarser) continue; // nothing of this layer is ready yet
+            plan = coarser;
+            for (int cy = plan->cy0; cy <= plan->cy1; ++cy) // keep what it draws from
+                for (int cx = plan->cx0; cx <= plan->cx1; ++cx) needed.insert(ChunkKey{&map, plan->k, cx, cy});
         }
+        const int k = plan->k;
+        const RasterLevel& lv = map.levels[size_t(k)];
+        const double a = plan->a, b = plan->b, d = plan->d, f = plan->f, det = plan->det;
+        const auto o = plan->o;
         // The palette: the colour map, or the class table (an invisible class: alpha 0).
         std::vector<uint32_t> entries;
         if (map.kind == RasterKind::Scalar) {
@@ -345,17 +423,31 @@ Result LayerPass::prepare(FrameContext& frame) {
         const double high = std::isnan(e.style.high) ? map.maxValue : e.style.high;
         const double margin = 2.0 * std::sqrt(a * a + b * b + d * d + f * f);
         const VkFormat format = formatOf(map.kind);
-        for (int cy = cy0; cy <= cy1; ++cy) {
-            for (int cx = cx0; cx <= cx1; ++cx) {
+        for (int cy = plan->cy0; cy <= plan->cy1; ++cy) {
+            for (int cx = plan->cx0; cx <= plan->cx1; ++cx) {
                 const ChunkKey key{&map, k, cx, cy};
                 auto it = chunks_.find(key);
                 if (it == chunks_.end()) {
+                    if (failed_.count(key)) continue; // could not be read: nothing to draw
                     const int ox = cx * kChunk, oy = cy * kChunk;
                     Chunk c;
                     c.map = e.map;
                     c.texX = std::max(ox - 1, 0), c.texY = std::max(oy - 1, 0);
                     c.texW = std::min(ox + kChunk + 1, lv.width) - c.texX;
                     c.texH = std::min(oy + kChunk + 1, lv.height) - c.texY;
+                    // Held: the level's own rows; streamed: the chunk the reader read.
+                    const uint8_t* src = nullptr;
+                    size_t stride = 0;
+                    auto ready = ready_.end();
+                    if (lv.streamed()) {
+                        ready = ready_.find(key);
+                        if (ready == ready_.end()) continue; // (whole() said it is there)
+                        src = ready->second.pixels.data();
+                        stride = size_t(c.texW) * bpt;
+                    } else {
+                        src = levelBytes(map.kind, lv) + (size_t(c.texY) * size_t(lv.width) + size_t(c.texX)) * bpt;
+                        stride = size_t(lv.width) * bpt;
+                    }
                     if (Result r = makeTexture(c.tex, format, uint32_t(c.texW), uint32_t(c.texH), chunkPool_.get());
                         !r.ok()) {
                         release(c.tex);
@@ -364,14 +456,14 @@ Result LayerPass::prepare(FrameContext& frame) {
                         frame.redraw = true;
                         continue;
                     }
-                    const uint8_t* src = levelBytes(map.kind, lv) + (size_t(c.texY) * size_t(lv.width) + size_t(c.texX)) * bpt;
-                    if (!stage(frame.slot, src, size_t(c.texW) * bpt, uint32_t(c.texH), size_t(lv.width) * bpt,
-                               c.tex.image.get(), uint32_t(c.texW))) {
+                    if (!stage(frame.slot, src, size_t(c.texW) * bpt, uint32_t(c.texH), stride, c.tex.image.get(),
+                               uint32_t(c.texW))) {
                         release(c.tex);
                         frame.complete = false; // this frame's uploads are spent: the next one goes on
                         frame.redraw = true;
                         continue;
                     }
+                    if (ready != ready_.end()) ready_.erase(ready); // on its way to the GPU
                     c.tex.uploaded = true;
                     residentBytes_ += c.tex.bytes;
                     it = chunks_.emplace(key, std::move(c)).first;
@@ -408,6 +500,12 @@ Result LayerPass::prepare(FrameContext& frame) {
             }
         }
     }
+    // The reader's list: this frame's missing chunks (an empty list cancels what a view that
+    // moved on no longer needs). Read chunks, and failures, that no view looks at are let go.
+    if (!wanted.empty() && !streamer_) streamer_ = std::make_unique<LayerStreamer>(wake_);
+    if (streamer_ && !streamer_->want(std::move(wanted))) frame.redraw = true;
+    std::erase_if(ready_, [&](const auto& kv) { return !needed.count(kv.first); });
+    std::erase_if(failed_, [&](const auto& kv) { return !needed.count(kv.first); });
     // Over the budget, or holding chunks of maps no longer shown: give them back now.
     bool stale = residentBytes_ > kBudgetBytes || chunks_.size() > kChunkSets / 2;
     for (auto it = chunks_.begin(); !stale && it != chunks_.end(); ++it) stale = !shown_.count(it->first.map);

@@ -10,8 +10,14 @@
 // kUploadBytesPerFrame a frame (a frame that could not take them all is incomplete and another
 // follows), and destroyed only once no frame in flight samples them. Colour maps and class
 // tables are small palette images, shared by content. Render thread only.
+//
+// A streamed level (RasterLevel::source: a large map left in its file) is never read here: its
+// missing chunks go to the LayerStreamer's thread, nearest the view's centre first, and until
+// all of them are in, the layer is drawn at the finest coarser level whose chunks are (a held
+// level always is), and the frame is incomplete. Each chunk read wakes the render thread.
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <unordered_map>
@@ -22,12 +28,15 @@
 #include "gpu/device.h"
 #include "gpu/vk_handle.h"
 #include "render/frame_pass.h"
+#include "render/layer_streamer.h"
 
 namespace iris::render {
 
 class LayerPass final : public FramePass {
 public:
-    LayerPass(gpu::Device& device, const Log& log) : device_(device), log_(log) {}
+    // `wake` bumps the shared wake counter (a streamed chunk was read).
+    LayerPass(gpu::Device& device, const Log& log, std::function<void()> wake)
+        : device_(device), log_(log), wake_(std::move(wake)) {}
     ~LayerPass() override;
     LayerPass(const LayerPass&) = delete;
     LayerPass& operator=(const LayerPass&) = delete;
@@ -47,14 +56,6 @@ public:
     size_t chunksResident() const { return chunks_.size(); }
 
 private:
-    struct ChunkKey {
-        const RasterMap* map;
-        int level, cx, cy;
-        bool operator==(const ChunkKey&) const = default;
-    };
-    struct ChunkKeyHash {
-        size_t operator()(const ChunkKey& k) const noexcept;
-    };
     // A device image with its view and descriptor set, and the frame serial that last used it.
     struct Texture {
         vk::Image image;
@@ -120,6 +121,15 @@ private:
     std::vector<Draw> draws_;
     std::unordered_set<const RasterMap*> shown_; // the maps of this frame's layers
     bool warnedBudget_ = false;
+
+    // Streamed levels: the reader (made when the first streamed level is shown), the chunks it
+    // has read that wait for their upload, and those it could not read (not drawn, and asked
+    // for again once a view no longer needs them and another does).
+    std::function<void()> wake_;
+    std::unique_ptr<LayerStreamer> streamer_;
+    std::unordered_map<ChunkKey, LayerStreamer::Result_, ChunkKeyHash> ready_;
+    std::unordered_map<ChunkKey, std::shared_ptr<const RasterMap>, ChunkKeyHash> failed_;
+    std::unordered_set<const RasterMap*> warnedRead_;
 };
 
 } // namespace iris::render

@@ -83,7 +83,7 @@ Result RenderThread::init() {
 
 Result RenderThread::initGpu() {
     VkDevice dev = device_.device();
-    passes_.emplace(device_, pipeline_, log_, tuning_.drawCovered);
+    passes_.emplace(device_, pipeline_, log_, tuning_.drawCovered, [this] { shared_.bump(); });
     if (Result r = passes_->layers.init(kFramesInFlight); !r.ok()) return r;
     if (Result r = passes_->annotation.init(kFramesInFlight); !r.ok()) return r;
     if (Result r = passes_->hud.init(kFramesInFlight); !r.ok()) return r;

@@ -166,8 +166,10 @@ private:
     // maps, label maps), annotations, HUD. Made anew with the device
     // after a loss (initGpu), in place: the HUD pass refers to the tile pass.
     struct Passes {
-        Passes(gpu::Device& device, gpu::TilePipeline& pipeline, const Log& log, bool drawCovered)
-            : tile(pipeline, drawCovered), layers(device, log), annotation(device, log), hud(device, log, tile) {}
+        Passes(gpu::Device& device, gpu::TilePipeline& pipeline, const Log& log, bool drawCovered,
+               std::function<void()> wake)
+            : tile(pipeline, drawCovered), layers(device, log, std::move(wake)), annotation(device, log),
+              hud(device, log, tile) {}
         render::TilePass tile;
         render::LayerPass layers;
         render::AnnotationPass annotation;

@@ -1,12 +1,16 @@
 #include "layersdock.h"
 
 #include <cmath>
+#include <memory>
+#include <optional>
 #include <limits>
 
 #include <QtCore/QDir>
+#include <QtCore/QFile>
 #include <QtCore/QFileInfo>
 #include <QtCore/QLocale>
 #include <QtCore/QSettings>
+#include <QtCore/QThread>
 #include <QtWidgets/QCheckBox>
 #include <QtWidgets/QColorDialog>
 #include <QtWidgets/QComboBox>
@@ -24,6 +28,7 @@
 #include <QtWidgets/QVBoxLayout>
 
 #include <iris/IrisSlideView.h>
+#include <iris/layers.h>
 
 namespace {
 
@@ -94,6 +99,7 @@ LayersDock::LayersDock(IrisSlideView *view, QWidget *parent)
     auto *body = new QWidget;
     auto *layout = new QVBoxLayout(body);
     auto *open = new QPushButton(tr("Open Layer…"));
+    m_open = open;
     open->setObjectName(QStringLiteral("openLayerButton"));
     connect(open, &QPushButton::clicked, this, &LayersDock::showOpenDialog);
     auto *openRow = new QHBoxLayout;
@@ -187,7 +193,54 @@ void LayersDock::showOpenDialog()
     if (path.isEmpty())
         return;
     settings.setValue(QStringLiteral("layers/lastDir"), QFileInfo(path).absolutePath());
-    addLayerFile(path, m_asLabels->isChecked());
+    addLayerFileInBackground(path, m_asLabels->isChecked());
+}
+
+LayersDock::~LayersDock()
+{
+    if (m_loading) {
+        m_loading->disconnect(this); // its result has no dock to go to
+        m_loading->wait();
+        delete m_loading;
+    }
+}
+
+bool LayersDock::addLayerFileInBackground(const QString &path, bool asLabels)
+{
+    if (!m_view || m_loading)
+        return false;
+    // What IrisSlideView::addLayer(path) reads, read here off the UI thread.
+    auto result = std::make_shared<std::optional<iris::Expected<iris::RasterMap>>>();
+    iris::RasterLoadOptions options;
+    options.asLabels = asLabels;
+    options.title = QFileInfo(path).fileName().toStdString();
+    const std::string file = QFile::encodeName(path).toStdString();
+    m_loading = QThread::create([result, options, file] { result->emplace(iris::loadRasterMap(file, options)); });
+    m_open->setEnabled(false);
+    m_open->setText(tr("Loading…"));
+    connect(m_loading, &QThread::finished, this, [this, result, path] {
+        m_loading->deleteLater();
+        m_loading = nullptr;
+        m_open->setEnabled(true);
+        m_open->setText(tr("Open Layer…"));
+        quint64 id = 0;
+        if (!result->has_value() || !**result) {
+            const QString why = result->has_value() ? QString::fromStdString((**result).error().message())
+                                                    : tr("%1: the load did not finish").arg(path);
+            showError(tr("Cannot open the layer"), why);
+        } else if (m_view) {
+            const QString error = firstError(m_view, this, [&] {
+                id = m_view->addLayer(std::make_shared<const iris::RasterMap>(std::move(**result).value()));
+            });
+            if (id)
+                setCurrentLayer(id);
+            else
+                showError(tr("Cannot open the layer"), error);
+        }
+        Q_EMIT layerFileAdded(id);
+    });
+    m_loading->start();
+    return true;
 }
 
 quint64 LayersDock::addLayerFile(const QString &path, bool asLabels)

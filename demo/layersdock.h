@@ -22,6 +22,7 @@ class QListWidget;
 class QPushButton;
 class QSlider;
 class QTableWidget;
+class QThread;
 class QWidget;
 QT_END_NAMESPACE
 class IrisSlideView;
@@ -36,11 +37,18 @@ public:
 
     explicit LayersDock(IrisSlideView *view, QWidget *parent = nullptr);
 
-    // Asks for a file (Open Layer…) and adds it as addLayerFile does.
+    ~LayersDock() override;
+
+    // Asks for a file (Open Layer…) and adds it as addLayerFileInBackground does.
     void showOpenDialog();
     // Adds a map file, as a label map when asLabels; the new layer becomes the current one.
     // Returns its id, or 0 after showing why in a message box.
     quint64 addLayerFile(const QString &path, bool asLabels);
+    // The same, the file read on a worker thread (a large map is streamed, and its load reads
+    // every pixel once: seconds for a map of a gigabyte): the Open button says "Loading…" and
+    // waits meanwhile, and layerFileAdded() reports the outcome. False when a load is going on.
+    bool addLayerFileInBackground(const QString &path, bool asLabels);
+    bool loading() const { return m_loading != nullptr; }
     // Asks for a LUT file (the colour map combo's "Custom LUT…") and uses it as loadColorMapFile.
     void showColorMapDialog();
     // The current layer's colour map from a LUT file; false after a message box.
@@ -65,6 +73,10 @@ public:
     QDoubleSpinBox *thresholdSpin() const { return m_threshold; }
     QComboBox *samplingCombo() const { return m_sampling; }
     QTableWidget *classTable() const { return m_classes; }
+
+Q_SIGNALS:
+    // A background load ended: the new layer's id, or 0 after the message box said why.
+    void layerFileAdded(quint64 id);
 
 private:
     void refreshList();      // the view's layers, keeping the current one
@@ -92,4 +104,6 @@ private:
     QComboBox *m_sampling;
     QTableWidget *m_classes;
     bool m_updating = false; // the controls are being set from the view: no edits back
+    QPushButton *m_open;
+    QThread *m_loading = nullptr; // the background load, waited for when the dock goes
 };

@@ -65,6 +65,7 @@ private Q_SLOTS:
     void userColorMap();
     void hostileFilesShowAMessage();
     void anotherSlideEmptiesTheList();
+    void openInTheBackground();
 
 private:
     QString path(const QString &name) const { return m_dir.filePath(name); }
@@ -277,6 +278,40 @@ void TstLayersDock::anotherSlideEmptiesTheList()
     QCOMPARE(dock()->layerList()->count(), 0);
     QVERIFY(!dock()->removeButton()->isEnabled());
     QVERIFY(!dock()->currentLayer());
+}
+
+// Open Layer…'s path: the file read on a worker thread, the button waiting meanwhile, the
+// outcome reported by layerFileAdded (a refusal after its message box).
+void TstLayersDock::openInTheBackground()
+{
+    QSignalSpy added(dock(), &LayersDock::layerFileAdded);
+    auto *open = dock()->findChild<QPushButton *>(QStringLiteral("openLayerButton"));
+    QVERIFY(open);
+    QVERIFY(dock()->addLayerFileInBackground(path(QStringLiteral("labels.png")), true));
+    QVERIFY(dock()->loading());
+    QVERIFY(!open->isEnabled());
+    // One load at a time: the second waits for the user to ask again.
+    QVERIFY(!dock()->addLayerFileInBackground(path(QStringLiteral("heat.png")), false));
+    QVERIFY(added.wait(20000));
+    const quint64 id = added.takeFirst().at(0).toULongLong();
+    QVERIFY(id);
+    QVERIFY(!dock()->loading());
+    QVERIFY(open->isEnabled());
+    QCOMPARE(dock()->currentLayer(), id);
+    QCOMPARE(dock()->layerList()->count(), 1);
+    QCOMPARE(view()->layerIds(), QList<quint64>{id});
+    QCOMPARE(view()->layer(id).kindName(), QStringLiteral("label"));
+
+    QVERIFY(dock()->addLayerFileInBackground(path(QStringLiteral("missing.tif")), false));
+    QVERIFY(added.wait(20000));
+    QCOMPARE(added.takeFirst().at(0).toULongLong(), quint64(0));
+    QMessageBox *box = nullptr;
+    QTRY_VERIFY((box = errorBox(m_main.get())));
+    QCOMPARE(box->windowTitle(), QStringLiteral("Cannot open the layer"));
+    QVERIFY2(box->text().contains(QStringLiteral("missing.tif")), qPrintable(box->text()));
+    box->close();
+    QTRY_VERIFY(!errorBox(m_main.get()));
+    QCOMPARE(view()->layerIds(), QList<quint64>{id});
 }
 
 IRIS_WIDGET_TEST_MAIN(TstLayersDock)

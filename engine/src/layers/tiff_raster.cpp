@@ -7,7 +7,9 @@
 #include <cstdarg>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <mutex>
+#include <type_traits>
 
 #include "layers/raster_readers.h"
 #include "layers/streamed_raster.h"
@@ -176,6 +178,70 @@ Dir readDir(TIFF* tif, bool asLabels) {
     return d;
 }
 
+// One row of `cols` numbers of type T in this machine's byte order to a Scalar or Label row, as
+// storeValueTo would store them, with their range added to `range`; false (and `range`
+// untouched) where a value is refused, for the caller to name it through storeValueTo. The
+// load's inner loop: a sample through Sample and a Result a pixel took most of a large map's
+// load (measured in LAYERS.md).
+template <class T>
+bool convertRow(RasterKind kind, const uint8_t* p, uint8_t* out, uint32_t cols, ValueRange* range) {
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (uint32_t c = 0; c < cols; ++c) {
+        T t;
+        std::memcpy(&t, p + size_t(c) * sizeof(T), sizeof(T));
+        const double v = double(t);
+        if (kind == RasterKind::Label) {
+            if constexpr (std::is_floating_point_v<T>) {
+                return false; // refused (floating-point labels never get here)
+            } else {
+                if constexpr (std::numeric_limits<T>::min() < 0 || sizeof(T) > 2)
+                    if (!(v >= 0 && v <= 65535)) return false;
+                const uint16_t id = uint16_t(t);
+                std::memcpy(out + size_t(c) * 2, &id, 2);
+            }
+        } else {
+            if constexpr (std::is_floating_point_v<T>) {
+                if (v != v) { // NaN: stored, not ranged
+                    const float f = float(v);
+                    std::memcpy(out + size_t(c) * 4, &f, 4);
+                    continue;
+                }
+                if (!(std::fabs(v) <= double(std::numeric_limits<float>::max()))) return false;
+            }
+            const float f = float(v);
+            std::memcpy(out + size_t(c) * 4, &f, 4);
+        }
+        lo = v < lo ? v : lo;
+        hi = v > hi ? v : hi;
+    }
+    if (range && lo <= hi) range->add(lo), range->add(hi);
+    return true;
+}
+
+// convertRow for d's samples, or false where there is none (swapped bytes, half floats, 64-bit
+// integers) or a value is refused.
+bool convertRowFast(const Dir& d, const uint8_t* p, uint8_t* out, uint32_t cols, ValueRange* range) {
+    if (d.sample.swap) return false;
+    switch (d.sample.kind) {
+    case SampleKind::Uint:
+        if (d.sample.size == 1) return convertRow<uint8_t>(d.kind, p, out, cols, range);
+        if (d.sample.size == 2) return convertRow<uint16_t>(d.kind, p, out, cols, range);
+        if (d.sample.size == 4) return convertRow<uint32_t>(d.kind, p, out, cols, range);
+        return false;
+    case SampleKind::Int:
+        if (d.sample.size == 1) return convertRow<int8_t>(d.kind, p, out, cols, range);
+        if (d.sample.size == 2) return convertRow<int16_t>(d.kind, p, out, cols, range);
+        if (d.sample.size == 4) return convertRow<int32_t>(d.kind, p, out, cols, range);
+        return false;
+    case SampleKind::Float:
+        if (d.sample.size == 4) return convertRow<float>(d.kind, p, out, cols, range);
+        if (d.sample.size == 8) return convertRow<double>(d.kind, p, out, cols, range);
+        return false;
+    case SampleKind::Bool: return false;
+    }
+    return false;
+}
+
 // Converts decoded pixels (one tile or strip) into the map's kind: `cols` × `rows` pixels of
 // `src` (rows `stride` bytes apart) to `dst` (rows `dstStride` pixels apart); (x0, y0) is where
 // they lie in the level, to name a bad value. Scalar and Label values are added to `range`.
@@ -186,6 +252,8 @@ Result convert(const Dir& d, const uint16_t* const* palette, uint8_t* dst, size_
     for (uint32_t r = 0; r < rows; ++r) {
         const uint8_t* p = src + size_t(r) * stride;
         const uint64_t y = uint64_t(y0) + r;
+        if (d.kind != RasterKind::Rgba && convertRowFast(d, p, dst + size_t(r) * dstStride * bpp, cols, range))
+            continue;
         for (uint32_t c = 0; c < cols; ++c, p += d.pixelBytes) {
             const uint64_t x = uint64_t(x0) + c;
             uint8_t* out = dst + (size_t(r) * dstStride + c) * bpp;

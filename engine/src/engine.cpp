@@ -446,7 +446,11 @@ Expected<Frame> Engine::readFrame() const {
         std::lock_guard lock(impl_->openMutex);
         if (!impl_->offscreenBound) return Result(Status::NotBound, "readFrame needs an offscreen target (bindOffscreen)");
     }
-    return impl_->render->lastFrame();
+    Expected<Frame> frame = impl_->render->lastFrame();
+    // Bound, but nothing drawn yet: with no slide open, that is why.
+    if (!frame.ok() && !impl_->shared.snapshot().slide)
+        return Result(Status::NoSlide, "No slide is open, and no frame has been rendered yet");
+    return frame;
 }
 
 Result Engine::waitForFrame(std::chrono::milliseconds timeout) {

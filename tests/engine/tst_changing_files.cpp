@@ -163,7 +163,19 @@ private slots:
             fs::remove(hit);
         } else {
             // Another file takes the name (a scanner re-exporting the slide): the open one stays.
-            const fs::path other = copyOf(*slidesDir("generic-tiff") / "boxes.tiff", "changing-other.tmp");
+            // Another slide where the test data has one, else 1 MiB that is no slide at all.
+            fs::path other;
+            if (const auto tiffs = slidesDir("generic-tiff")) {
+                other = copyOf(*tiffs / "boxes.tiff", "changing-other.tmp");
+            } else {
+                other = testOutDir() / "changing-other.tmp";
+                std::ofstream out(other, std::ios::binary | std::ios::trunc);
+                for (uint32_t i = 0; i < (1u << 20) / 4; ++i) {
+                    const uint32_t w = i * 2654435761u;
+                    out.write(reinterpret_cast<const char*>(&w), 4);
+                }
+                QVERIFY(out.good());
+            }
             fs::rename(other, hit);
         }
 

@@ -163,7 +163,8 @@ public:
     std::pair<uint32_t, uint32_t> targetSize() const;
 
     // --- output --------------------------------------------------------------------
-    // The last frame rendered into the offscreen target (RGBA8).
+    // The last frame rendered into the offscreen target (RGBA8). NotBound without an offscreen
+    // target or before the first frame; NoSlide before the first frame when no slide is open.
     Expected<Frame> readFrame() const;
     // Waits until a frame of the current view with every visible tile resident has been
     // rendered (or until timeout). Returns Timeout, NoSlide, NotBound or the engine error.

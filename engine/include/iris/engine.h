@@ -163,8 +163,7 @@ public:
     std::pair<uint32_t, uint32_t> targetSize() const;
 
     // --- output --------------------------------------------------------------------
-    // The last frame rendered into the offscreen target (RGBA8). NotBound without an offscreen
-    // target or before the first frame; NoSlide before the first frame when no slide is open.
+    // The last frame in the offscreen target (RGBA8); before the first, NoSlide or NotBound.
     Expected<Frame> readFrame() const;
     // Waits until a frame of the current view with every visible tile resident has been
     // rendered (or until timeout). Returns Timeout, NoSlide, NotBound or the engine error.

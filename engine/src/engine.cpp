@@ -316,6 +316,7 @@ Result Engine::open(const std::string& path) {
     if (impl_->generation == 0) impl_->generation = 1;
     slide->generation = impl_->generation;
     impl_->cache.dropOtherGenerations(slide->generation);
+    impl_->shared.failingTiles.clear();
     impl_->shared.clearErrorForSlide(slide->generation);
     ColorStatus colorStatus;
     const std::shared_ptr<const color::Lut3D> lut = impl_->bakeColor(&slide->info, colorSettings(), colorStatus);

@@ -576,6 +576,67 @@ private slots:
         e_->close();
     }
 
+    // Through the Engine: frames that fail for a reason that may pass (503) are drawn as the
+    // placeholder while they fail, not as the coarser level beneath (which a pathologist could
+    // take for the slide's own pixels), and the frame stays incomplete; once the server answers,
+    // the same view, unchanged, loads exactly.
+    void failingFrameDrawsPlaceholderUntilBack() {
+        std::string why;
+        auto proxy = FaultProxy::start(server_->port(), &why);
+        QVERIFY2(proxy, why.c_str());
+        const std::string url = through(*proxy, sampleUrl_);
+        e_.beginTest();
+        const iris::View view = viewWithOrigin(0, 0, 1, kW, kH);
+        auto local = render(sampleJpeg_.string(), view, &why);
+        QVERIFY2(local, why.c_str());
+        // Frame 1 of each instance passes (open reads it); every request for a later frame fails.
+        proxy->setRule({.fault = FaultProxy::Fault::Unavailable, .fromFrame = 2});
+        QVERIFY(e_->open(url).ok());
+        e_->setView(view);
+        // Tile (1, 0) of level 0 (frame 2) fails after its attempts (about 1.3 s): then a frame
+        // shows the placeholder there. Bounded.
+        const std::vector<uint8_t> ph = placeholderTile();
+        const auto showsPlaceholder = [&](const iris::Image& im) {
+            for (uint32_t y = 0; y < kTileSize; ++y)
+                for (uint32_t x = 0; x + kTileSize < kW; ++x)
+                    if (std::memcmp(pixel(im, x + kTileSize, y), ph.data() + (size_t(y) * kTileSize + x) * 4, 3) != 0)
+                        return false;
+            return true;
+        };
+        bool shown = false;
+        const auto deadline = Clock::now() + std::chrono::seconds(30);
+        while (!shown && Clock::now() < deadline) {
+            const iris::Result w = e_->waitForFrame(std::chrono::milliseconds(100));
+            QVERIFY2(!w.ok(), "a frame with tiles failing for now counted as complete");
+            auto f = e_->readFrame();
+            shown = f.ok() && showsPlaceholder(f->image);
+        }
+        QVERIFY2(shown, "no frame drew the placeholder where a tile failed for now");
+        const iris::Result err = e_->error();
+        QCOMPARE(err.status(), iris::Status::IoError);
+        QVERIFY2(err.message().find("HTTP 503") != std::string::npos, err.message().c_str());
+
+        // The server answers again: the view, unchanged, completes and equals the local frame.
+        proxy->setRule({});
+        e_->clearError();
+        iris::Result drawn(iris::Status::Timeout, "no complete frame in 60 s");
+        const auto back = Clock::now();
+        while (Clock::now() - back < std::chrono::seconds(60)) {
+            drawn = e_->waitForFrame(std::chrono::milliseconds(200));
+            if (drawn.ok()) break;
+            e_->clearError(); // a read that failed before the server was back: wait on
+        }
+        QVERIFY2(drawn.ok(), describe(drawn).c_str());
+        auto frame = e_->readFrame();
+        QVERIFY(frame.ok());
+        const DiffStats st = compareImages(frame->image, local->image);
+        QVERIFY2(st.differing == 0,
+                 saveFailureArtefacts("dicomweb.failing", frame->image, local->image, nullptr).c_str());
+        const std::string lines = e_.endTest(TestEngine::ErrorLines::Show);
+        QVERIFY2(lines.empty(), lines.c_str());
+        e_->close();
+    }
+
     // A slow server, at its slowest: it answers no frame at all while the views move. The API
     // never waits for it (the walk ends while every frame answer is still held back: had a call
     // waited, it would have waited for the proxy's 60 s hold and seen answers), and what a
@@ -645,7 +706,7 @@ private slots:
         qInfo("with the server stopped: %s", describe(err).c_str());
         QCOMPARE(err.status(), iris::Status::IoError);
         QVERIFY2(err.message().find("Cannot read frame") != std::string::npos, err.message().c_str());
-        // Still usable: frames are drawn (incomplete: the layers below show through), views move.
+        // Still usable: frames are drawn (incomplete: the failing tiles as the placeholder), views move.
         auto shown = e_->readFrame();
         QVERIFY(shown.ok());
         e_->setView(first);

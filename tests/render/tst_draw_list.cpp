@@ -206,6 +206,7 @@ private slots:
     void nothingResidentDrawsNothing();
     void allResidentCullsWhatHrCovers();
     void lrAloneIsWholeAndShows();
+    void failingTilesShowThePlaceholder();
     void cullingNeverChangesAPixel();
     void slideEdgesKeepTheirCoarseTiles();
     void instanceBudget();
@@ -444,6 +445,78 @@ void TestDrawList::lrAloneIsWholeAndShows() {
         QVERIFY(layer >= 0);
         QCOMPARE(TileKey::level(map.keyOf(layer)), 1);
     }
+}
+
+// Tiles whose read failed for now (core/failing_tiles.h) are drawn with the placeholder's atlas
+// layer where they are not resident, over what lies beneath (the LR level does not show through
+// them), and the frame stays incomplete; without the placeholder resident they are left out as
+// before, and a listed tile that is resident is drawn as itself.
+void TestDrawList::failingTilesShowThePlaceholder() {
+    const SlideInfo s = scan();
+    const Viewport vp = viewport(10000, 7000, 2);
+    const iris::TileRange hr = iris::visibleTiles(s.levels[0], vp, 0);
+    QVERIFY(hr.x1 > hr.x0 && hr.y1 > hr.y0);
+    const uint64_t ph = TileKey::make(kGen, 63, iris::kMaxTilesPerAxis - 1, iris::kMaxTilesPerAxis - 1);
+    // All of LR and the base resident; HR resident but for its first row, whose tiles failed.
+    FakeMap map;
+    map.addLevel(s, 1);
+    map.addLevel(s, 2);
+    std::unordered_set<uint64_t> failing;
+    for (int64_t ty = hr.y0; ty <= hr.y1; ++ty)
+        for (int64_t tx = hr.x0; tx <= hr.x1; ++tx) {
+            const uint64_t k = TileKey::make(kGen, 0, tx, ty);
+            if (ty == hr.y0)
+                failing.insert(k);
+            else
+                map.add(k);
+        }
+    // A listed tile that is resident after all (read since) is drawn as itself.
+    const uint64_t readSince = TileKey::make(kGen, 0, hr.x0 + 1, hr.y0 + 1);
+    failing.insert(readSince);
+    const DrawOptions withFailing{.failing = &failing, .placeholder = ph};
+
+    // The placeholder not resident yet: the failing row shows LR, as a tile merely missing does.
+    const DrawList before = build(s, vp, map, withFailing);
+    QCOMPARE(before.placeholderLayer, -1);
+    QCOMPARE(before.placeholders, 0u);
+    QVERIFY(!before.hrComplete);
+
+    map.add(ph);
+    const int phLayer = map.pin(ph);
+    const DrawList list = build(s, vp, map, withFailing);
+    QCOMPARE(list.placeholderLayer, phLayer);
+    QCOMPARE(list.placeholders, uint32_t(hr.x1 - hr.x0 + 1));
+    QVERIFY(!list.hrComplete); // the failing tiles are read again: not the complete frame
+    QVERIFY(list.lrComplete);
+    // Every pixel shows an HR tile: its own where resident, the placeholder on the failing row
+    // (LR, all resident, never shows through).
+    const std::vector<int> top = rasterise(instancesOf(list), vp.width, vp.height);
+    int placeholderPixels = 0;
+    for (uint32_t y = 0; y < vp.height; ++y)
+        for (uint32_t x = 0; x < vp.width; ++x) {
+            const int layer = top[size_t(y) * vp.width + x];
+            QVERIFY(layer >= 0);
+            const std::array<double, 2> at = {vp.view.centerX + (x + 0.5 - vp.width / 2.0) * vp.view.downsample,
+                                              vp.view.centerY + (y + 0.5 - vp.height / 2.0) * vp.view.downsample};
+            const int64_t ty = int64_t(at[1]) / iris::kTileSize;
+            if (ty == hr.y0) {
+                QCOMPARE(layer, phLayer);
+                ++placeholderPixels;
+            } else {
+                QCOMPARE(TileKey::level(map.keyOf(layer)), 0);
+                QVERIFY(map.keyOf(layer) != ph);
+            }
+        }
+    QVERIFY(placeholderPixels > 0);
+    // The read-since tile is drawn as itself; the placeholder never counts as a newest upload.
+    QVERIFY(list.levels[2].isDrawn(hr.x0 + 1, hr.y0 + 1));
+    QVERIFY(list.levels[2].layers[size_t((1) * (hr.x1 - hr.x0 + 1) + 1)] != phLayer);
+    QVERIFY(list.newestUpload < uint64_t(phLayer) + 1000); // it has the highest layer of all
+
+    // Without the list nothing changes: the row shows LR.
+    const DrawList plain = build(s, vp, map);
+    QCOMPARE(plain.placeholders, 0u);
+    for (const iris::gpu::TileInstance& t : instancesOf(plain)) QVERIFY(int(t.texel[2]) != phLayer);
 }
 
 void TestDrawList::cullingNeverChangesAPixel() {

@@ -289,6 +289,22 @@ bool BufferThread::submitNew(const Snapshot& snap) {
     // allocate() may reclaim a slot only for a tile outside the region.
     const auto inRegion = [&](uint64_t k) { return keep.count(k) != 0; };
     auto* base = static_cast<uint8_t*>(staging_.mapped);
+    if (!shared_.failingTiles.empty() && snap.slide->source->readsOverNetwork()) {
+        // A tile failed for now: the render thread draws the placeholder in its place, from a
+        // slot of its own that stays while tiles are listed (core/failing_tiles.h).
+        const uint64_t ph = placeholderKey(snap.slide->generation);
+        keep_.insert(ph);
+        if (!map.contains(ph)) {
+            const int slot = map.allocate(ph, inRegion);
+            if (slot >= 0) {
+                const uint32_t st = freeStaging_.back();
+                freeStaging_.pop_back();
+                fillFailedTilePlaceholder(base + size_t(st) * kTileBytes);
+                tx.slots.push_back(slot);
+                tx.staging.push_back(st);
+            }
+        }
+    }
     for (const TileRef& t : region) {
         if (tx.slots.size() == kTilesPerTransaction || freeStaging_.empty()) break;
         if (map.contains(t.key) || !cache_.isReady(t.key)) continue;

@@ -113,17 +113,21 @@ void LoaderPool::decode(const Snapshot& snap, Plan& plan, const TileRef& t) {
         shared_.setSlideError(snap.slide->generation, r);
         log_.error(r.message());
         if (source.readsOverNetwork() && (r.status() == Status::IoError || r.status() == Status::Timeout)) {
-            // Perhaps only for now (no connection, a timeout, a server error): no placeholder
-            // (the layers below show through), and the claim stays with the plan. The view still
-            // needs the tile, so it is asked for again at once: the source sends the request when
-            // its back-off of the server ends, and the tile waits for it like any other (a view
-            // that stays put recovers when the server is back). Only a source that still has
-            // the failure at hand leaves it failed until a later view asks again.
+            // Perhaps only for now (no connection, a timeout, a server error): the tile is not
+            // published, so it is read again, and the claim stays with the plan; meanwhile the
+            // render thread draws the placeholder where it lies (core/failing_tiles.h). The view
+            // still needs the tile, so it is asked for again at once: the source sends the
+            // request when its back-off of the server ends, and the tile waits for it like any
+            // other (a view that stays put recovers when the server is back). Only a source
+            // that still has the failure at hand leaves it failed until a later view asks again.
+            shared_.failingTiles.add(t.key);
             hold(plan, t, source.requestTile(t.level, t.tx, t.ty) ? &Plan::failed : &Plan::waiting);
+            shared_.bump(); // the buffer thread uploads the placeholder, the render thread draws it
             return;
         }
         if (!source.keepsPartialTiles(t.level)) fillFailedTilePlaceholder(buf.get());
     }
+    shared_.failingTiles.remove(t.key); // read (or failed for good: its own placeholder)
     cache_.publish(t.key, std::move(buf), failed);
     shared_.tileStages.stamp(TileStage::Decoded);
     shared_.bump(); // the buffer thread may now upload it

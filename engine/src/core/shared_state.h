@@ -15,6 +15,7 @@
 #include <mutex>
 
 #include "color/color_lut.h"
+#include "core/failing_tiles.h"
 #include "core/published.h"
 #include "core/stage_log.h"
 #include "iris/annotations.h"
@@ -108,6 +109,9 @@ public:
     // When tiles pass each stage of their way to the screen (the loaders, the buffer thread and
     // the render thread stamp it; the metrics summarise it per field). Wait-free, statistics only.
     StageLog tileStages;
+    // Tiles of a network slide whose read failed for now (core/failing_tiles.h): listed by the
+    // loaders, drawn as the placeholder by the render thread, which the buffer thread uploads.
+    FailingTiles failingTiles;
 
     // First error wins and sticks (until cleared).
     void setError(const Result& r) {

@@ -131,6 +131,9 @@ void buildDrawList(const SlideInfo& info, uint32_t generation, const Viewport& v
     }
     out.lrTiles = out.hrTiles = 0;
     out.newestUpload = 0;
+    out.placeholderLayer = -1;
+    out.placeholders = 0;
+    bool placeholderLooked = false;
     out.hasLr = out.lrComplete = out.hrComplete = false;
     if (info.levels.empty() || vp.width == 0 || vp.height == 0) return;
 
@@ -177,14 +180,23 @@ void buildDrawList(const SlideInfo& info, uint32_t generation, const Viewport& v
                     if (isLr && !tiles.isActive(key)) out.lrComplete = false;
                     continue;
                 }
-                const int layer = budget > 0 ? tiles.pin(key) : -1;
+                int layer = budget > 0 ? tiles.pin(key) : -1;
                 if (layer < 0) {
                     if (isHr) hrComplete = false;
                     if (isLr) out.lrComplete = false;
-                    continue;
+                    if (budget == 0 || !options.failing || !options.failing->count(key)) continue;
+                    // Failed for now: the placeholder (pinned once a frame) in its place.
+                    if (!placeholderLooked) {
+                        placeholderLooked = true;
+                        out.placeholderLayer = tiles.pin(options.placeholder);
+                    }
+                    if (out.placeholderLayer < 0) continue;
+                    layer = out.placeholderLayer;
+                    ++out.placeholders;
+                } else if (isHr || isLr) {
+                    out.newestUpload = std::max(out.newestUpload, tiles.uploadSeq(layer));
                 }
                 --budget;
-                if (isHr || isLr) out.newestUpload = std::max(out.newestUpload, tiles.uploadSeq(layer));
                 d.layers[size_t((ty - d.range.y0) * (d.range.x1 - d.range.x0 + 1) + (tx - d.range.x0))] = layer;
                 d.instances.push_back(instanceOf(placeTile(level, vp, tx, ty), 0, 0, layer, lod));
             }

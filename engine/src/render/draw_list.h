@@ -12,6 +12,7 @@
 
 #include <array>
 #include <cstdint>
+#include <unordered_set>
 #include <vector>
 
 #include "gpu/tile_instance.h"
@@ -44,6 +45,12 @@ struct DrawOptions {
     bool sizeMatches = true;
     // Instances the frame can hold; tiles past it are left out (and the frame is incomplete).
     uint32_t maxInstances = 16384;
+    // Tiles whose read failed for now (core/failing_tiles.h; null: none): one that is not
+    // resident is drawn with the atlas tile `placeholder` names, when that is resident, and
+    // covers what lies beneath like a drawn tile. The frame stays incomplete: the tile is read
+    // again, and the frame that shows it is the complete one.
+    const std::unordered_set<uint64_t>* failing = nullptr;
+    uint64_t placeholder = 0;
 };
 
 // One drawn level: its visible range, the atlas layer of each tile drawn (row-major over the
@@ -69,6 +76,8 @@ struct DrawList {
     bool hrComplete = false;         // every visible HR tile is drawn: the frame is complete
     uint32_t lrTiles = 0, hrTiles = 0; // visible tiles of each layer
     uint64_t newestUpload = 0;         // the highest upload sequence number among drawn LR and HR tiles
+    int32_t placeholderLayer = -1;     // the atlas layer drawn for failing tiles this frame (-1: none)
+    uint32_t placeholders = 0;         // failing tiles drawn as the placeholder
 
     uint32_t instanceCount() const;
     // The instances in painter's order (base, LR, HR) into `out`, which holds instanceCount().

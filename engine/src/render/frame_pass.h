@@ -16,6 +16,8 @@
 // snapshot and the context, so they need no synchronisation of their own.
 #pragma once
 
+#include <unordered_set>
+
 #include <cstdint>
 
 #include "core/shared_state.h"
@@ -49,6 +51,8 @@ struct FrameContext {
     bool sizeMatches = true;
     TileResidency& tiles; // the GPU tile map, pinning what this frame samples
     InstanceArena& instances;
+    // Tiles of the slide whose read failed for now (core/failing_tiles.h); null: none.
+    const std::unordered_set<uint64_t>* failing = nullptr;
     // Cleared by any pass whose content is not whole: a complete frame is what TeFOV times and
     // what waitForFrame waits for.
     bool complete = true;

@@ -544,6 +544,8 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
 
     // The passes prepare on the CPU: what each draws, in the frame slot's own buffers.
     FramePins pins(atlas_.map(), serial, &f.pinned);
+    // Tiles failing for now, drawn as the placeholder (held for this frame's preparation).
+    const std::shared_ptr<const FailingTiles::Set> failing = shared_.failingTiles.load();
     render::InstanceArena instances{static_cast<gpu::TileInstance*>(f.instances.mapped), f.instances.buffer,
                                     kMaxInstances, 0};
     render::FrameContext frame{.snap = snap,
@@ -561,7 +563,8 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
                                                         target.extent.height == snap.viewport.height
                                                   : surfacePhase_ != SurfacePhase::WaitingForWindow,
                                .tiles = pins,
-                               .instances = instances};
+                               .instances = instances,
+                               .failing = failing.get()};
     frame.viewport.width = target.extent.width;
     frame.viewport.height = target.extent.height;
     const auto passFailed = [&](render::FramePass& pass, const Result& r) {

@@ -40,8 +40,11 @@ Result TilePass::prepare(FrameContext& frame) {
         frame.complete = false; // nothing to show is not a shown view (waitForFrame needs a slide)
         return colorError;
     }
-    const DrawOptions options{
-        .drawCovered = drawCovered_, .sizeMatches = frame.sizeMatches, .maxInstances = frame.instances.remaining()};
+    const DrawOptions options{.drawCovered = drawCovered_,
+                              .sizeMatches = frame.sizeMatches,
+                              .maxInstances = frame.instances.remaining(),
+                              .failing = frame.failing,
+                              .placeholder = placeholderKey(frame.snap.slide->generation)};
     buildDrawList(frame.snap.slide->info, frame.snap.slide->generation, frame.viewport, options, frame.tiles,
                   drawList_);
     count_ = drawList_.instanceCount();
@@ -52,7 +55,7 @@ Result TilePass::prepare(FrameContext& frame) {
     uint32_t newlyShown = 0;
     for (const LevelDraw& d : drawList_.levels)
         for (const int32_t layer : d.layers) {
-            if (layer < 0) continue;
+            if (layer < 0 || layer == drawList_.placeholderLayer) continue;
             if (size_t(layer) >= shownUploads_.size()) shownUploads_.resize(size_t(layer) + 1, 0);
             const uint64_t seq = frame.tiles.uploadSeq(layer);
             if (seq != 0 && std::exchange(shownUploads_[size_t(layer)], seq) != seq) ++newlyShown;

@@ -23,6 +23,7 @@
 #include "overlay/font.h"
 #include "metrics/field_metrics.h"
 #include "render/render_thread.h"
+#include "slide/dicomweb_source.h"
 #include "slide/pyramid_source.h"
 #include "view/view_model.h"
 
@@ -301,6 +302,10 @@ Result Engine::open(const std::string& path) {
     }
     // The disk work (header parse) runs without holding any engine lock.
     Expected<std::unique_ptr<SlideSource>> src = openSlideSource(path, impl_->config.source, network);
+    // A network slide keeps compressed frames besides the decoded tiles: a share of the budget.
+    if (src)
+        if (auto* web = dynamic_cast<DicomWebSource*>(src->get()))
+            web->setFrameStoreBytes(DicomWebSource::frameStoreBytesFor(impl_->config.ramBudgetBytes));
     std::lock_guard lock(impl_->openMutex);
     if (!src) {
         close();

@@ -36,6 +36,7 @@
 #include "dicomizer.h"
 #include "fault_proxy.h"
 #include "orthanc_server.h"
+#include "slide/dicomweb_source.h"
 #include "slide/slide_source.h"
 #include "test_support.h"
 
@@ -437,6 +438,62 @@ private slots:
 
     // Broken answers for frames 2 and later (frame 1 of each instance is read at open): each a
     // clear error for the tile that needs the frame; the tiles around it still read.
+    // The frames that arrived are kept, compressed, within the store's budget: read a second
+    // time from a store that holds them they cost no request; from one that holds none (a
+    // budget of one byte) each is asked for again, and still arrives exactly. The engine gives
+    // the store 1/16 of its RAM budget, from 4 MiB to 1 GiB.
+    void frameStoreFollowsItsBudget() {
+        using iris::DicomWebSource;
+        QCOMPARE(DicomWebSource::frameStoreBytesFor(uint64_t(1) << 30), uint64_t(64) << 20);
+        QCOMPARE(DicomWebSource::frameStoreBytesFor(uint64_t(16) << 20), uint64_t(4) << 20);
+        QCOMPARE(DicomWebSource::frameStoreBytesFor(uint64_t(64) << 30), uint64_t(1) << 30);
+        std::string why;
+        auto local = openSource(sampleJpeg_.string(), {}, &why);
+        QVERIFY2(local, why.c_str());
+        auto proxy = FaultProxy::start(server_->port(), &why);
+        QVERIFY2(proxy, why.c_str());
+        const int level = 1; // 12 × 8 tiles
+        std::vector<uint8_t> ta(kTileBytes), tb(kTileBytes);
+        // Reads every tile of the level twice (hinted once, as the loaders do) and returns the
+        // frames asked for by the second pass.
+        const auto twice = [&](iris::SlideSource& web, int* second) {
+            const iris::LevelInfo& l = web.info().levels[level];
+            std::vector<iris::TileAddress> all;
+            for (int64_t ty = 0; ty < l.tilesY; ++ty)
+                for (int64_t tx = 0; tx < l.tilesX; ++tx) all.push_back({level, tx, ty});
+            web.prefetch(all, [] {});
+            for (int pass = 0; pass < 2; ++pass) {
+                if (pass == 1) proxy->resetCount();
+                for (const iris::TileAddress& a : all) {
+                    const iris::Result r = web.readTile(a.level, a.tx, a.ty, ta.data());
+                    QVERIFY2(r.ok(), describe(r).c_str());
+                    QVERIFY(local->readTile(a.level, a.tx, a.ty, tb.data()).ok());
+                    QVERIFY2(ta == tb, qPrintable(QString("tile (%1, %2) differs").arg(a.tx).arg(a.ty)));
+                }
+            }
+            *second = proxy->framesAsked();
+        };
+        int keptAsked = -1, noneAsked = -1;
+        {
+            auto web = openSource(through(*proxy, sampleUrl_), {}, &why);
+            QVERIFY2(web, why.c_str());
+            CHECKED(twice(*web, &keptAsked));
+        }
+        {
+            auto web = openSource(through(*proxy, sampleUrl_), {}, &why);
+            QVERIFY2(web, why.c_str());
+            auto* dw = dynamic_cast<DicomWebSource*>(web.get());
+            QVERIFY(dw);
+            dw->setFrameStoreBytes(1);
+            CHECKED(twice(*web, &noneAsked));
+        }
+        const int tiles = int(local->info().levels[level].tilesX * local->info().levels[level].tilesY);
+        qInfo("second pass over %d tiles: %d frames asked for with the default store, %d with a store of one byte",
+              tiles, keptAsked, noneAsked);
+        QCOMPARE(keptAsked, 0);
+        QVERIFY2(noneAsked >= tiles - 1, "frames read before were kept beyond the store's budget");
+    }
+
     // Each fault twice: for a frame read alone (a read nobody hinted), and for frames hinted
     // with their row, which go in a frame list first: the list's answer is broken too, so its
     // frames are asked for alone, and each gets its own answer and error.

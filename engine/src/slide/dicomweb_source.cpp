@@ -16,7 +16,6 @@ constexpr const char* kFrameAccept = "multipart/related; type=\"application/octe
 constexpr const char* kBulkAccept = "multipart/related; type=\"application/octet-stream\"";
 constexpr size_t kMaxMetadataBytes = size_t(512) << 20;
 constexpr size_t kMaxIccBytes = size_t(16) << 20;
-constexpr size_t kFrameBudgetBytes = size_t(64) << 20; // compressed frames kept
 constexpr int kAttempts = 3;                           // per request, when failures may pass
 constexpr size_t kMaxStreams = 64;                     // in flight over HTTP/2
 // Frames of one instance asked for in one request (…/frames/a,b,c): a server answers a list
@@ -284,16 +283,28 @@ void DicomWebSource::storeReady(FrameKey key, Frame& f, std::vector<uint8_t> byt
     evict();
 }
 
+void DicomWebSource::setFrameStoreBytes(uint64_t bytes) {
+    std::lock_guard lock(mutex_);
+    frameStoreBytes_ = bytes;
+    evict();
+}
+
+uint64_t DicomWebSource::frameStoreBytesFor(uint64_t ramBudgetBytes) {
+    return std::clamp<uint64_t>(ramBudgetBytes / 16, uint64_t(4) << 20, uint64_t(1) << 30);
+}
+
 void DicomWebSource::evict() {
-    // Oldest first; a frame the current batch wants and nobody has read yet stays.
-    for (auto it = readyLru_.end(); readyBytes_ > kFrameBudgetBytes && it != readyLru_.begin();) {
+    // Oldest first; a frame nobody has read yet stays when the current batch wants it or a
+    // reader waits for it (else a store smaller than the frames in flight would evict a frame
+    // before its reader wakes, and the reader would ask for it again, and again).
+    for (auto it = readyLru_.end(); readyBytes_ > frameStoreBytes_ && it != readyLru_.begin();) {
         --it;
         auto f = frames_.find(*it);
         if (f == frames_.end()) {
             it = readyLru_.erase(it);
             continue;
         }
-        if (f->second.wantedBy == batch_ && !f->second.consumed && batch_ != 0) continue;
+        if (!f->second.consumed && (f->second.urgent || (f->second.wantedBy == batch_ && batch_ != 0))) continue;
         readyBytes_ -= f->second.bytes.size();
         it = readyLru_.erase(it);
         frames_.erase(f);
@@ -534,6 +545,9 @@ Result DicomWebSource::readFrame(size_t instance, uint32_t frame, uint8_t* dst, 
                 bytes = f.bytes;
                 f.consumed = true;
                 readyLru_.splice(readyLru_.begin(), readyLru_, f.lru);
+                // Frames kept over the budget for their readers may go now (this one too: its
+                // bytes are copied).
+                if (readyBytes_ > frameStoreBytes_) evict();
                 break;
             }
             if (f.state == Frame::State::Failed) {

@@ -17,8 +17,9 @@
 //     kept: a list answered otherwise, or refused (400/404/…: some servers take single frames
 //     only), is asked for again one frame a request, and a server that has refused two lists and
 //     answered none is asked for single frames only from then on. Many requests are on the wire
-//     at once (net::HttpClient); the frames that arrive are kept, compressed, in a 64 MiB LRU
-//     until read.
+//     at once (net::HttpClient); the frames that arrive are kept, compressed, in an LRU of
+//     setFrameStoreBytes() (64 MiB until set; the engine gives it 1/16 of its RAM budget), so
+//     that a tile the RAM cache let go of is decoded again without a round trip.
 //   * The loaders never wait on the network (SlideSource::prefetch / requestTile): each view's
 //     tiles are requested in one batch in the loaders' priority order, and a newer batch drops
 //     what is still queued of the older one. A request that fails for a reason that may pass (no
@@ -55,6 +56,13 @@ public:
     ~DicomWebSource() override;
 
     bool readsOverNetwork() const override { return true; }
+    // The most bytes of compressed frames kept (at least one frame: the one being read, and the
+    // frames the current batch wants that no reader has taken yet, always stay).
+    static constexpr uint64_t kDefaultFrameStoreBytes = uint64_t(64) << 20;
+    void setFrameStoreBytes(uint64_t bytes);
+    // The frame store for an engine's RAM budget: 1/16 of it (compressed frames are about a
+    // tenth of the decoded tiles), from 4 MiB to 1 GiB.
+    static uint64_t frameStoreBytesFor(uint64_t ramBudgetBytes);
     void prefetch(const std::vector<TileAddress>& tiles, std::function<void()> arrived) override;
     bool requestTile(int level, int64_t tx, int64_t ty) override;
     void abandon() override;
@@ -131,6 +139,7 @@ private:
     uint64_t batch_ = 0;           // the newest prefetch batch
     std::list<FrameKey> readyLru_; // Ready frames, most recently used first
     size_t readyBytes_ = 0;
+    uint64_t frameStoreBytes_ = kDefaultFrameStoreBytes;
     bool abandoned_ = false;
     // The server as a whole (not one frame) is backed off after a failure that may pass (no
     // connection, a timeout, 408/429/5xx): until quietUntil_ no request is sent (those due are

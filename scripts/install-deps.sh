@@ -17,8 +17,9 @@ PACKAGES=(
   libdcmtk-dev libjpeg62-turbo-dev orthanc-wsi
   # DICOMweb (engine/src/slide/dicomweb_source, engine/src/net): libcurl speaks HTTP(S). Its tests
   # (tests/dicomweb) run a real Orthanc with the DICOMweb plugin, make a CA and certificates with
-  # openssl, and terminate TLS in their own proxy with libssl (Debian 12's Orthanc cannot serve HTTPS).
-  libcurl4-openssl-dev orthanc orthanc-dicomweb openssl libssl-dev
+  # openssl, and terminate TLS in their own proxy with libssl (Debian 12's Orthanc cannot serve HTTPS);
+  # nghttpx (nghttp2-proxy) puts HTTP/2 in front of it, since Orthanc speaks HTTP/1.1 only.
+  libcurl4-openssl-dev orthanc orthanc-dicomweb openssl libssl-dev nghttp2-proxy
   libfreetype-dev libfontconfig-dev fonts-dejavu-core
   xvfb xauth gnuplot-nox
   # The fuzz preset (clang, libFuzzer). lld: configuring with clang, CMake picks ld.lld as

@@ -24,6 +24,7 @@
 
 #include <chrono>
 #include <fstream>
+#include <set>
 
 #include <dcmtk/config/osconfig.h>
 
@@ -35,6 +36,7 @@
 
 #include "dicomizer.h"
 #include "fault_proxy.h"
+#include "h2_server.h"
 #include "orthanc_server.h"
 #include "slide/dicomweb_source.h"
 #include "slide/slide_source.h"
@@ -434,6 +436,45 @@ private slots:
                                 {"is not on the server", "HTTP 404"}));
         proxy.reset();
         QVERIFY(server->stop());
+    }
+
+    // HTTP/2 where the server speaks it: through nghttpx (HTTP/2 over TLS, negotiated by ALPN,
+    // in front of Orthanc) every frame request goes over HTTP/2 (the server's access log names
+    // the protocol of each), multiplexed on one or two connections where HTTP/1.1 opens up to
+    // six, and every tile equals the local series'.
+    void http2WhereTheServerSpeaksIt() {
+        const fs::path dir = outDir() / "h2";
+        QVERIFY2(makeCertificates(dir / "certs"),
+                 ("openssl failed: see " + (dir / "certs" / "openssl.log").string()).c_str());
+        std::string why;
+        auto h2 = H2Server::start(dir / "nghttpx", server_->port(), dir / "certs" / "server.crt",
+                                  dir / "certs" / "server.key", &why);
+        QVERIFY2(h2, why.c_str());
+        const std::string origin = "http://127.0.0.1:" + std::to_string(server_->port());
+        QVERIFY(sampleUrl_.rfind(origin, 0) == 0);
+        const std::string url = "https://127.0.0.1:" + std::to_string(h2->port()) + sampleUrl_.substr(origin.size());
+        iris::NetworkOptions o;
+        o.caFile = (dir / "certs" / "ca.pem").string();
+        auto web = openSource(url, o, &why);
+        QVERIFY2(web, why.c_str());
+        auto local = openSource(sampleJpeg_.string(), {}, &why);
+        QVERIFY2(local, why.c_str());
+        CHECKED(expectSameTiles(*web, *local, "over HTTP/2"));
+        web.reset();
+        int frames = 0, overH2 = 0;
+        std::set<std::string> ports;
+        for (const std::string& line : h2->accessLog()) {
+            if (line.find("/frames/") == std::string::npos) continue;
+            ++frames;
+            if (line.rfind("h2 ", 0) == 0) ++overH2;
+            const size_t a = line.find(' ') + 1;
+            ports.insert(line.substr(a, line.find(' ', a) - a));
+        }
+        qInfo("%d frame requests, %d of them over HTTP/2, on %zu connections", frames, overH2, ports.size());
+        QVERIFY2(frames > 0, "nghttpx logged no frame request");
+        QCOMPARE(overH2, frames);
+        QVERIFY2(ports.size() <= 2, "the requests were not multiplexed");
+        QVERIFY(h2->stop());
     }
 
     // Broken answers for frames 2 and later (frame 1 of each instance is read at open): each a

@@ -1,10 +1,9 @@
 // The RAM tile cache (cache/tile_cache): claims, publication, eviction within the budget, and
-// copyOut under churn. While tiles are copied out, others are evicted or dropped with their
-// generation and their buffers handed back to loaders that refill them: a copy must read the
-// tile it asked for whole, never a buffer a loader is already refilling. Two copier threads race
-// a publisher that refills recycled buffers and evicts, and a dropper; every copy must be one
-// tile's pattern whole (run under ASan and TSan too). A copy made without the cache's lock
-// (tried for issue 20) fails this unless the buffer being copied is kept from the loaders.
+// copyOut, which copies a 256 KiB tile without the cache's lock. While a copy runs, the tile may
+// be evicted or dropped with its generation and its buffer handed back: the copy must still
+// read the tile it started on, never a buffer a loader is already refilling. Two copier threads
+// race a publisher that refills recycled buffers and evicts, and a dropper; every copy must be
+// one tile's pattern whole (run under ASan and TSan too).
 #include <QtTest>
 
 #include <atomic>

@@ -1,5 +1,6 @@
 #include "cache/tile_cache.h"
 
+#include <algorithm>
 #include <cstring>
 
 #include "slide/slide_source.h"
@@ -29,7 +30,12 @@ std::unique_ptr<uint8_t[]> TileCache::acquireBuffer() {
 }
 
 void TileCache::recycleLocked(std::unique_ptr<uint8_t[]> buf) {
-    if (buf && freeBuffers_.size() < 64) freeBuffers_.push_back(std::move(buf));
+    if (!buf) return;
+    if (std::find(copying_.begin(), copying_.end(), buf.get()) != copying_.end()) {
+        orphans_.push_back(std::move(buf)); // a copy still reads it
+        return;
+    }
+    if (freeBuffers_.size() < 64) freeBuffers_.push_back(std::move(buf));
 }
 
 void TileCache::publish(uint64_t key, std::unique_ptr<uint8_t[]> pixels, bool failed) {
@@ -58,12 +64,29 @@ void TileCache::abandon(uint64_t key, std::unique_ptr<uint8_t[]> buffer) {
 }
 
 bool TileCache::copyOut(uint64_t key, uint8_t* dst, bool* failed) {
+    const uint8_t* src = nullptr;
+    {
+        std::lock_guard lock(mutex_);
+        auto it = entries_.find(key);
+        if (it == entries_.end() || !it->second.pixels) return false;
+        src = it->second.pixels.get();
+        if (failed) *failed = it->second.failed;
+        lru_.splice(lru_.begin(), lru_, it->second.lru);
+        copying_.push_back(src);
+    }
+    // The buffer stays as it is while listed in copying_: an eviction or a drop moves it to
+    // orphans_ instead of recycling it, and only recycled buffers are written (acquireBuffer).
+    std::memcpy(dst, src, kTileBytes);
     std::lock_guard lock(mutex_);
-    auto it = entries_.find(key);
-    if (it == entries_.end() || !it->second.pixels) return false;
-    std::memcpy(dst, it->second.pixels.get(), kTileBytes);
-    if (failed) *failed = it->second.failed;
-    lru_.splice(lru_.begin(), lru_, it->second.lru);
+    copying_.erase(std::find(copying_.begin(), copying_.end(), src));
+    if (std::find(copying_.begin(), copying_.end(), src) == copying_.end()) {
+        auto o = std::find_if(orphans_.begin(), orphans_.end(), [&](const auto& b) { return b.get() == src; });
+        if (o != orphans_.end()) {
+            std::unique_ptr<uint8_t[]> buf = std::move(*o);
+            orphans_.erase(o);
+            recycleLocked(std::move(buf));
+        }
+    }
     return true;
 }
 
@@ -105,7 +128,7 @@ void TileCache::dropOtherGenerations(uint32_t generation) {
 
 uint64_t TileCache::bytesUsed() const {
     std::lock_guard lock(mutex_);
-    return (readyCount_ + freeBuffers_.size()) * uint64_t(kTileBytes);
+    return (readyCount_ + freeBuffers_.size() + orphans_.size()) * uint64_t(kTileBytes);
 }
 
 } // namespace iris

@@ -25,7 +25,8 @@ public:
     void publish(uint64_t key, std::unique_ptr<uint8_t[]> pixels, bool failed);
     // Drops a claim without a result (the tile left the buffer region before it was decoded).
     void abandon(uint64_t key, std::unique_ptr<uint8_t[]> buffer);
-    // Copies a ready tile into dst; false when not ready. `failed` tells a placeholder.
+    // Copies a ready tile into dst; false when not ready. `failed` tells a placeholder. The copy
+    // runs without the cache's lock; any number of threads may copy at once.
     bool copyOut(uint64_t key, uint8_t* dst, bool* failed);
     bool isReady(uint64_t key) const;
     // Forgets every tile whose generation differs from `generation`.
@@ -53,6 +54,11 @@ private:
     std::unordered_map<uint64_t, Entry> entries_;
     std::list<uint64_t> lru_; // ready entries, most recent at the front
     std::vector<std::unique_ptr<uint8_t[]>> freeBuffers_;
+    // copyOut copies without the lock (a tile is 256 KiB: the loaders would wait on every copy):
+    // the buffers being copied from, and those an eviction or a drop let go of meanwhile, kept
+    // here, neither freed nor handed to a loader, until their copies end.
+    std::vector<const uint8_t*> copying_;
+    std::vector<std::unique_ptr<uint8_t[]>> orphans_;
     uint64_t readyCount_ = 0;
     std::atomic<uint64_t> releaseEpoch_{0}; // written under mutex_, read without it
 };

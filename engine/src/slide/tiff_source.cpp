@@ -15,6 +15,7 @@
 #include <tiffio.h>
 
 #include "slide/jp2k_decode.h"
+#include "slide/jpeg_frame_decode.h"
 #include "slide/openslide_source.h"
 
 namespace iris {
@@ -29,7 +30,14 @@ constexpr uint64_t kMaxRawTileBytes = uint64_t(64) << 20;    // a compressed til
 constexpr size_t kCacheBudgetBytes = size_t(32) << 20;       // decoded file tiles kept
 constexpr int kMaxDirectories = 4096;
 
-enum class Decoder { LibTiff, Jp2kYCbCr, Jp2kRgb };
+// LibTiff: TIFFRGBAImage, as OpenSlide 3.4.1 reads a tile. JpegYCbCr / JpegRgb: a JPEG tile read
+// raw, its directory's JPEGTables put in front, and decoded by libjpeg-turbo straight into the
+// tile's RGBA (decodeJpegFrameRgba) — the same decode libtiff's JPEG codec makes under
+// TIFFRGBAImage (islow DCT, fancy upsampling; YCbCr converted to RGB for photometric YCbCr,
+// the components taken as they are for photometric RGB), without its per-tile codec set-up,
+// its scanline copies and its packing into ABGR words (issue 20: the tile decode was twice the
+// decode floor's). A tile it cannot decode is read through TIFFRGBAImage as before.
+enum class Decoder { LibTiff, JpegYCbCr, JpegRgb, Jp2kYCbCr, Jp2kRgb };
 
 // What one TIFF directory says about itself.
 struct DirInfo {
@@ -39,6 +47,7 @@ struct DirInfo {
     uint16_t compression = 0, photometric = 0, spp = 0, bps = 0, planar = 0, orientation = 0, sampleFormat = 0;
     uint16_t extraSamples = 0;
     uint32_t tileCount = 0;
+    std::vector<uint8_t> jpegTables; // JPEGTables (JPEG compression), "" when absent
 };
 
 std::string fileNameOf(const std::string& path) {
@@ -52,6 +61,7 @@ struct TiffTileSource::Level {
     uint32_t width = 0, height = 0, tileW = 0, tileH = 0;
     uint32_t across = 0, down = 0;
     Decoder decoder = Decoder::LibTiff;
+    std::vector<uint8_t> jpegTables; // the directory's JPEGTables without their EOI (Jpeg decoders)
 };
 
 struct TiffTileSource::DecodedTile {
@@ -187,6 +197,12 @@ DirInfo readDirInfo(TIFF* tif, tdir_t index) {
     TIFFGetFieldDefaulted(tif, TIFFTAG_SAMPLEFORMAT, &d.sampleFormat);
     uint16_t* extra = nullptr;
     if (!TIFFGetField(tif, TIFFTAG_EXTRASAMPLES, &d.extraSamples, &extra)) d.extraSamples = 0;
+    if (d.compression == COMPRESSION_JPEG) {
+        uint32_t count = 0;
+        const uint8_t* tables = nullptr;
+        if (TIFFGetField(tif, TIFFTAG_JPEGTABLES, &count, &tables) && tables && count > 0 && count < (1u << 20))
+            d.jpegTables.assign(tables, tables + count);
+    }
     return d;
 }
 
@@ -248,6 +264,13 @@ bool decodable(const DirInfo& d, Decoder* decoder, std::string* why) {
         return false;
     }
     *decoder = Decoder::LibTiff;
+    // The direct JPEG decode: three 8-bit samples, interleaved, tables (if any) a whole
+    // tables-only stream (SOI … EOI).
+    const std::vector<uint8_t>& t = d.jpegTables;
+    const bool tablesOk = t.empty() || (t.size() >= 4 && t[0] == 0xFF && t[1] == 0xD8 && t[t.size() - 2] == 0xFF &&
+                                        t[t.size() - 1] == 0xD9);
+    if (d.compression == COMPRESSION_JPEG && rgb && tablesOk)
+        *decoder = d.photometric == PHOTOMETRIC_YCBCR ? Decoder::JpegYCbCr : Decoder::JpegRgb;
     return true;
 }
 
@@ -367,6 +390,8 @@ Expected<std::unique_ptr<SlideSource>> TiffTileSource::tryOpen(const std::string
             return notMine(name, "level " + std::to_string(l) + " (directory " + std::to_string(d.index) + "): " + why);
         }
         lv.dir = d.index;
+        if (lv.decoder == Decoder::JpegYCbCr || lv.decoder == Decoder::JpegRgb)
+            lv.jpegTables.assign(d.jpegTables.begin(), d.jpegTables.end() - (d.jpegTables.empty() ? 0 : 2));
         lv.width = d.width;
         lv.height = d.height;
         lv.tileW = d.tileW;
@@ -442,6 +467,37 @@ void TiffTileSource::release(size_t level, std::unique_ptr<Handle> handle) {
     pool_[level].push_back(std::move(handle));
 }
 
+bool TiffTileSource::decodeJpegTile(Handle& hd, const Level& L, uint32_t tileIndex, uint32_t w, uint32_t h, uint8_t* dst,
+                                    size_t pitch) {
+    int errorFlag = 0;
+    const uint64_t bytes = TIFFGetStrileByteCountWithErr(hd.tif, tileIndex, &errorFlag);
+    if (errorFlag || bytes < 4 || bytes > kMaxRawTileBytes || bytes > fileSize_) return false;
+    // The stream libjpeg reads: the tables (SOI, DQT, DHT…, no EOI), then the tile's own stream
+    // after its SOI; a tile with its own tables reads the same, its tables replacing ours.
+    thread_local std::vector<uint8_t> stream;
+    const size_t head = L.jpegTables.empty() ? 0 : L.jpegTables.size();
+    stream.resize(head + size_t(bytes));
+    std::memcpy(stream.data(), L.jpegTables.data(), head);
+    uint8_t* raw = stream.data() + head;
+    if (TIFFReadRawTile(hd.tif, tileIndex, raw, tmsize_t(bytes)) != tmsize_t(bytes) || !hd.lastError.empty()) return false;
+    if (raw[0] != 0xFF || raw[1] != 0xD8) return false;
+    const uint8_t* data = stream.data();
+    size_t size = stream.size();
+    if (head > 0) {
+        std::memmove(raw, raw + 2, size_t(bytes) - 2); // drop the tile's SOI: the tables' opens the stream
+        size -= 2;
+    }
+    const JpegColour colour = L.decoder == Decoder::JpegYCbCr ? JpegColour::YCbCr : JpegColour::Rgb;
+    if (w == L.tileW && h == L.tileH)
+        return decodeJpegFrameRgba(data, size, int(L.tileW), int(L.tileH), colour, dst, pitch).ok();
+    thread_local std::vector<uint8_t> full; // an edge tile: the file tile is whole, the level ends inside it
+    full.resize(size_t(L.tileW) * L.tileH * 4);
+    if (!decodeJpegFrameRgba(data, size, int(L.tileW), int(L.tileH), colour, full.data(), size_t(L.tileW) * 4).ok())
+        return false;
+    for (uint32_t y = 0; y < h; ++y) std::memcpy(dst + size_t(y) * pitch, full.data() + size_t(y) * L.tileW * 4, size_t(w) * 4);
+    return true;
+}
+
 Expected<std::shared_ptr<const TiffTileSource::DecodedTile>> TiffTileSource::fileTile(size_t level, uint32_t col,
                                                                                      uint32_t row) {
     const Level& L = levels_[level];
@@ -472,7 +528,12 @@ Expected<std::shared_ptr<const TiffTileSource::DecodedTile>> TiffTileSource::fil
                                                "': " + why);
     };
 
-    if (L.decoder == Decoder::LibTiff) {
+    bool decoded = false;
+    if (L.decoder == Decoder::JpegYCbCr || L.decoder == Decoder::JpegRgb) decoded = decodeJpegTile(*hd, L, tileIndex, w, h, tile->rgba.data(), size_t(w) * 4);
+    if (decoded) {
+        // done
+    } else if (L.decoder == Decoder::LibTiff || L.decoder == Decoder::JpegYCbCr || L.decoder == Decoder::JpegRgb) {
+        hd->lastError.clear();
         // As OpenSlide 3.4.1 reads a tile (TIFFRGBAImage, top-left orientation), except that the
         // raster is clipped to the image: a raster wider than the image makes libtiff "adapt"
         // the width and scramble the rows (SOURCES.md's warning about 3.4.1 on small levels).
@@ -562,6 +623,24 @@ Result TiffTileSource::readTile(int level, int64_t tx, int64_t ty, uint8_t* dst)
     const int64_t x0 = tx * kTileSize, y0 = ty * kTileSize;
     const int w = int(std::min<int64_t>(kTileSize, li.width - x0));
     const int h = int(std::min<int64_t>(kTileSize, li.height - y0));
+    if ((L.decoder == Decoder::JpegYCbCr || L.decoder == Decoder::JpegRgb) && L.tileW == uint32_t(kTileSize) &&
+        L.tileH == uint32_t(kTileSize)) {
+        // The file's tile grid is the engine's: file tile (tx, ty) is this tile and no other
+        // engine tile needs it, so it is decoded straight into dst, past the file-tile cache and
+        // its copy (issue 20). A tile that does not decode so takes the way below.
+        Result error;
+        if (std::unique_ptr<Handle> hd = acquire(size_t(level), &error)) {
+            hd->lastError.clear();
+            const bool ok = decodeJpegTile(*hd, L, uint32_t(ty) * L.across + uint32_t(tx), uint32_t(w), uint32_t(h), dst,
+                                           size_t(kTileSize) * 4);
+            hd->lastError.clear();
+            release(size_t(level), std::move(hd));
+            if (ok) {
+                padTileEdges(dst, w, h);
+                return {};
+            }
+        }
+    }
     const uint32_t col0 = uint32_t(x0 / L.tileW), col1 = uint32_t((x0 + w - 1) / L.tileW);
     const uint32_t row0 = uint32_t(y0 / L.tileH), row1 = uint32_t((y0 + h - 1) / L.tileH);
     for (uint32_t row = row0; row <= row1; ++row) {

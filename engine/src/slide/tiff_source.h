@@ -59,6 +59,11 @@ private:
     std::unique_ptr<Handle> acquire(size_t level, Result* error);
     void release(size_t level, std::unique_ptr<Handle> handle);
     Expected<std::shared_ptr<const DecodedTile>> fileTile(size_t level, uint32_t col, uint32_t row);
+    // A JPEG level's tile through libjpeg-turbo directly (Decoder::JpegYCbCr/JpegRgb): its
+    // top-left w × h pixels (the part inside the level) into dst, rows `pitch` bytes apart;
+    // false when it cannot (the caller then reads it through TIFFRGBAImage).
+    bool decodeJpegTile(Handle& hd, const Level& level, uint32_t tileIndex, uint32_t w, uint32_t h, uint8_t* dst,
+                        size_t pitch);
 
     std::unique_ptr<SlideSource> meta_; // the OpenSlide reader: associated images
     SlideInfo info_;                    // OpenSlide's, plus the ICC profile OpenSlide 3.4 does not read

@@ -118,6 +118,12 @@ private slots:
             QVERIFY(t->tileResolve == T::TileResolve::Compute);
             QVERIFY(t->colorLookup == T::ColorLookup::Sampler);
         }
+        {
+            ScopedEnvironment env(std::map<std::string, std::string>{{"IRIS_MIP_SCHEDULE", "host"}});
+            auto t = iris::tuningFromEnvironment();
+            QVERIFY(t.ok());
+            QVERIFY(t->mipSchedule == T::MipSchedule::Host);
+        }
     }
 
     void unsetOrEmptyKeepsTheBase() {
@@ -177,7 +183,7 @@ private slots:
             schedule = plain->device().mipSchedule;
             device = plain->device().name;
         }
-        QVERIFY(schedule == "wide" || schedule == "serial");
+        QVERIFY(schedule == "wide" || schedule == "serial" || schedule == "host");
         ScopedEnvironment env({{"IRIS_MIP_SCHEDULE", schedule == "wide" ? "serial" : "wide"},
                                {"IRIS_DEVICE", "no device is called this"},
                                {"IRIS_QUEUES", "bogus"},

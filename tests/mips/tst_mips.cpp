@@ -1,7 +1,8 @@
 // mips.enhancement (issue 6): the single-dispatch mip reduction against its CPU reference
 // (engine/src/gpu/mip_kernel.cpp, compiled into this test). CTest runs it once per schedule
 // (IRIS_MIP_SCHEDULE=wide: shaders/mip_reduce.comp, 16 workgroups per tile; =serial:
-// shaders/mip_reduce_serial.comp), and the test checks the engine really uses that schedule.
+// shaders/mip_reduce_serial.comp; =host: the buffer thread's mipkernel::reduceChain8, uploaded
+// with the base level), and the test checks the engine really uses that schedule.
 //
 // Reading GPU mips back. There is no engine hook; instead a slide whose only level is level 0
 // (synthetic:512x512, and CMU-1-Small-Region.svs, both single-level) is rendered at downsample
@@ -10,7 +11,7 @@
 // level-0 tile, byte for byte (linear filtering with zero weights). Only tiles wholly inside
 // the slide are compared (edge tiles hold padding).
 //
-// Cases: GPU = CPU reference within 1/255 at every level 1..8, enhancement on and off, on
+// Cases: GPU = CPU reference within 1/255 at every level 1..8 (the host schedule: equal), enhancement on and off, on
 // synthetic and real tiles; enhancement off = an independent area average within 1/255; a
 // flat tile stays flat; a tile's mips do not depend on its neighbours; sharpness on tissue at
 // downsample 8 (mean squared Laplacian of luma) and a step edge's overshoot within λ/4.
@@ -151,7 +152,11 @@ class TestMips : public QObject {
             qInfo("%s enhance=%d level %d: %d tiles, max |GPU - CPU| = %d%s", path.c_str(), int(enhance), k, compared,
                   worst, enhance ? "" : qPrintable(QString(", max |GPU - area average| = %1").arg(worstArea)));
             QVERIFY(compared > 0);
-            QVERIFY2(worst <= 1, qPrintable(QString("level %1: GPU differs from the CPU reference by %2").arg(k).arg(worst)));
+            // The shaders' float steps may round a value the other way; the host schedule runs the
+            // reference's own expressions, so its levels are the reference's bytes.
+            const int allowed = engine_->device().mipSchedule == "host" ? 0 : 1;
+            QVERIFY2(worst <= allowed,
+                     qPrintable(QString("level %1: GPU differs from the CPU reference by %2").arg(k).arg(worst)));
             QVERIFY2(worstArea <= 1, qPrintable(QString("level %1: not the area average (%2)").arg(k).arg(worstArea)));
         }
     }

@@ -424,8 +424,8 @@ void printTable(const SizeResult& r) {
     const double hr = quartiles(r.hrTefov).median;
     std::printf("  HR TeFOV vs OpenSlide: %.3f×   vs decode floor: %.3f×\n", hr / quartiles(r.osr.ms).median,
                 hr / quartiles(r.floor.ms).median);
-    std::printf("  mip pass (%s schedule, GPU timestamps): %.2f us per tile = %.1f%% of the HR time per tile\n",
-                r.mipSchedule.c_str(), r.mipUsPerTile,
+    std::printf("  mip pass (%s schedule, %s): %.2f us per tile = %.1f%% of the HR time per tile\n",
+                r.mipSchedule.c_str(), r.mipSchedule == "host" ? "buffer thread's clock" : "GPU timestamps", r.mipUsPerTile,
                 100.0 * r.mipUsPerTile / quartiles(r.hrTpt).median);
     // Where a field's time goes: each stage's events from the move to HR completion.
     const auto rows = stageTimeline(r.timed);

@@ -22,7 +22,7 @@ inline constexpr const char* kTuningEnvironmentHelp =
     "\n\nEnvironment (EngineTuning, see iris/environment.h):\n"
     "  IRIS_PACE_FRAMES=0|1           frame pacing off/on (default: on for CPU devices)\n"
     "  IRIS_DRAW_COVERED=0|1          draw tiles hidden under finer ones\n"
-    "  IRIS_MIP_SCHEDULE=wide|serial  mip compute schedule (default: by device type)\n"
+    "  IRIS_MIP_SCHEDULE=wide|serial|host  who makes the mips (default: by device type)\n"
     "  IRIS_DEVICE=TEXT               use the Vulkan device whose name contains TEXT\n"
     "  IRIS_QUEUES=single|auto        every role on the graphics queue\n"
     "  IRIS_TILE_RESOLVE=auto|quads|compute  tiles as quads, or resolved per pixel\n"

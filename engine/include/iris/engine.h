@@ -36,10 +36,12 @@ struct EngineTuning {
     // Draw coarser tiles also where resident finer tiles cover them completely (the frame is
     // the same; it only costs fill). For tests and benchmarks of the culling.
     bool drawCovered = false;
+    // Who makes the tiles' mip levels (the same kernel each way: docs/ENHANCEMENT.md).
     enum class MipSchedule {
-        Auto,   // Serial for CPU devices, Wide otherwise (and Serial where shared memory is short)
-        Wide,   // 16 workgroups per tile
-        Serial, // one workgroup per tile
+        Auto,   // Host for CPU devices, Wide otherwise (and Serial where shared memory is short)
+        Wide,   // a compute dispatch, 16 workgroups per tile
+        Serial, // a compute dispatch, one workgroup per tile
+        Host,   // the buffer thread, on the CPU, uploading them with the base level (no dispatch)
     };
     MipSchedule mipSchedule = MipSchedule::Auto;
     // Use only a Vulkan device whose name contains this (empty: the best one by type).

@@ -6,7 +6,7 @@
 //
 //   IRIS_PACE_FRAMES=0|1          tuning.pacing = Off | On
 //   IRIS_DRAW_COVERED=0|1         tuning.drawCovered
-//   IRIS_MIP_SCHEDULE=wide|serial tuning.mipSchedule = Wide | Serial
+//   IRIS_MIP_SCHEDULE=wide|serial|host  tuning.mipSchedule = Wide | Serial | Host
 //   IRIS_DEVICE=TEXT              tuning.deviceName (a part of the Vulkan device's name)
 //   IRIS_QUEUES=single|auto       tuning.singleQueue = true | false
 //   IRIS_TILE_RESOLVE=auto|quads|compute  tuning.tileResolve = Auto | Quads | Compute

@@ -411,8 +411,9 @@ struct EngineMetrics {
     uint64_t frames = 0;
     uint64_t tilesBuffered = 0;    // since create()
     uint64_t bytesBuffered = 0;
-    double mipGpuMs = 0;           // GPU time of the mip (reduction-enhancement) dispatches, summed
-    uint64_t mipTiles = 0;         // tiles those dispatches covered (0: no timestamps on the compute queue)
+    double mipGpuMs = 0;           // GPU time of the mip (reduction-enhancement) dispatches, summed; under
+                                   // the host schedule the buffer thread's time making the levels
+    uint64_t mipTiles = 0;         // tiles those covered (0: no timestamps on the compute queue)
     FrameStats lastFrame;
     std::vector<FieldStats> fields; // completed or superseded field moves, oldest first (last 4096)
     uint32_t tileReadsInProgress = 0; // tiles the loader threads are reading and decoding now
@@ -425,7 +426,7 @@ struct DeviceInfo {
     uint32_t computeFamily = 0;
     uint32_t transferFamily = 0;
     uint32_t atlasSlots = 0;     // tile slots the VRAM budget bought
-    std::string mipSchedule;     // "wide" (16 workgroups per tile, GPUs) or "serial" (one, CPU devices)
+    std::string mipSchedule;     // "wide" (16 workgroups per tile, GPUs), "serial" (one) or "host" (the CPU, CPU devices)
     uint32_t recoveries = 0;     // lost devices the engine recreated since create() (Engine::injectFault)
     bool lost = false;           // the device is lost now and not yet recreated
 };

@@ -1,7 +1,10 @@
 #include "buffer/buffer_thread.h"
 
 #include <algorithm>
+#include <chrono>
 #include <unordered_set>
+
+#include "gpu/mip_kernel.h"
 
 namespace iris {
 
@@ -26,7 +29,12 @@ Result BufferThread::init() {
     transferFamily_ = device_.family(Role::Transfer);
     computeFamily_ = device_.family(Role::Compute);
     graphicsFamily_ = device_.family(Role::Graphics);
-    separateCopy_ = transferFamily_ != computeFamily_;
+    // The host schedule uploads every level with one copy and dispatches nothing, so its copy
+    // goes on the compute queue with the rest of the transaction.
+    hostMips_ = mips_.schedule() == gpu::MipPipeline::Schedule::Host;
+    separateCopy_ = transferFamily_ != computeFamily_ && !hostMips_;
+    stagingStride_ = hostMips_ ? (VkDeviceSize(kTileBytes) + gpu::mipkernel::kChainBytes + 255) / 256 * 256
+                               : VkDeviceSize(kTileBytes);
     const auto makePool = [&](uint32_t family, vk::CommandPool& pool) -> Result {
         const VkCommandPoolCreateInfo pci{.sType = VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO,
                                           .pNext = nullptr,
@@ -50,15 +58,18 @@ Result BufferThread::init() {
         if (Result r = makePool(transferFamily_, copyPool_); !r.ok()) return r;
         if (Result r = makeTimeline(copyTimeline_); !r.ok()) return r;
     }
-    if (Result r = vk::createTimestampPool(device_.physical(), dev, computeFamily_, 2 * kMaxTransactions,
-                                           *mipTimestamps_.replace(dev), timestampPeriodNs_);
-        !r.ok())
-        return r;
+    if (!hostMips_)
+        if (Result r = vk::createTimestampPool(device_.physical(), dev, computeFamily_, 2 * kMaxTransactions,
+                                               *mipTimestamps_.replace(dev), timestampPeriodNs_);
+            !r.ok())
+            return r;
     handover_.needed = computeFamily_ != graphicsFamily_;
     handover_.srcFamily = computeFamily_;
     handover_.uploadTimeline = timeline_.get();
-    if (Result r = vk::createMappedBuffer(device_.physical(), dev, VkDeviceSize(kStagingTiles) * kTileBytes,
-                                          VK_BUFFER_USAGE_TRANSFER_SRC_BIT, /*preferCached=*/false, staging_);
+    // The host schedule reads each base level back from staging to make its levels: cached
+    // memory, where write-combined memory would make every read an uncached one.
+    if (Result r = vk::createMappedBuffer(device_.physical(), dev, VkDeviceSize(kStagingTiles) * stagingStride_,
+                                          VK_BUFFER_USAGE_TRANSFER_SRC_BIT, /*preferCached=*/hostMips_, staging_);
         !r.ok())
         return r;
     for (uint32_t i = kStagingTiles; i-- > 0;) freeStaging_.push_back(i);
@@ -299,7 +310,8 @@ bool BufferThread::submitNew(const Snapshot& snap) {
             if (slot >= 0) {
                 const uint32_t st = freeStaging_.back();
                 freeStaging_.pop_back();
-                fillFailedTilePlaceholder(base + size_t(st) * kTileBytes);
+                fillFailedTilePlaceholder(base + size_t(st) * stagingStride_);
+                if (hostMips_) makeHostMips(base + size_t(st) * stagingStride_, snap.enhance);
                 tx.slots.push_back(slot);
                 tx.staging.push_back(st);
             }
@@ -315,11 +327,12 @@ bool BufferThread::submitNew(const Snapshot& snap) {
         }
         const uint32_t st = freeStaging_.back();
         bool failed = false;
-        if (!cache_.copyOut(t.key, base + size_t(st) * kTileBytes, &failed)) {
+        if (!cache_.copyOut(t.key, base + size_t(st) * stagingStride_, &failed)) {
             map.abandon(slot); // evicted from RAM meanwhile; a loader will decode it again
             continue;
         }
         freeStaging_.pop_back();
+        if (hostMips_) makeHostMips(base + size_t(st) * stagingStride_, snap.enhance);
         shared_.tileStages.stamp(TileStage::Staged);
         tx.slots.push_back(slot);
         tx.staging.push_back(st);
@@ -328,6 +341,10 @@ bool BufferThread::submitNew(const Snapshot& snap) {
     if (map.takeReclaimAborted()) shared_.bump();
     if (tx.slots.empty()) return false;
     tx.enhance = snap.enhance;
+    if (Result r = vk::flush(device_.device(), staging_); !r.ok()) { // non-coherent memory only
+        shared_.setError(r);
+        log_.error(r.message());
+    }
     if (Result r = record(tx); !r.ok()) {
         shared_.setError(r);
         log_.error(r.message());
@@ -352,6 +369,14 @@ bool BufferThread::submitNew(const Snapshot& snap) {
     submittedValue_ = tx.signalValue;
     shared_.tileStages.stamp(TileStage::Submitted, uint32_t(tx.slots.size()));
     return true;
+}
+
+void BufferThread::makeHostMips(uint8_t* tile, bool enhance) {
+    const auto t0 = std::chrono::steady_clock::now();
+    gpu::mipkernel::reduceChain8(tile, tile + kTileBytes, enhance);
+    const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count();
+    counters_.mipNs.fetch_add(uint64_t(ns), std::memory_order_relaxed);
+    counters_.mipTiles.fetch_add(1, std::memory_order_relaxed);
 }
 
 Result BufferThread::submit(Transaction& tx) {
@@ -412,17 +437,23 @@ Result BufferThread::record(Transaction& t) {
     std::vector<VkImageMemoryBarrier2> b;
     b.reserve(2 * n);
 
-    std::vector<VkBufferImageCopy> copies(n);
-    for (uint32_t i = 0; i < n; ++i) {
-        copies[i] = VkBufferImageCopy{
-            .bufferOffset = VkDeviceSize(t.staging[i]) * kTileBytes,
-            .bufferRowLength = 0,
-            .bufferImageHeight = 0,
-            .imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, uint32_t(t.slots[i]), 1},
-            .imageOffset = {0, 0, 0},
-            .imageExtent = {uint32_t(kTileSize), uint32_t(kTileSize), 1},
-        };
-    }
+    // The base level of each tile; under the host schedule also its 8 levels, packed after it.
+    const uint32_t levels = hostMips_ ? gpu::kTileMipLevels : 1;
+    std::vector<VkBufferImageCopy> copies;
+    copies.reserve(size_t(n) * levels);
+    for (uint32_t i = 0; i < n; ++i)
+        for (uint32_t m = 0; m < levels; ++m) {
+            const uint32_t side = uint32_t(kTileSize) >> m;
+            copies.push_back(VkBufferImageCopy{
+                .bufferOffset = VkDeviceSize(t.staging[i]) * stagingStride_ +
+                                (m == 0 ? 0 : VkDeviceSize(kTileBytes) + gpu::mipkernel::chainOffset(int(m))),
+                .bufferRowLength = 0,
+                .bufferImageHeight = 0,
+                .imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, m, uint32_t(t.slots[i]), 1},
+                .imageOffset = {0, 0, 0},
+                .imageExtent = {side, side, 1},
+            });
+        }
     // A reclaimed slot's old content is discarded (oldLayout UNDEFINED), which also lets the
     // uploading queue family take it without an ownership transfer back from graphics. Frames
     // that sampled it have completed (the tile map reclaims only unpinned slots, and frames
@@ -435,7 +466,8 @@ Result BufferThread::record(Transaction& t) {
                                          VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
                                          VK_IMAGE_LAYOUT_GENERAL, base(s)));
         vk::pipelineBarrier(t.copyCmd, b.data(), n);
-        vkCmdCopyBufferToImage(t.copyCmd, staging_.buffer, img, VK_IMAGE_LAYOUT_GENERAL, n, copies.data());
+        vkCmdCopyBufferToImage(t.copyCmd, staging_.buffer, img, VK_IMAGE_LAYOUT_GENERAL, uint32_t(copies.size()),
+                               copies.data());
         b.clear();
         for (int s : t.slots) // release: dst stage/access NONE (the acquire supplies them)
             b.push_back(ownership(img, kCopy, VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_NONE, VK_ACCESS_2_NONE,
@@ -458,18 +490,24 @@ Result BufferThread::record(Transaction& t) {
         }
         vk::pipelineBarrier(cmd, b.data(), uint32_t(b.size()));
     } else {
+        // After the last frames that sampled the slot (on this queue when it also draws; else
+        // their fences ordered them already, as for the transfer queue above).
+        const VkPipelineStageFlags2 after = C == G ? kFragment : VK_PIPELINE_STAGE_2_NONE;
         for (int s : t.slots)
-            b.push_back(vk::imageBarrier(img, kFragment, VK_ACCESS_2_NONE, kCopy | kCompute,
-                                         VK_ACCESS_2_TRANSFER_WRITE_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+            b.push_back(vk::imageBarrier(img, after, VK_ACCESS_2_NONE, hostMips_ ? kCopy : kCopy | kCompute,
+                                         hostMips_ ? VK_ACCESS_2_TRANSFER_WRITE_BIT
+                                                   : VK_ACCESS_2_TRANSFER_WRITE_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
                                          VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL, all(s)));
         vk::pipelineBarrier(cmd, b.data(), n);
-        vkCmdCopyBufferToImage(cmd, staging_.buffer, img, VK_IMAGE_LAYOUT_GENERAL, n, copies.data());
+        vkCmdCopyBufferToImage(cmd, staging_.buffer, img, VK_IMAGE_LAYOUT_GENERAL, uint32_t(copies.size()), copies.data());
         b.clear();
-        for (int s : t.slots)
-            b.push_back(vk::imageBarrier(img, kCopy, VK_ACCESS_2_TRANSFER_WRITE_BIT, kCompute,
-                                         VK_ACCESS_2_SHADER_STORAGE_READ_BIT, VK_IMAGE_LAYOUT_GENERAL,
-                                         VK_IMAGE_LAYOUT_GENERAL, base(s)));
-        vk::pipelineBarrier(cmd, b.data(), n);
+        if (!hostMips_) {
+            for (int s : t.slots)
+                b.push_back(vk::imageBarrier(img, kCopy, VK_ACCESS_2_TRANSFER_WRITE_BIT, kCompute,
+                                             VK_ACCESS_2_SHADER_STORAGE_READ_BIT, VK_IMAGE_LAYOUT_GENERAL,
+                                             VK_IMAGE_LAYOUT_GENERAL, base(s)));
+            vk::pipelineBarrier(cmd, b.data(), n);
+        }
     }
     const uint32_t q = uint32_t(&t - txns_.data()) * 2;
     if (mipTimestamps_) {
@@ -477,7 +515,7 @@ Result BufferThread::record(Transaction& t) {
         // Both stamps bracket only the dispatch: the first waits for the copy above to finish.
         vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, mipTimestamps_.get(), q);
     }
-    mips_.record(cmd, t.slots.data(), n, t.enhance);
+    if (!hostMips_) mips_.record(cmd, t.slots.data(), n, t.enhance);
     if (mipTimestamps_) vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, mipTimestamps_.get(), q + 1);
     b.clear();
     for (int s : t.slots) {

@@ -5,6 +5,9 @@
 // transactions are in flight; completion is read from the upload timeline semaphore without
 // waiting, and only then are the tiles handed to rendering.
 //
+// Under the host mip schedule (CPU devices) this thread makes a tile's levels itself while it
+// stages it, and the transaction is one copy of all nine levels on the compute queue.
+//
 // Queues: the copy runs on the transfer queue, the mip dispatch on the compute queue, drawing
 // on the graphics queue. Where those families differ, each crossing is a matched release /
 // acquire ownership-transfer pair with a semaphore between: transfer → compute inside the
@@ -65,6 +68,8 @@ private:
     bool pollCompleted();
     bool submitNew(const Snapshot& snap);
     Result record(Transaction& t);
+    // The host mip schedule: levels 1..8 of the staged tile at `tile`, packed after it.
+    void makeHostMips(uint8_t* tile, bool enhance);
     Result submit(Transaction& t);
 
     SharedState& shared_;
@@ -94,6 +99,8 @@ private:
     vk::QueryPool mipTimestamps_; // 2 per transaction, around the mip dispatch
     double timestampPeriodNs_ = 0;
     bool separateCopy_ = false;
+    bool hostMips_ = false;                 // MipPipeline::Schedule::Host: levels made here, uploaded by copy
+    VkDeviceSize stagingStride_ = kTileBytes; // one tile's staging (with its levels under the host schedule)
     uint32_t transferFamily_ = 0, computeFamily_ = 0, graphicsFamily_ = 0;
     uint64_t nextValue_ = 0;
     uint64_t submittedValue_ = 0; // the last timeline value a successful submission will signal

@@ -41,7 +41,7 @@ Expected<EngineTuning> tuningFromEnvironment(EngineTuning base) {
     if (Result r = pick<Pacing>("IRIS_PACE_FRAMES", {{"0", Pacing::Off}, {"1", Pacing::On}}, base.pacing); !r.ok())
         return r;
     if (Result r = pick<bool>("IRIS_DRAW_COVERED", {{"0", false}, {"1", true}}, base.drawCovered); !r.ok()) return r;
-    if (Result r = pick<Schedule>("IRIS_MIP_SCHEDULE", {{"wide", Schedule::Wide}, {"serial", Schedule::Serial}},
+    if (Result r = pick<Schedule>("IRIS_MIP_SCHEDULE", {{"wide", Schedule::Wide}, {"serial", Schedule::Serial}, {"host", Schedule::Host}},
                                   base.mipSchedule);
         !r.ok())
         return r;

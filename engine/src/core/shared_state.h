@@ -65,7 +65,7 @@ struct Snapshot {
 struct UploadCounters {
     std::atomic<uint64_t> tiles{0};
     std::atomic<uint64_t> bytes{0};
-    std::atomic<uint64_t> mipNs{0};    // GPU time of the mip dispatches (timestamps), summed
+    std::atomic<uint64_t> mipNs{0};    // GPU time of the mip dispatches (timestamps), or host time (host schedule), summed
     std::atomic<uint64_t> mipTiles{0}; // tiles those dispatches covered
 };
 

@@ -44,4 +44,110 @@ std::vector<uint8_t> reduceLevel8(const uint8_t* tile, int level, bool enhance, 
     return out;
 }
 
+namespace {
+
+// The 8-bit store of one value in [0, 1]: std::lround(v · 255), as reduceLevel8 does. Rounding
+// half away from zero is written out (trunc, then up when the fraction is at least one half:
+// x − trunc(x) is exact in float), which vectorises where a call to lround does not.
+inline uint8_t store8(float v) {
+    const float x = v * 255.0f;
+    const int t = int(x);
+    return uint8_t(t + ((x - float(t)) >= 0.5f ? 1 : 0));
+}
+
+// Row y of the horizontal (1 2 1) pass over block sums `s` (rows of `row` values, RGBA
+// interleaved), the index clamped at both ends: at x = 0 it is 3·S0 + S1.
+void blurRow(const uint32_t* s, size_t row, int y, uint32_t* o) {
+    const uint32_t* r = s + size_t(y) * row;
+    if (row == 4) {
+        for (int c = 0; c < 4; ++c) o[c] = 4 * r[c];
+        return;
+    }
+    for (int c = 0; c < 4; ++c) o[c] = 3 * r[c] + r[4 + c];
+    for (size_t i = 4; i + 4 < row; ++i) o[i] = r[i - 4] + 2 * r[i] + r[i + 4];
+    for (size_t c = 0; c < 4; ++c) o[row - 4 + c] = r[row - 8 + c] + 3 * r[row - 4 + c];
+}
+
+// One level from its block sums `s` (n×n RGBA, row-major) into `out`; `ring` is scratch for
+// three rows. Every value goes through reduceLevel's float expressions, in its order. Row by
+// row (the vertical pass over a ring of three horizontally blurred rows), so that a level's
+// passes stay in the cache, and as plain array loops, so that the compiler vectorises them.
+void emitLevel(const uint32_t* s, int n, int level, bool enhance, float lambda, uint32_t* ring, uint8_t* out) {
+    const float texels = float(1 << (2 * level));
+    const size_t row = size_t(n) * 4;
+    if (!enhance) {
+        for (size_t i = 0; i < row * size_t(n); ++i) out[i] = store8(float(s[i]) / (texels * 255.0f));
+        return;
+    }
+    const auto slot = [&](int y) { return ring + size_t(y % 3) * row; };
+    blurRow(s, row, 0, slot(0));
+    if (n > 1) blurRow(s, row, 1, slot(1));
+    for (int y = 0; y < n; ++y) {
+        if (y > 0 && y + 1 < n) blurRow(s, row, y + 1, slot(y + 1)); // replaces row y − 2
+        // Vertical (1 2 1), clamped the same way: g = Σ b_i b_j S as in reduceLevel.
+        const uint32_t* up = slot(std::max(y - 1, 0));
+        const uint32_t* mid = slot(y);
+        const uint32_t* down = slot(std::min(y + 1, n - 1));
+        const uint32_t* sr = s + size_t(y) * row;
+        uint8_t* o = out + size_t(y) * row;
+        for (size_t i = 0; i < row; ++i) {
+            const int32_t d = int32_t(16 * sr[i]) - int32_t(up[i] + 2 * mid[i] + down[i]); // 16·(A − G)·r²·255
+            const float a = float(sr[i]) / (texels * 255.0f);
+            const float e = a + lambda * (float(d) / (16.0f * texels * 255.0f));
+            o[i] = store8(std::min(std::max(e, 0.0f), 1.0f)); // std::clamp(e, 0, 1), branch-free
+        }
+    }
+}
+
+} // namespace
+
+void reduceChain8(const uint8_t* tile, uint8_t* out, bool enhance, float lambda) {
+    constexpr size_t kLevel1 = size_t(kTile / 2) * (kTile / 2) * 4;
+    thread_local std::vector<uint32_t> sums[2], ring;
+    for (auto& v : sums) v.resize(kLevel1);
+    ring.resize(3 * size_t(kTile / 2) * 4);
+    // Level 1: sums of the base's 2×2 blocks: the two rows added first (a plain vector loop),
+    // then neighbouring texels, one RGBA quad at a time.
+    {
+        const int n = kTile / 2;
+        uint32_t* s = sums[1].data();
+        uint32_t pair[kTile * 4];
+        for (int py = 0; py < n; ++py) {
+            const uint8_t* r0 = tile + size_t(2 * py) * kTile * 4;
+            const uint8_t* r1 = r0 + size_t(kTile) * 4;
+            for (int i = 0; i < kTile * 4; ++i) pair[i] = uint32_t(r0[i]) + r1[i];
+            uint32_t* o = s + size_t(py) * n * 4;
+            for (int px = 0; px < n; ++px) {
+                const uint32_t* q = pair + px * 8;
+                o[px * 4 + 0] = q[0] + q[4];
+                o[px * 4 + 1] = q[1] + q[5];
+                o[px * 4 + 2] = q[2] + q[6];
+                o[px * 4 + 3] = q[3] + q[7];
+            }
+        }
+        emitLevel(s, n, 1, enhance, lambda, ring.data(), out + chainOffset(1));
+    }
+    // Level k: sums of level k−1's 2×2 blocks of sums, the same way.
+    for (int k = 2; k <= kLevels; ++k) {
+        const int n = kTile >> k, m = 2 * n;
+        const uint32_t* src = sums[(k - 1) & 1].data();
+        uint32_t* s = sums[k & 1].data();
+        uint32_t pair[kTile * 2];
+        for (int py = 0; py < n; ++py) {
+            const uint32_t* r0 = src + size_t(2 * py) * m * 4;
+            const uint32_t* r1 = r0 + size_t(m) * 4;
+            for (int i = 0; i < m * 4; ++i) pair[i] = r0[i] + r1[i];
+            uint32_t* o = s + size_t(py) * n * 4;
+            for (int px = 0; px < n; ++px) {
+                const uint32_t* q = pair + px * 8;
+                o[px * 4 + 0] = q[0] + q[4];
+                o[px * 4 + 1] = q[1] + q[5];
+                o[px * 4 + 2] = q[2] + q[6];
+                o[px * 4 + 3] = q[3] + q[7];
+            }
+        }
+        emitLevel(s, n, k, enhance, lambda, ring.data(), out + chainOffset(k));
+    }
+}
+
 } // namespace iris::gpu::mipkernel

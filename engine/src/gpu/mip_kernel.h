@@ -1,5 +1,7 @@
-// The mip reduction kernel (shaders/mip_reduce.comp) as constants shared with the host, and
-// a CPU reference of exactly the same arithmetic (mip_kernel.cpp) for the tests.
+// The mip reduction kernel (shaders/mip_reduce.comp) as constants shared with the host, a CPU
+// reference of exactly the same arithmetic (mip_kernel.cpp) for the tests, and the same kernel
+// made fast for the host mip schedule (reduceChain8: the buffer thread makes the levels on the
+// CPU where the "GPU" is the CPU, EngineTuning::MipSchedule::Host).
 // The kernel is documented in docs/ENHANCEMENT.md.
 //
 // Level k (r = 2^k, n = 256 / r texels per side), per channel, from the 1× base tile only:
@@ -13,6 +15,7 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -30,5 +33,21 @@ inline constexpr float kOvershootBound = kLambda / 4.0f;
 std::vector<float> reduceLevel(const uint8_t* tile, int level, bool enhance, float lambda = kLambda);
 // The same, quantised as the GPU's UNORM8 store does (round to nearest).
 std::vector<uint8_t> reduceLevel8(const uint8_t* tile, int level, bool enhance, float lambda = kLambda);
+
+// Levels 1..8 of one tile packed one after another, each row-major RGBA8 (level k at
+// chainOffset(k), (256>>k)² texels).
+inline constexpr size_t chainOffset(int level) {
+    size_t o = 0;
+    for (int k = 1; k < level; ++k) o += size_t(kTile >> k) * size_t(kTile >> k) * 4;
+    return o;
+}
+inline constexpr size_t kChainBytes = chainOffset(kLevels + 1); // 87 380
+
+// All 8 levels of `tile` into `out` (kChainBytes), equal byte for byte to reduceLevel8 of each
+// level (unit.mip_chain), at a small part of its cost: each level's block sums are the 2×2 sums
+// of the level above (exact in integers), the 3×3 binomial runs as two 1-D passes (its index
+// clamp is per axis, so that is the same sum), and the one float step per value is the
+// reference's own expression. Thread-safe; keeps its scratch per thread.
+void reduceChain8(const uint8_t* tile, uint8_t* out, bool enhance, float lambda = kLambda);
 
 } // namespace iris::gpu::mipkernel

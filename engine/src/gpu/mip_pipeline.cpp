@@ -26,11 +26,13 @@ Result MipPipeline::init(EngineTuning::MipSchedule requested) {
     const VkPhysicalDeviceLimits& limits = device_.properties().limits;
     switch (requested) {
     case EngineTuning::MipSchedule::Auto:
-        schedule_ = device_.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU ? Schedule::Serial : Schedule::Wide;
+        schedule_ = device_.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU ? Schedule::Host : Schedule::Wide;
         break;
     case EngineTuning::MipSchedule::Wide: schedule_ = Schedule::Wide; break;
     case EngineTuning::MipSchedule::Serial: schedule_ = Schedule::Serial; break;
+    case EngineTuning::MipSchedule::Host: schedule_ = Schedule::Host; break;
     }
+    if (schedule_ == Schedule::Host) return {}; // the buffer thread makes the levels; no pipeline
     if (schedule_ == Schedule::Wide && limits.maxComputeSharedMemorySize < kSharedBytes) {
         schedule_ = Schedule::Serial; // 13.4 KiB: within Vulkan's 16 KiB minimum
     }
@@ -139,6 +141,7 @@ void MipPipeline::recordScratchBarrier(VkCommandBuffer cmd) {
 }
 
 void MipPipeline::record(VkCommandBuffer cmd, const int* layers, uint32_t count, bool enhance) {
+    if (schedule_ == Schedule::Host) return; // nothing to dispatch: the levels were uploaded
     if (schedule_ == Schedule::Wide) recordScratchBarrier(cmd);
     MipPush push{};
     for (uint32_t i = 0; i < count && i < kMaxTiles; ++i) push.layers[i] = uint32_t(layers[i]);

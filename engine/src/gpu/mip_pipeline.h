@@ -3,8 +3,12 @@
 // kernel of gpu/mip_kernel.h (docs/ENHANCEMENT.md). Two schedules of the same kernel:
 //   wide   (shaders/mip_reduce.comp, GPUs): 16 workgroups per tile, one per 64×64 region; the
 //          last region of a tile to finish also makes levels 5–8;
-//   serial (shaders/mip_reduce_serial.comp, CPU devices): one workgroup per tile.
-// The device type picks one; EngineTuning::mipSchedule overrides it (tests run both).
+//   serial (shaders/mip_reduce_serial.comp): one workgroup per tile;
+//   host   (no pipeline): the buffer thread runs the kernel on the CPU while it stages a tile
+//          (mipkernel::reduceChain8) and uploads the levels with the base level. For CPU
+//          devices, where a dispatch is the same cores running the kernel far more slowly
+//          (lavapipe's serial dispatch: 0.6–2 ms a tile), serialised with the frames.
+// The device type picks wide or host; EngineTuning::mipSchedule overrides it (tests run all).
 //
 // Owned by the engine, used only by the buffer thread (record() is not thread-safe).
 #pragma once
@@ -20,12 +24,14 @@ public:
     static constexpr uint32_t kMaxTiles = 8;
     static constexpr uint32_t kRegionsPerTile = 16;     // workgroups per tile
     static constexpr uint32_t kSharedBytes = 27876;     // the wide shader's shared memory (checked at init)
-    enum class Schedule { Wide, Serial };
+    enum class Schedule { Wide, Serial, Host };
     MipPipeline(Device& device, TileAtlas& atlas) : device_(device), atlas_(atlas) {}
     // `requested`: EngineConfig::tuning.mipSchedule (Auto picks by device type).
     Result init(EngineTuning::MipSchedule requested);
     Schedule schedule() const { return schedule_; }
-    static const char* scheduleName(Schedule s) { return s == Schedule::Wide ? "wide" : "serial"; }
+    static const char* scheduleName(Schedule s) {
+        return s == Schedule::Wide ? "wide" : s == Schedule::Serial ? "serial" : "host";
+    }
     // Records the dispatch for `count` atlas layers (count ≤ kMaxTiles); enhance selects the
     // sharpened kernel, else the exact area average.
     // The first call also zeroes the per-slot arrival counters (in the same command buffer).

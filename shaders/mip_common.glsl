@@ -1,5 +1,6 @@
 // Shared by the two schedules of the mip pass (mip_reduce.comp: 16 workgroups per tile, for
-// GPUs; mip_reduce_serial.comp: one workgroup per tile, for CPU devices such as lavapipe).
+// GPUs; mip_reduce_serial.comp: one workgroup per tile; CPU devices make the same levels on the
+// host instead, mipkernel::reduceChain8).
 // Both compute exactly the same kernel (docs/ENHANCEMENT.md; CPU reference
 // engine/src/gpu/mip_kernel.cpp), per channel, for level k (r = 2^k, n = 256/r):
 // S = integer sum of the r×r base block (exact), A = S/(r²·255),

@@ -1,6 +1,7 @@
 #version 450
 #extension GL_GOOGLE_include_directive : require
-// Mip reduction, the serial schedule (CPU devices such as lavapipe): every mip level of every
+// Mip reduction, the serial schedule (chosen by IRIS_MIP_SCHEDULE=serial; CPU devices make
+// their mips on the host by default, gpu/mip_pipeline.h): every mip level of every
 // tile of a microtransaction in one dispatch of one 256-thread workgroup per tile, each level
 // computed from the 1× base level only. The kernel, bindings and push constants:
 // mip_common.glsl. A CPU device runs a workgroup on one core, and llvmpipe's cost per workgroup

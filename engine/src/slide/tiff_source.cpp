@@ -477,7 +477,7 @@ bool TiffTileSource::decodeJpegTile(Handle& hd, const Level& L, uint32_t tileInd
     thread_local std::vector<uint8_t> stream;
     const size_t head = L.jpegTables.empty() ? 0 : L.jpegTables.size();
     stream.resize(head + size_t(bytes));
-    std::memcpy(stream.data(), L.jpegTables.data(), head);
+    if (head > 0) std::memcpy(stream.data(), L.jpegTables.data(), head); // no tables: data() may be null
     uint8_t* raw = stream.data() + head;
     if (TIFFReadRawTile(hd.tif, tileIndex, raw, tmsize_t(bytes)) != tmsize_t(bytes) || !hd.lastError.empty()) return false;
     if (raw[0] != 0xFF || raw[1] != 0xD8) return false;

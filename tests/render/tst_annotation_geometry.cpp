@@ -95,8 +95,14 @@ private slots:
         QCOMPARE(g.dots, 100u);
         QCOMPARE(g.strokes.size(), size_t(100));
         QVERIFY(g.fills.empty());
-        // At downsample 2 they are outlined and filled.
-        buildAnnotationGeometry(*store.snapshot(), viewport(500, 0, 2.0, 1200, 100), 0, {}, g);
+        // At downsample 2 they are outlined and filled. Fills are triangulated within a time budget
+        // a frame (fillsAreTriangulatedOverSeveralFrames tests that); here the budget is unlimited
+        // so that all 100 are made in this one build however slow the machine (under ASan on a
+        // loaded machine the default 4 ms made fewer, and the count below failed).
+        AnnotationBudget unlimited;
+        unlimited.triangulateMs = 1e9;
+        buildAnnotationGeometry(*store.snapshot(), viewport(500, 0, 2.0, 1200, 100), 0, unlimited, g);
+        QVERIFY(g.complete);
         QCOMPARE(g.dots, 0u);
         QVERIFY(g.fills.size() >= 6 * size_t(g.objects));
     }

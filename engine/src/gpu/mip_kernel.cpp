@@ -99,6 +99,25 @@ void emitLevel(const uint32_t* s, int n, int level, bool enhance, float lambda, 
     }
 }
 
+// The sums of the 2×2 blocks of a 2n×2n RGBA grid `src` (the base's bytes, or a level's sums)
+// into n×n `s`: each pair of rows added first (a plain vector loop), then neighbouring texels,
+// one RGBA quad at a time.
+template <typename T>
+void sumBlocks(const T* src, int n, uint32_t* s) {
+    const int m = 2 * n;
+    uint32_t pair[kTile * 4];
+    for (int py = 0; py < n; ++py) {
+        const T* r0 = src + size_t(2 * py) * m * 4;
+        const T* r1 = r0 + size_t(m) * 4;
+        for (int i = 0; i < m * 4; ++i) pair[i] = uint32_t(r0[i]) + r1[i];
+        uint32_t* o = s + size_t(py) * n * 4;
+        for (int px = 0; px < n; ++px) {
+            const uint32_t* q = pair + px * 8;
+            for (int c = 0; c < 4; ++c) o[px * 4 + c] = q[c] + q[c + 4];
+        }
+    }
+}
+
 } // namespace
 
 void reduceChain8(const uint8_t* tile, uint8_t* out, bool enhance, float lambda) {
@@ -106,47 +125,12 @@ void reduceChain8(const uint8_t* tile, uint8_t* out, bool enhance, float lambda)
     thread_local std::vector<uint32_t> sums[2], ring;
     for (auto& v : sums) v.resize(kLevel1);
     ring.resize(3 * size_t(kTile / 2) * 4);
-    // Level 1: sums of the base's 2×2 blocks: the two rows added first (a plain vector loop),
-    // then neighbouring texels, one RGBA quad at a time.
-    {
-        const int n = kTile / 2;
-        uint32_t* s = sums[1].data();
-        uint32_t pair[kTile * 4];
-        for (int py = 0; py < n; ++py) {
-            const uint8_t* r0 = tile + size_t(2 * py) * kTile * 4;
-            const uint8_t* r1 = r0 + size_t(kTile) * 4;
-            for (int i = 0; i < kTile * 4; ++i) pair[i] = uint32_t(r0[i]) + r1[i];
-            uint32_t* o = s + size_t(py) * n * 4;
-            for (int px = 0; px < n; ++px) {
-                const uint32_t* q = pair + px * 8;
-                o[px * 4 + 0] = q[0] + q[4];
-                o[px * 4 + 1] = q[1] + q[5];
-                o[px * 4 + 2] = q[2] + q[6];
-                o[px * 4 + 3] = q[3] + q[7];
-            }
-        }
-        emitLevel(s, n, 1, enhance, lambda, ring.data(), out + chainOffset(1));
-    }
-    // Level k: sums of level k−1's 2×2 blocks of sums, the same way.
+    // Level 1 from the base's bytes, level k from level k−1's sums.
+    sumBlocks(tile, kTile / 2, sums[1].data());
+    emitLevel(sums[1].data(), kTile / 2, 1, enhance, lambda, ring.data(), out + chainOffset(1));
     for (int k = 2; k <= kLevels; ++k) {
-        const int n = kTile >> k, m = 2 * n;
-        const uint32_t* src = sums[(k - 1) & 1].data();
-        uint32_t* s = sums[k & 1].data();
-        uint32_t pair[kTile * 2];
-        for (int py = 0; py < n; ++py) {
-            const uint32_t* r0 = src + size_t(2 * py) * m * 4;
-            const uint32_t* r1 = r0 + size_t(m) * 4;
-            for (int i = 0; i < m * 4; ++i) pair[i] = r0[i] + r1[i];
-            uint32_t* o = s + size_t(py) * n * 4;
-            for (int px = 0; px < n; ++px) {
-                const uint32_t* q = pair + px * 8;
-                o[px * 4 + 0] = q[0] + q[4];
-                o[px * 4 + 1] = q[1] + q[5];
-                o[px * 4 + 2] = q[2] + q[6];
-                o[px * 4 + 3] = q[3] + q[7];
-            }
-        }
-        emitLevel(s, n, k, enhance, lambda, ring.data(), out + chainOffset(k));
+        sumBlocks(sums[(k - 1) & 1].data(), kTile >> k, sums[k & 1].data());
+        emitLevel(sums[k & 1].data(), kTile >> k, k, enhance, lambda, ring.data(), out + chainOffset(k));
     }
 }
 

@@ -104,14 +104,16 @@ Viewport viewport(double cx, double cy, double ds, uint32_t w = 320, uint32_t h 
 }
 
 // The pins a level's draw takes: its drawn tiles, and once each the resident tiles of the level
-// next to a drawn one (8-connected) that are not drawn themselves (the seam pass's neighbours).
+// next to a drawn one (8-connected) that are not drawn themselves (the seam pass's neighbours),
+// unless the level is drawn exactly (no seam pass).
 int pinsOf(const LevelDraw& d, const LevelInfo& level, const FakeMap& map) {
     std::set<std::pair<int64_t, int64_t>> pinned;
+    const int64_t reach = d.linked ? 1 : 0;
     for (int64_t ty = d.range.y0; ty <= d.range.y1; ++ty)
         for (int64_t tx = d.range.x0; tx <= d.range.x1; ++tx) {
             if (!d.isDrawn(tx, ty)) continue;
-            for (int64_t y = ty - 1; y <= ty + 1; ++y)
-                for (int64_t x = tx - 1; x <= tx + 1; ++x)
+            for (int64_t y = ty - reach; y <= ty + reach; ++y)
+                for (int64_t x = tx - reach; x <= tx + reach; ++x)
                     if (x >= 0 && y >= 0 && x < level.tilesX && y < level.tilesY &&
                         map.isActive(TileKey::make(kGen, d.level, x, y)))
                         pinned.insert({x, y});
@@ -214,6 +216,8 @@ private slots:
     void syntheticBase();
     void thumbnail();
     void zoomedInTilesNameTheirNeighbours();
+    void exactLevels_data();
+    void exactLevels();
     void viewTransformRoundTrips();
     void turnedViewsHaveNoHoles_data();
     void turnedViewsHaveNoHoles();
@@ -247,6 +251,86 @@ void TestDrawList::turnedFootprintsHoldWhatTheFilterReads() {
     }
     qInfo("%d tiles read only through a tap box's corner", cornerCases);
     QVERIFY2(cornerCases > 0, "no view put a tap across a tile corner: the case is not exercised");
+}
+
+// A level drawn 1:1 on whole pixels is drawn exactly (the tile pass fetches its texels, with no
+// seam pass): drawsExact must hold exactly when every pixel centre the level's tiles cover maps,
+// in the fragment shader's float arithmetic (tile_turn.glsl, tile.frag), onto a texel centre.
+// Checked pixel by pixel, with the instances as the draw list makes them.
+void TestDrawList::exactLevels_data() {
+    QTest::addColumn<double>("cx");
+    QTest::addColumn<double>("cy");
+    QTest::addColumn<double>("downsample");
+    QTest::addColumn<double>("rotation");
+    QTest::addColumn<bool>("flipH");
+    QTest::addColumn<uint32_t>("width");
+    QTest::addColumn<bool>("exact");
+    QTest::newRow("1:1 whole") << 10000.0 << 7000.0 << 1.0 << 0.0 << false << 320u << true;
+    QTest::newRow("1:1 half a pixel off") << 10000.5 << 7000.0 << 1.0 << 0.0 << false << 320u << false;
+    QTest::newRow("1:1 a quarter off") << 10000.0 << 7000.25 << 1.0 << 0.0 << false << 320u << false;
+    QTest::newRow("1:1 odd width, half") << 10000.5 << 7000.0 << 1.0 << 0.0 << false << 321u << true;
+    QTest::newRow("1:1 odd width, whole") << 10000.0 << 7000.0 << 1.0 << 0.0 << false << 321u << false;
+    QTest::newRow("level 1 whole") << 10000.0 << 7000.0 << 4.0 << 0.0 << false << 320u << true;
+    QTest::newRow("level 1 a level-0 pixel off") << 10001.0 << 7000.0 << 4.0 << 0.0 << false << 320u << false;
+    QTest::newRow("level 2 (16.004)") << 10000.0 << 7000.0 << 16.004 << 0.0 << false << 320u << false;
+    QTest::newRow("zoomed in 0.5") << 10000.0 << 7000.0 << 0.5 << 0.0 << false << 320u << false;
+    QTest::newRow("between levels 1.37") << 10000.0 << 7000.0 << 1.37 << 0.0 << false << 320u << false;
+    QTest::newRow("turned 90") << 10000.0 << 7000.0 << 1.0 << 90.0 << false << 320u << true;
+    QTest::newRow("turned 90, odd width") << 10000.0 << 7000.0 << 1.0 << 90.0 << false << 321u << false;
+    QTest::newRow("turned 90, odd width, half") << 10000.0 << 7000.5 << 1.0 << 90.0 << false << 321u << true;
+    QTest::newRow("turned 180, flipped") << 10000.0 << 7000.0 << 1.0 << 180.0 << true << 320u << true;
+    QTest::newRow("turned 270, flipped, off") << 10000.25 << 7000.0 << 1.0 << 270.0 << true << 320u << false;
+    QTest::newRow("turned 30") << 10000.0 << 7000.0 << 1.0 << 30.0 << false << 320u << false;
+}
+
+void TestDrawList::exactLevels() {
+    QFETCH(double, cx);
+    QFETCH(double, cy);
+    QFETCH(double, downsample);
+    QFETCH(double, rotation);
+    QFETCH(bool, flipH);
+    QFETCH(uint32_t, width);
+    QFETCH(bool, exact);
+    const SlideInfo s = scan();
+    FakeMap map;
+    for (int li = 0; li < 3; ++li) map.addLevel(s, li);
+    const Viewport vp{.view = {cx, cy, downsample, rotation, flipH}, .width = width, .height = 240};
+    const DrawList list = build(s, vp, map);
+    const LevelDraw& hr = list.levels[2];
+    QVERIFY(hr.level >= 0 && !hr.instances.empty());
+    QCOMPARE(iris::render::drawsExact(s.levels[size_t(hr.level)], vp), exact);
+    QCOMPARE(hr.exact, exact);
+    QCOMPARE(hr.linked, !exact); // an exact level has no seam bands, and names no neighbours
+    for (const LevelDraw& d : list.levels)
+        if (d.level >= 0 && d.level != hr.level) QVERIFY(!d.exact); // coarser levels are shrunk
+    if (exact) QCOMPARE(map.pins, pinsOf(hr, s.levels[size_t(hr.level)], map)); // only the drawn tiles
+
+    // The shader's mapping, in float: every covered pixel centre on a texel centre, or not.
+    const iris::ViewTransform t = iris::ViewTransform::of(vp.view, vp.width, vp.height);
+    const float m[4] = {float(t.m[0]), float(t.m[1]), float(t.m[2]), float(t.m[3])};
+    const float c[2] = {float(t.targetCX), float(t.targetCY)};
+    size_t covered = 0, onCentre = 0;
+    for (uint32_t y = 0; y < vp.height; ++y) {
+        for (uint32_t x = 0; x < vp.width; ++x) {
+            const float px = float(x) + 0.5f - c[0], py = float(y) + 0.5f - c[1];
+            const float ux = c[0] + (m[0] * px + m[2] * py), uy = c[1] + (m[1] * px + m[3] * py);
+            for (const iris::gpu::TileInstance& i : hr.instances) {
+                if (ux < i.rect[0] || ux >= i.rect[2] || uy < i.rect[1] || uy >= i.rect[3]) continue;
+                const float tx = (ux - i.rect[0]) * i.scale, ty = (uy - i.rect[1]) * i.scale;
+                ++covered;
+                if (tx - std::floor(tx) == 0.5f && ty - std::floor(ty) == 0.5f) ++onCentre;
+                if (exact) {
+                    QCOMPARE(i.scale, 1.0f);
+                    QCOMPARE(i.texel[3], 0.0f); // LOD 0
+                    for (int k = 0; k < 4; ++k) QCOMPARE(i.sides[k], -1.0f);
+                }
+                break;
+            }
+        }
+    }
+    QVERIFY(covered > 0);
+    if (exact) QCOMPARE(onCentre, covered);
+    else QVERIFY(onCentre < covered);
 }
 
 void TestDrawList::viewTransformRoundTrips() {

@@ -4,7 +4,8 @@
 // resident, filtering across the seam (shaders/tile_bands.glsl). Dynamic rendering, so one
 // pipeline of each per colour-attachment format (offscreen RGBA8, swapchain BGRA8 …), and per
 // colour management (on: the fragment shaders apply the colour table, binding 1; off: that
-// step is compiled out by a specialization constant).
+// step is compiled out by a specialization constant), and for the tile pass per exactness
+// (a level drawn 1:1 on whole pixels fetches its texels: render/draw_list.h, drawsExact).
 #pragma once
 
 #include <unordered_map>
@@ -40,9 +41,9 @@ public:
     // Whether the colour step's table is interpolated by the sampler (else from its 8 nodes).
     bool lutSampled() const { return lutSampled_; }
     // The tile pass's and the seam pass's pipelines for a colour format, with or without the
-    // colour transform, created on first use (render thread only). All use layout() and
-    // descriptorSet().
-    Expected<VkPipeline> pipelineFor(VkFormat format, bool colorManaged = false);
+    // colour transform, created on first use (render thread only); `exact`: the tile pass's
+    // for levels drawn exactly. All use layout() and descriptorSet().
+    Expected<VkPipeline> pipelineFor(VkFormat format, bool colorManaged = false, bool exact = false);
     Expected<VkPipeline> seamPipelineFor(VkFormat format, bool colorManaged = false);
     // The colour table the pipelines sample (binding 1); the render thread updates it.
     ColorLutTexture& colorLut() { return colorLut_; }
@@ -50,7 +51,7 @@ public:
     VkDescriptorSet descriptorSet() const { return set_; }
 
 private:
-    Expected<VkPipeline> create(VkFormat format, bool seams, bool colorManaged);
+    Expected<VkPipeline> create(VkFormat format, bool seams, bool colorManaged, bool exact);
 
     Device& device_;
     TileAtlas& atlas_;
@@ -61,7 +62,7 @@ private:
     vk::PipelineLayout layout_;
     vk::DescriptorPool pool_;
     VkDescriptorSet set_ = VK_NULL_HANDLE;           // freed with pool_
-    std::unordered_map<int, vk::Pipeline> pipelines_; // key: format × 4 + seams × 2 + colour
+    std::unordered_map<uint64_t, vk::Pipeline> pipelines_; // key: format × 8 + exact × 4 + seams × 2 + colour
 };
 
 } // namespace iris::gpu

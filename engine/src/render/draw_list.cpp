@@ -109,6 +109,21 @@ void linkNeighbours(const LevelInfo& level, int levelIndex, uint32_t generation,
     }
 }
 
+bool drawsExact(const LevelInfo& level, const Viewport& vp) {
+    if (vp.width == 0 || vp.height == 0 || !(vp.view.downsample == level.downsample)) return false;
+    const ViewTransform t = ViewTransform::of(vp.view, double(vp.width), double(vp.height));
+    if (!t.axisAligned()) return false;
+    // M is a signed permutation, so whole-pixel steps in the target are whole-texel steps in
+    // the level: one pixel centre on a texel centre puts them all there. The fragment shader
+    // maps pixel centre p to u = c + Mᵀ (p − c) and reads texel u − (the tile's corner); every
+    // value is a small multiple of 1/2, exact in float as in double.
+    const double dx = 0.5 - t.targetCX, dy = 0.5 - t.targetCY;
+    const double ux = t.targetCX + t.m[0] * dx + t.m[2] * dy, uy = t.targetCY + t.m[1] * dx + t.m[3] * dy;
+    const TilePlacement p = placeTile(level, vp, 0, 0); // every tile's corner is this one's plus a multiple of 256
+    const auto onCentre = [](double v) { return std::isfinite(v) && v - std::floor(v) == 0.5; };
+    return p.texelsPerPixel == 1.0 && onCentre(ux - p.x0) && onCentre(uy - p.y0);
+}
+
 bool allResident(const SlideInfo& info, uint32_t generation, int level, const Viewport& vp,
                  const TileResidency& tiles) {
     const Footprint area = footprint(info.levels[size_t(level)], vp, 0);
@@ -127,7 +142,7 @@ void buildDrawList(const SlideInfo& info, uint32_t generation, const Viewport& v
         d.area = Footprint{};
         d.layers.clear();
         d.instances.clear();
-        d.linked = false;
+        d.linked = d.exact = false;
     }
     out.lrTiles = out.hrTiles = 0;
     out.newestUpload = 0;
@@ -201,8 +216,10 @@ void buildDrawList(const SlideInfo& info, uint32_t generation, const Viewport& v
                 d.instances.push_back(instanceOf(placeTile(level, vp, tx, ty), 0, 0, layer, lod));
             }
         }
-        // Every drawn level filters across its tile seams (the seam pass), enlarged or shrunk.
-        if (!d.instances.empty()) {
+        // Every drawn level filters across its tile seams (the seam pass), enlarged or shrunk;
+        // one drawn exactly has nothing to filter.
+        d.exact = drawsExact(level, vp);
+        if (!d.instances.empty() && !d.exact) {
             linkNeighbours(level, li, generation, tiles, d);
             d.linked = true;
         }

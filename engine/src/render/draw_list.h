@@ -63,6 +63,7 @@ struct LevelDraw {
     std::vector<gpu::TileInstance> instances;
     std::vector<int32_t> around; // scratch: layers of the range grown by one tile (linkNeighbours)
     bool linked = false;         // neighbours named: the seam pass draws its bands
+    bool exact = false;          // drawn 1:1 on whole pixels (drawsExact): fetched, not filtered; no bands
 
     bool isDrawn(int64_t tx, int64_t ty) const {
         return range.contains(tx, ty) && layers[size_t((ty - range.y0) * (range.x1 - range.x0 + 1) + (tx - range.x0))] >= 0;
@@ -90,10 +91,19 @@ struct DrawList {
 void buildDrawList(const SlideInfo& info, uint32_t generation, const Viewport& vp, const DrawOptions& options,
                    TileResidency& tiles, DrawList& out);
 
-// Names in each of `d`'s instances (a level drawn enlarged or shrunk) the atlas layers of the
+// Names in each of `d`'s instances (a level not drawn exactly) the atlas layers of the
 // tile's eight neighbours in the level, so that the tile shader interpolates across the seams:
 // drawn tiles' layers as they are, any other neighbour pinned for the frame when resident.
 void linkNeighbours(const LevelInfo& level, int levelIndex, uint32_t generation, TileResidency& tiles, LevelDraw& d);
+
+// Whether `level` is drawn exactly in `vp`: one texel a target pixel, the view unturned or
+// turned by a multiple of 90° (flips included), and every target pixel's centre on a texel's
+// centre (the view's centre on whole pixels of the level). Such a level's pixels are its
+// texels' bytes, which filtering would reproduce with weights of 0 (at LOD 0, and across a
+// seam too), so the tile pass fetches them (the exact pipeline: on lavapipe the filtered fetch
+// is most of a frame's cost) and draws the whole tile without seam bands. The mapping tested is
+// the fragment shader's (shaders/tile_turn.glsl) on the draw list's float rectangles.
+bool drawsExact(const LevelInfo& level, const Viewport& vp);
 
 // Whether every tile of `level` visible in `vp` is resident.
 bool allResident(const SlideInfo& info, uint32_t generation, int level, const Viewport& vp,

@@ -16,7 +16,7 @@ Result TilePass::prepare(FrameContext& frame) {
     progress_ = {};
     first_ = frame.instances.used;
     count_ = 0;
-    pipe_ = seamPipe_ = VK_NULL_HANDLE;
+    pipe_ = seamPipe_ = exactPipe_ = VK_NULL_HANDLE;
     // The colour transform: the snapshot's table into the GPU's, and the pipelines with the step.
     Result colorError;
     bool managed = frame.snap.colorLut != nullptr;
@@ -48,6 +48,16 @@ Result TilePass::prepare(FrameContext& frame) {
     buildDrawList(frame.snap.slide->info, frame.snap.slide->generation, frame.viewport, options, frame.tiles,
                   drawList_);
     count_ = drawList_.instanceCount();
+    for (const LevelDraw& d : drawList_.levels) {
+        if (!drawLevels_ || !d.exact || d.instances.empty() || exactPipe_) continue;
+        Expected<VkPipeline> exactPipe = pipeline_.pipelineFor(frame.format, managed, true);
+        if (!exactPipe) {
+            frame.complete = false;
+            count_ = 0;
+            return exactPipe.error();
+        }
+        exactPipe_ = *exactPipe;
+    }
     drawList_.copyInstances(frame.instances.mapped + first_);
     frame.instances.used += count_;
     // Tiles drawn for the first time: an atlas layer whose upload this pass has not drawn yet
@@ -83,16 +93,17 @@ Result TilePass::recordDraws(VkCommandBuffer cmd, const FrameContext& frame) {
     uint32_t first = first_;
     for (const LevelDraw& d : drawList_.levels) {
         const uint32_t n = uint32_t(d.instances.size());
-        if (n > 0) drawSpan(cmd, frame, first, n, d.linked, true);
+        if (n > 0) drawSpan(cmd, frame, first, n, d.linked, true, d.exact);
         first += n;
     }
     return {};
 }
 
 void TilePass::drawSpan(VkCommandBuffer cmd, const FrameContext& frame, uint32_t first, uint32_t n, bool seams,
-                        bool turned) {
-    if (!pipe_ || n == 0) return; // prepare failed to make the pipelines (and said so)
-    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipe_);
+                        bool turned, bool exact) {
+    const VkPipeline pipe = exact ? exactPipe_ : pipe_;
+    if (!pipe || n == 0) return; // prepare failed to make the pipelines (and said so)
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, pipe);
     const VkViewport viewport{0, 0, float(frame.extent.width), float(frame.extent.height), 0, 1};
     vkCmdSetViewport(cmd, 0, 1, &viewport);
     VkDescriptorSet set = pipeline_.descriptorSet();

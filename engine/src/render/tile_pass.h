@@ -35,9 +35,10 @@ public:
     // then the seam pass's four bands of each. Binds its own pipeline and state. Only after
     // this frame's prepare() (which makes the pipelines for the frame's format).
     // `turned`: the instances are the view's tiles, in its unturned frame (the view's rotation
-    // and flips are applied); else they are placed as they are (the thumbnail).
+    // and flips are applied); else they are placed as they are (the thumbnail). `exact`: a level
+    // drawn exactly (LevelDraw::exact), with the pipeline that fetches texels.
     void drawSpan(VkCommandBuffer cmd, const FrameContext& frame, uint32_t first, uint32_t n, bool seams,
-                  bool turned);
+                  bool turned, bool exact = false);
 
 private:
     gpu::TilePipeline& pipeline_;
@@ -48,6 +49,7 @@ private:
     std::vector<uint64_t> shownUploads_; // by atlas layer: the upload sequence number last drawn there
     uint32_t first_ = 0, count_ = 0;                               // this frame's span of the arena
     VkPipeline pipe_ = VK_NULL_HANDLE, seamPipe_ = VK_NULL_HANDLE; // for this frame's format
+    VkPipeline exactPipe_ = VK_NULL_HANDLE; // and for its levels drawn exactly (made when one is)
 };
 
 } // namespace iris::render

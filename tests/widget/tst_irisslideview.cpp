@@ -587,12 +587,34 @@ void TstIrisSlideView::magnificationPresets()
     QVERIFY(view->openSlide(svs));
     QVERIFY(view->objectivePower() > 0);
     const double presets[] = {5, 10, 20, 40};
+    int aligned = 0;
     for (int i = 0; i < 4; ++i) {
+        view->setCentre(QPointF(1000.3, 700.6)); // between pixels
         QTest::keyClick(m_w->surface(), Qt::Key(Qt::Key_1 + i));
         QVERIFY2(near(view->magnification(), presets[i], 1e-9 * presets[i]),
                  qPrintable(QString::number(view->magnification())));
-        QCOMPARE(view->downsample(), view->objectivePower() * view->slideInfo().levels.first().downsample / presets[i]);
+        const double ds = view->downsample();
+        QCOMPARE(ds, view->objectivePower() * view->slideInfo().levels.first().downsample / presets[i]);
+        // At a level's own scale (20× here, downsample 1) the centre moved, by under half a
+        // device pixel, so that every device pixel's centre is a level pixel's centre.
+        for (const IrisSlideLevel &level : view->slideInfo().levels) {
+            if (level.downsample != ds)
+                continue;
+            ++aligned;
+            const QPointF c = view->centre();
+            QVERIFY(std::abs(c.x() - 1000.3) <= 0.5 * ds && std::abs(c.y() - 700.6) <= 0.5 * ds);
+            const QSize target = view->targetSize();
+            const iris::ViewTransform t = iris::ViewTransform::of(
+                iris::View{.centerX = c.x(), .centerY = c.y(), .downsample = ds}, target.width(), target.height());
+            for (const int x : {0, target.width() / 2, target.width() - 1})
+                for (const int y : {0, target.height() / 2, target.height() - 1}) {
+                    const auto [sx, sy] = t.toSlide(x + 0.5, y + 0.5);
+                    QCOMPARE(sx / level.downsample - std::floor(sx / level.downsample), 0.5);
+                    QCOMPARE(sy / level.downsample - std::floor(sy / level.downsample), 0.5);
+                }
+        }
     }
+    QVERIFY(aligned > 0); // 20× on this 20× scan
     view->setMagnification(2.5);
     QVERIFY(near(view->magnification(), 2.5, 1e-9));
     QVERIFY(m_w->frames->waitForCompleteFrame());

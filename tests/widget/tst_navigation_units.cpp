@@ -19,6 +19,7 @@
 #include <iris/IrisSlideInfo.h>
 
 #include "fpsmeter_p.h"
+#include "magnification_p.h"
 #include "navigator_p.h"
 
 using IrisWidget::KineticPanner;
@@ -109,6 +110,7 @@ private Q_SLOTS:
     void ctrlDragTurnsWithThePointersAngle();
     void flipAndResetKeys();
     void magnificationRule();
+    void alignedToLevelPixels();
     void fpsMeter();
 };
 
@@ -360,6 +362,64 @@ void TstNavigationUnits::magnificationRule()
     QCOMPARE(info.effectiveObjectivePower(), 20.0);
     info.mppX = 0;
     QCOMPARE(info.effectiveObjectivePower(), 0.0);
+}
+
+// At a level's own downsample the preset's view moves (under half a pixel) so that every
+// target pixel's centre maps to a level pixel's centre: checked through the engine's own map
+// (ViewTransform::toSlide) at pixels across the target, turned by right angles and flipped,
+// odd and even sizes, levels at 1, 4 and 16; other views are left alone.
+void TstNavigationUnits::alignedToLevelPixels()
+{
+    iris::SlideInfo info;
+    info.width = 100000;
+    info.height = 80000;
+    for (const double ds : {1.0, 4.0, 16.0, 48.33})
+        info.levels.push_back(iris::LevelInfo{.width = int64_t(100000 / ds), .height = int64_t(80000 / ds),
+                                              .downsample = ds});
+    const auto onCentres = [](const iris::View &v, int w, int h, double lds) {
+        const iris::ViewTransform t = iris::ViewTransform::of(v, w, h);
+        for (const int x : {0, 1, w / 2, w - 1})
+            for (const int y : {0, 1, h / 3, h - 1}) {
+                const auto [sx, sy] = t.toSlide(x + 0.5, y + 0.5);
+                const double fx = sx / lds - std::floor(sx / lds), fy = sy / lds - std::floor(sy / lds);
+                if (fx != 0.5 || fy != 0.5)
+                    return false;
+            }
+        return true;
+    };
+    int moved = 0;
+    for (const double ds : {1.0, 4.0, 16.0})
+        for (const double rotation : {0.0, 90.0, 180.0, 270.0})
+            for (const bool flip : {false, true})
+                for (const QSize size : {QSize(640, 480), QSize(641, 480), QSize(640, 481), QSize(333, 777)}) {
+                    const iris::View v{.centerX = 31234.567, .centerY = 20001.2345, .downsample = ds,
+                                       .rotation = rotation, .flipH = flip};
+                    const iris::View a = IrisWidget::alignedToLevelPixels(info, v, size.width(), size.height());
+                    const QString what = QStringLiteral("ds %1, %2°, flip %3, %4×%5")
+                                             .arg(ds).arg(rotation).arg(flip).arg(size.width()).arg(size.height());
+                    QVERIFY2(onCentres(a, size.width(), size.height(), ds), qPrintable(what));
+                    QVERIFY2(std::abs(a.centerX - v.centerX) <= 0.5 * ds && std::abs(a.centerY - v.centerY) <= 0.5 * ds,
+                             qPrintable(what));
+                    QCOMPARE(a.downsample, v.downsample);
+                    QCOMPARE(a.rotation, v.rotation);
+                    QCOMPARE(a.flipH, v.flipH);
+                    QCOMPARE(IrisWidget::alignedToLevelPixels(info, a, size.width(), size.height()), a); // stays
+                    moved += a != v;
+                }
+    QVERIFY(moved > 0);
+    // Between levels (2.5), turned by 30°, or with no target: unchanged.
+    const iris::View between{.centerX = 1000.3, .centerY = 700.6, .downsample = 2.5};
+    QCOMPARE(IrisWidget::alignedToLevelPixels(info, between, 640, 480), between);
+    const iris::View turned{.centerX = 1000.3, .centerY = 700.6, .downsample = 1, .rotation = 30};
+    QCOMPARE(IrisWidget::alignedToLevelPixels(info, turned, 640, 480), turned);
+    const iris::View plain{.centerX = 1000.3, .centerY = 700.6, .downsample = 1};
+    QCOMPARE(IrisWidget::alignedToLevelPixels(info, plain, 0, 0), plain);
+    // A level at 48.33: moved within half a pixel (its product may round; the centres are
+    // then within a rounding error of the level's, which is all the engine can show).
+    const iris::View odd{.centerX = 31234.567, .centerY = 20001.2345, .downsample = 48.33};
+    const iris::View oddAligned = IrisWidget::alignedToLevelPixels(info, odd, 640, 480);
+    QVERIFY(std::abs(oddAligned.centerX - odd.centerX) <= 0.5 * 48.33);
+    QVERIFY(oddAligned != odd);
 }
 
 void TstNavigationUnits::fpsMeter()

@@ -162,7 +162,10 @@ void IrisSlideView::setMagnification(double magnification)
     d->navigator.stopMotion();
     iris::View view = d->engine()->view();
     view.downsample = downsample;
-    d->setView(view);
+    // At a level's own scale (20× on a 20× scan), on the level's pixel grid: sharp, each slide
+    // pixel on one device pixel. The centre moves by under half a device pixel.
+    const auto [width, height] = d->engine()->targetSize();
+    d->setView(alignedToLevelPixels(*d->slide, view, int(width), int(height)));
 }
 
 QPointF IrisSlideView::centre() const
@@ -202,7 +205,10 @@ void IrisSlideView::setDownsample(double downsample)
     d->navigator.stopMotion();
     iris::View view = d->engine()->view();
     view.downsample = downsample;
-    d->setView(view);
+    // At a level's own scale (20× on a 20× scan), on the level's pixel grid: sharp, each slide
+    // pixel on one device pixel. The centre moves by under half a device pixel.
+    const auto [width, height] = d->engine()->targetSize();
+    d->setView(alignedToLevelPixels(*d->slide, view, int(width), int(height)));
 }
 
 double IrisSlideView::rotation() const

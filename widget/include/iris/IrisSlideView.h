@@ -342,6 +342,9 @@ public Q_SLOTS:
     void setSlidePath(const QString &path);
     void closeSlide();
     void fitToWindow();
+    // Zooms about the centre to an objective magnification. Where that is a level's own scale
+    // (20× on a 20× scan), the centre also moves by under half a device pixel onto the level's
+    // pixel grid, so that each slide pixel lies on one device pixel, not between them.
     void setMagnification(double magnification);
     void setCentre(const QPointF &slidePos);
     void setDownsample(double downsample);

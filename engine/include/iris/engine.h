@@ -76,7 +76,7 @@ struct EngineConfig {
     SourcePreference source = SourcePreference::Auto;
     uint64_t ramBudgetBytes = 1ull << 30;   // decoded tiles kept in RAM
     uint64_t vramBudgetBytes = 512ull << 20; // tile atlas size (slots of 256×256 RGBA8 with mips)
-    uint32_t loaderThreads = 0;              // 0: one per hardware thread
+    uint32_t loaderThreads = 0;              // 0: one per hardware thread (two fewer above 4)
     uint32_t perimeterTiles = 1;             // tiles buffered beyond the visible field on each side
     bool validation = false;                 // enable VK_LAYER_KHRONOS_validation when installed
     std::array<float, 3> background{0.96f, 0.96f, 0.96f}; // colour outside the slide: RGB 0..1, written as bytes (round(v·255))

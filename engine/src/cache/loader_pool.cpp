@@ -4,7 +4,7 @@ namespace iris {
 
 LoaderPool::LoaderPool(SharedState& shared, TileCache& cache, const Log& log, unsigned threads, int perimeter)
     : shared_(shared), cache_(cache), log_(log), perimeter_(perimeter) {
-    if (threads == 0) threads = std::max(1u, std::thread::hardware_concurrency());
+    if (threads == 0) threads = defaultThreads(std::thread::hardware_concurrency());
     syntheticCap_ = std::max(1u, threads - 1);
     for (unsigned i = 0; i < threads; ++i) threads_.emplace_back([this] { run(); });
 }
@@ -206,4 +206,10 @@ bool LoaderPool::tryLoad(const Snapshot& snap, Plan& plan, const TileRef& t) {
     return claimed;
 }
 
+} // namespace iris
+
+namespace iris {
+static_assert(LoaderPool::defaultThreads(0) == 1 && LoaderPool::defaultThreads(2) == 2 &&
+              LoaderPool::defaultThreads(4) == 4 && LoaderPool::defaultThreads(5) == 3 &&
+              LoaderPool::defaultThreads(16) == 14);
 } // namespace iris

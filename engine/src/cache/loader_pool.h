@@ -32,7 +32,16 @@ namespace iris {
 
 class LoaderPool {
 public:
+    // threads 0: defaultThreads(the hardware threads).
     LoaderPool(SharedState& shared, TileCache& cache, const Log& log, unsigned threads, int perimeter);
+    // Loaders for `hardware` hardware threads: all of them up to 4, else two fewer, which the
+    // buffer thread (staging every tile) and the render thread then have to themselves. On
+    // the H100's 16 cores, 14 loaders made a new field whole sooner than 16 in 7 of 9 and 8 of
+    // 9 alternated pairs (HR-TeFOV medians 6.25 → 5.65 ms at 2774×1750, 2.86 → 2.69 ms at
+    // 1920×1080; BENCHMARKS.md, "Loaders leave two cores").
+    static constexpr unsigned defaultThreads(unsigned hardware) {
+        return hardware == 0 ? 1 : hardware <= 4 ? hardware : hardware - 2;
+    }
     ~LoaderPool(); // joins (shared.stopping must be set and bumped first, or the pool does it)
     void stop();
     // Tile reads (SlideSource::readTile) running now, on all loaders. Relaxed: a count for

@@ -74,7 +74,7 @@ constexpr uint64_t kRssRangeBound = kEngines * (kRamBudget + (kRecycledBuffers +
 // 26 MiB while the medians differed by 3.8 (docs/RELIABILITY.md). A process without a leak
 // still climbs for its first ten minutes or so (glibc's arenas keep the most each thread's
 // ever held, in steps of up to 13 MiB; 0.075 MiB/s on average up to 600 s in the 30-minute
-// runs, flat after), and 120-s runs without a leak measured 3.8 to 14.3 MiB between the halves:
+// runs, flat after), and 120-s runs without a leak measured 3.8 to 15.4 MiB between the halves:
 // a 120-s run cannot tell a leak of 0.2 MiB/s from that. 24 MiB fails a leak of 0.5 MiB/s or
 // more (24 MiB in the 48 s between the halves' middles): one tile buffer (256 KiB) lost every
 // other slide switch, a slide's decoded level lost now and then. Slower leaks are what the

@@ -1,5 +1,6 @@
 #include "render/tile_pass.h"
 
+#include <algorithm>
 #include <cstring>
 #include <utility>
 
@@ -48,8 +49,8 @@ Result TilePass::prepare(FrameContext& frame) {
     buildDrawList(frame.snap.slide->info, frame.snap.slide->generation, frame.viewport, options, frame.tiles,
                   drawList_);
     count_ = drawList_.instanceCount();
-    for (const LevelDraw& d : drawList_.levels) {
-        if (!drawLevels_ || !d.exact || d.instances.empty() || exactPipe_) continue;
+    const auto drawnExactly = [](const LevelDraw& d) { return d.exact && !d.instances.empty(); };
+    if (drawLevels_ && std::any_of(drawList_.levels.begin(), drawList_.levels.end(), drawnExactly)) {
         Expected<VkPipeline> exactPipe = pipeline_.pipelineFor(frame.format, managed, true);
         if (!exactPipe) {
             frame.complete = false;

@@ -15,7 +15,9 @@ function(check_keys object where)
   foreach(key_type device:STRING size:STRING source:STRING baseline_slide:STRING lr_tefov_ms:OBJECT
                    hr_tefov_ms:OBJECT lr_tpt_us:OBJECT hr_tpt_us:OBJECT buffer_rate_gbps:OBJECT frame_ms:OBJECT
                    fps:OBJECT settled_frame_gpu_ms:OBJECT baselines:OBJECT ratios:OBJECT moves:NUMBER
-                   mip_schedule:STRING tuning:OBJECT timeouts:NUMBER untimed_moves:NUMBER notes:STRING)
+                   mip_schedule:STRING tuning:OBJECT timeouts:NUMBER untimed_moves:NUMBER notes:STRING
+                   open_to_first_frame_ms:OBJECT open_call_ms:OBJECT switch_to_first_frame_ms:OBJECT
+                   switch_call_ms:OBJECT opening:OBJECT)
     string(REPLACE ":" ";" kt ${key_type})
     list(GET kt 0 key)
     list(GET kt 1 want)
@@ -75,6 +77,15 @@ check_quartiles(frame_ms 0.01 60000)
 check_quartiles(fps 0.01 100000)
 # GPU time of frames redrawing a loaded field (timestamp queries; lavapipe has them).
 check_quartiles(settled_frame_gpu_ms 0.0001 60000)
+# Opening (issue 20): open() to the first complete frame, into a fresh engine and as a switch;
+# the open() call alone is part of it, so it cannot take longer.
+check_quartiles(open_to_first_frame_ms 0.01 60000)
+check_quartiles(open_call_ms 0.001 60000)
+check_quartiles(switch_to_first_frame_ms 0.01 60000)
+check_quartiles(switch_call_ms 0.001 60000)
+if(open_call_ms_median GREATER open_to_first_frame_ms_median OR switch_call_ms_median GREATER switch_to_first_frame_ms_median)
+  message(FATAL_ERROR "an open() call took longer than open() to its first frame")
+endif()
 string(JSON b GET "${j}" baselines)
 foreach(key openslide_fov_ms openslide_mt_fov_ms decode_floor_fov_ms)
   string(JSON med ERROR_VARIABLE err GET "${b}" ${key} median)

@@ -5,6 +5,7 @@
 //
 //   iris-bench SLIDE [--size WxH] [--moves N] [--magnifications LIST] [--source auto|openslide|iris]
 //              [--baseline SLIDE] [--json FILE] [--plots DIR] [--seed N] [--validation]
+//              [--opens N] [--switch-to SLIDE]
 //   iris-bench SLIDE --views N [--size WxH] [--ticks N] [--json FILE]
 //
 // Without --size it runs 2774×1750 (the paper's window) and 1920×1080. --views runs linked
@@ -55,6 +56,8 @@ struct Options {
     bool validation = false;
     iris::EngineTuning tuning; // from the IRIS_* environment variables
     std::string colorManaged = "on"; // on, off, or both (an A/B of the colour transform's cost)
+    int opens = 5;            // opening trials per size (0: none)
+    std::string switchTo;     // the slide opened in turn with SLIDE to time a switch (default: SLIDE again)
     int views = 0;   // > 0: the linked-views benchmark (linked.h) with this many views
     int ticks = 240; // its glide's display ticks
 };
@@ -113,16 +116,15 @@ struct SizeResult {
     int movesDone = 0, movesWanted = 0, timeouts = 0;
     int untimed = 0; // moves the engine did not time (the new field was already resident)
     double mipUsPerTile = NAN; // GPU time of the mip dispatch per tile (timestamps)
+    // Opening (issue 20): open() alone, and open() to the first complete frame of the fit view,
+    // into a fresh engine (a first slide) and with another slide shown (a switch).
+    std::vector<double> openCallMs, openFrameMs, switchCallMs, switchFrameMs;
     std::string notes;
 };
 
 bool progressTty() { return isatty(2); }
 
-SizeResult runSize(const Options& o, uint32_t W, uint32_t H, bool colorManaged) {
-    SizeResult res;
-    res.w = W;
-    res.h = H;
-    res.colorManaged = colorManaged;
+iris::EngineConfig benchConfig(const Options& o, bool colorManaged) {
     iris::EngineConfig cfg;
     cfg.color.managed = colorManaged;
     cfg.validation = o.validation;
@@ -134,7 +136,65 @@ SizeResult runSize(const Options& o, uint32_t W, uint32_t H, bool colorManaged) 
     cfg.log = [](iris::LogLevel l, std::string_view m) {
         if (l >= iris::LogLevel::Warning) std::fprintf(stderr, "iris-bench: %.*s\n", int(m.size()), m.data());
     };
-    auto created = iris::Engine::create(cfg);
+    return cfg;
+}
+
+double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+// Opening, as a host sees it: from the open() call to the first complete frame of the fit view
+// (every visible tile drawn; Engine::waitForFrame), and the open() call alone (the header read
+// it makes synchronously). First into engines that have shown nothing (one each, created and
+// bound before the clock starts: a viewer's start-up is not the slide's opening), then as
+// switches on one engine, where each open replaces a slide that was settled on screen (SLIDE
+// and --switch-to in turn). Every open is a new slide to the engine: nothing of an earlier one
+// is reused (the RAM cache drops other generations), but after the first trial the file's
+// bytes are in the operating system's cache, as for a case reopened or a slide of the same case.
+void measureOpening(const Options& o, uint32_t W, uint32_t H, bool colorManaged, SizeResult& res) {
+    const auto once = [&](iris::Engine& e, const std::string& path, std::vector<double>& call,
+                          std::vector<double>& frame) {
+        const auto t0 = Clock::now();
+        if (const iris::Result r = e.open(path); !r) {
+            res.notes += "opening " + path + " failed: " + r.message() + ". ";
+            return false;
+        }
+        const double callMs = msSince(t0);
+        if (const iris::Result r = e.waitForFrame(std::chrono::seconds(60)); !r) {
+            res.notes += "no complete frame after opening " + path + ": " + r.message() + ". ";
+            return false;
+        }
+        call.push_back(callMs);
+        frame.push_back(msSince(t0));
+        return true;
+    };
+    for (int i = 0; i < o.opens; ++i) {
+        auto created = iris::Engine::create(benchConfig(o, colorManaged));
+        if (!created) return;
+        if (!(*created)->bindOffscreen(W, H, /*readback=*/false)) return;
+        if (!once(**created, o.slide, res.openCallMs, res.openFrameMs)) return;
+    }
+    if (o.opens == 0) return;
+    auto created = iris::Engine::create(benchConfig(o, colorManaged));
+    if (!created || !(*created)->bindOffscreen(W, H, /*readback=*/false)) return;
+    iris::Engine& e = **created;
+    std::vector<double> ignored;
+    const std::string& other = o.switchTo.empty() ? o.slide : o.switchTo;
+    if (!once(e, o.slide, ignored, ignored)) return;
+    for (int i = 0; i < o.opens; ++i) {
+        if (const iris::Result r = e.waitForSettled(std::chrono::seconds(60)); !r) {
+            res.notes += "the slide shown before a switch did not settle: " + r.message() + ". ";
+            return;
+        }
+        if (!once(e, i % 2 == 0 ? other : o.slide, res.switchCallMs, res.switchFrameMs)) return;
+    }
+}
+
+SizeResult runSize(const Options& o, uint32_t W, uint32_t H, bool colorManaged) {
+    SizeResult res;
+    res.w = W;
+    res.h = H;
+    res.colorManaged = colorManaged;
+    measureOpening(o, W, H, colorManaged, res);
+    auto created = iris::Engine::create(benchConfig(o, colorManaged));
     if (!created) {
         res.notes = created.error().message();
         return res;
@@ -351,6 +411,12 @@ Json resultJson(const Options& o, const SizeResult& r) {
     j["frame_ms"] = jsonQuartiles(quartiles(r.frameMs));
     j["fps"] = jsonQuartiles(quartiles(fps));
     j["settled_frame_gpu_ms"] = jsonQuartiles(quartiles(r.settledGpuMs));
+    // Opening (measureOpening): into a fresh engine, and switching from a settled slide.
+    j["open_to_first_frame_ms"] = jsonQuartiles(quartiles(r.openFrameMs));
+    j["open_call_ms"] = jsonQuartiles(quartiles(r.openCallMs));
+    j["switch_to_first_frame_ms"] = jsonQuartiles(quartiles(r.switchFrameMs));
+    j["switch_call_ms"] = jsonQuartiles(quartiles(r.switchCallMs));
+    j["opening"] = {{"trials", o.opens}, {"switch_to", o.switchTo.empty() ? o.slide : o.switchTo}};
     j["baselines"] = {{"openslide_fov_ms", jsonQuartiles(osr)},
                       {"openslide_mt_fov_ms", jsonQuartiles(quartiles(r.osrMt.ms))},
                       {"decode_floor_fov_ms", jsonQuartiles(flo)},
@@ -418,6 +484,10 @@ void printTable(const SizeResult& r) {
     row("buffer rate", r.rate, "GB/s");
     row("frame interval", r.frameMs, "ms");
     row("settled frame GPU time", r.settledGpuMs, "ms");
+    row("open() to first frame", r.openFrameMs, "ms");
+    row("  the open() call", r.openCallMs, "ms");
+    row("switch to first frame", r.switchFrameMs, "ms");
+    row("  the open() call", r.switchCallMs, "ms");
     row("baseline: OpenSlide 1 thread", r.osr.ms, "ms");
     row("baseline: OpenSlide all cores", r.osrMt.ms, "ms");
     row("baseline: decode floor", r.floor.ms, "ms");
@@ -625,6 +695,17 @@ int main(int argc, char** argv) {
     app.add_option("--baseline", o.baseline,
                    "The slide the CPU baselines read; for an .iris file,\n"
                    "the slide it was encoded from")
+        ->option_text("SLIDE")
+        ->default_str("SLIDE");
+    app.add_option("--opens", o.opens,
+                   "Opening trials per size: open() to the first complete\n"
+                   "frame, into a fresh engine and as a switch from a\n"
+                   "settled slide (0: none)")
+        ->option_text("N")
+        ->check(iris::tools::wholeNumber(0, 1000));
+    app.add_option("--switch-to", o.switchTo,
+                   "The slide opened in turn with SLIDE when timing\n"
+                   "switches")
         ->option_text("SLIDE")
         ->default_str("SLIDE");
     app.add_option("--json", o.json, "Write the results as JSON to FILE")->option_text("FILE");

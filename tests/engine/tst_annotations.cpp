@@ -423,9 +423,9 @@ private slots:
         std::ofstream(file) << iris::writeGeoJson(doc);
         const std::filesystem::path png = testOutDir() / "annotations-render.png";
         std::filesystem::remove(png);
-        // iris-render beside this program (a bundle copied to another machine), else the build's.
-        QString exe = QCoreApplication::applicationDirPath() + "/iris-render";
-        if (!QFileInfo::exists(exe)) exe = IRIS_RENDER_EXE;
+        // iris-render beside this program (the build's bin/ folder, or a bundle copied elsewhere).
+        const QString exe = QCoreApplication::applicationDirPath() + "/iris-render";
+        QVERIFY2(QFileInfo::exists(exe), qPrintable(exe + " does not exist (built with this suite)"));
         QProcess p;
         p.start(exe, {QString::fromStdString(sampleSlidePath()->string()), "--out",
                                   QString::fromStdString(png.string()), "--size", QString("%1x%2").arg(kW).arg(kH),

@@ -509,7 +509,10 @@ private slots:
         if (!dir) QSKIP("no test data");
         const fs::path out = dicomOut() / "boxes.iris";
         fs::remove(out);
-        const std::string cmd = std::string(IRIS_ENCODE_EXE) + " '" + dir->string() + "' -o '" + out.string() +
+        // iris-encode beside this program (the build's bin/ folder, or a bundle copied elsewhere).
+        const QString exe = QCoreApplication::applicationDirPath() + "/iris-encode";
+        QVERIFY2(QFileInfo::exists(exe), qPrintable(exe + " does not exist (built with this suite)"));
+        const std::string cmd = exe.toStdString() + " '" + dir->string() + "' -o '" + out.string() +
                                 "' > '" + out.string() + ".log' 2>&1";
         QVERIFY2(std::system(cmd.c_str()) == 0, ("iris-encode failed: " + cmd).c_str());
         std::string why;

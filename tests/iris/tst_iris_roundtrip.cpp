@@ -696,12 +696,8 @@ private slots:
 
     // ---- iris-encode ------------------------------------------------------------------
 
-    // iris-encode beside this test (a build's bin/ folder, or a copy of it on another
-    // machine), else where the build put it.
-    static QString encoderExe() {
-        const QString beside = QCoreApplication::applicationDirPath() + QStringLiteral("/iris-encode");
-        return QFileInfo::exists(beside) ? beside : QStringLiteral(IRIS_ENCODE_EXE);
-    }
+    // iris-encode beside this test (a build's bin/ folder, or a copy of it on another machine).
+    static QString encoderExe() { return QCoreApplication::applicationDirPath() + QStringLiteral("/iris-encode"); }
 
     void cli() {
         const QString exe = encoderExe();

@@ -57,7 +57,8 @@ struct RunResult {
 
 RunResult runSample(const QStringList& args) {
   QProcess p;
-  p.start(QStringLiteral(IRIS_SAMPLE_EXE), args);
+  // iris-sample beside this program (the build's bin/ folder).
+  p.start(QCoreApplication::applicationDirPath() + QStringLiteral("/iris-sample"), args);
   RunResult r;
   if (!p.waitForStarted(10000)) return r;
   p.waitForFinished(120000);

@@ -66,7 +66,8 @@ class TestRenderLayers : public QObject {
     std::optional<iris::Image> render(const QStringList& args, const QString& name, iris::View* reported) {
         const QString out = path(qPrintable(name + ".png"));
         QProcess p;
-        p.start(QStringLiteral(IRIS_RENDER_EXE),
+        // iris-render beside this program (the build's bin/ folder).
+        p.start(QCoreApplication::applicationDirPath() + QStringLiteral("/iris-render"),
                 QStringList{slide_, "--out", out, "--size", QString("%1x%2").arg(kW).arg(kH), "-v"} + args);
         if (!p.waitForFinished(60000)) {
             QTest::qFail(qPrintable("iris-render did not finish: " + p.errorString()), __FILE__, __LINE__);

@@ -42,7 +42,8 @@ private:
 void TstDesignerPlugin::initTestCase()
 {
     IrisSlideView::setVulkanValidation(true); // before any view exists
-    const QString path = QStringLiteral(IRIS_DESIGNER_PLUGIN_PATH);
+    const QString path = qEnvironmentVariable("IRIS_DESIGNER_PLUGIN_PATH"); // set by CTest
+    QVERIFY2(!path.isEmpty(), "IRIS_DESIGNER_PLUGIN_PATH is not set (run the suite through ctest)");
     QVERIFY2(QFileInfo::exists(path), qPrintable(path));
     m_loader.setFileName(path);
     QVERIFY2(m_loader.load(), qPrintable(m_loader.errorString()));

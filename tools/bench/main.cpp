@@ -57,7 +57,7 @@ struct Options {
     iris::EngineTuning tuning; // from the IRIS_* environment variables
     std::string colorManaged = "on"; // on, off, or both (an A/B of the colour transform's cost)
     int opens = 5;            // opening trials per size (0: none)
-    std::string switchTo;     // the slide opened in turn with SLIDE to time a switch (default: SLIDE again)
+    std::string switchTo;     // the slide opened in turn with SLIDE to time a switch (main: SLIDE when not given)
     int views = 0;   // > 0: the linked-views benchmark (linked.h) with this many views
     int ticks = 240; // its glide's display ticks
 };
@@ -166,25 +166,26 @@ void measureOpening(const Options& o, uint32_t W, uint32_t H, bool colorManaged,
         frame.push_back(msSince(t0));
         return true;
     };
-    for (int i = 0; i < o.opens; ++i) {
+    // An engine bound to the offscreen target, or none (runSize reports why, making its own).
+    const auto bound = [&]() -> std::unique_ptr<iris::Engine> {
         auto created = iris::Engine::create(benchConfig(o, colorManaged));
-        if (!created) return;
-        if (!(*created)->bindOffscreen(W, H, /*readback=*/false)) return;
-        if (!once(**created, o.slide, res.openCallMs, res.openFrameMs)) return;
+        if (!created || !(*created)->bindOffscreen(W, H, /*readback=*/false)) return nullptr;
+        return std::move(*created);
+    };
+    for (int i = 0; i < o.opens; ++i) {
+        const auto e = bound();
+        if (!e || !once(*e, o.slide, res.openCallMs, res.openFrameMs)) return;
     }
     if (o.opens == 0) return;
-    auto created = iris::Engine::create(benchConfig(o, colorManaged));
-    if (!created || !(*created)->bindOffscreen(W, H, /*readback=*/false)) return;
-    iris::Engine& e = **created;
+    const auto e = bound();
     std::vector<double> ignored;
-    const std::string& other = o.switchTo.empty() ? o.slide : o.switchTo;
-    if (!once(e, o.slide, ignored, ignored)) return;
+    if (!e || !once(*e, o.slide, ignored, ignored)) return;
     for (int i = 0; i < o.opens; ++i) {
-        if (const iris::Result r = e.waitForSettled(std::chrono::seconds(60)); !r) {
+        if (const iris::Result r = e->waitForSettled(std::chrono::seconds(60)); !r) {
             res.notes += "the slide shown before a switch did not settle: " + r.message() + ". ";
             return;
         }
-        if (!once(e, i % 2 == 0 ? other : o.slide, res.switchCallMs, res.switchFrameMs)) return;
+        if (!once(*e, i % 2 == 0 ? o.switchTo : o.slide, res.switchCallMs, res.switchFrameMs)) return;
     }
 }
 
@@ -416,7 +417,7 @@ Json resultJson(const Options& o, const SizeResult& r) {
     j["open_call_ms"] = jsonQuartiles(quartiles(r.openCallMs));
     j["switch_to_first_frame_ms"] = jsonQuartiles(quartiles(r.switchFrameMs));
     j["switch_call_ms"] = jsonQuartiles(quartiles(r.switchCallMs));
-    j["opening"] = {{"trials", o.opens}, {"switch_to", o.switchTo.empty() ? o.slide : o.switchTo}};
+    j["opening"] = {{"trials", o.opens}, {"switch_to", o.switchTo}};
     j["baselines"] = {{"openslide_fov_ms", jsonQuartiles(osr)},
                       {"openslide_mt_fov_ms", jsonQuartiles(quartiles(r.osrMt.ms))},
                       {"decode_floor_fov_ms", jsonQuartiles(flo)},
@@ -759,6 +760,7 @@ int main(int argc, char** argv) {
     for (const std::string& s : sizes) o.sizes.push_back(*parseSize(s)); // each checked above
     if (o.sizes.empty()) o.sizes = {{2774, 1750}, {1920, 1080}};
     o.mags = parseList(mags);
+    if (o.switchTo.empty()) o.switchTo = o.slide;
     if (!annotationCounts.empty()) {
         AnnotationBenchOptions a;
         a.slide = o.slide;

@@ -211,6 +211,7 @@ private slots:
     void failingTilesShowThePlaceholder();
     void cullingNeverChangesAPixel();
     void slideEdgesKeepTheirCoarseTiles();
+    void fieldOnTileBoundariesCullsCoarseTiles();
     void instanceBudget();
     void wrongSizeIsNeverComplete();
     void syntheticBase();
@@ -665,6 +666,40 @@ void TestDrawList::slideEdgesKeepTheirCoarseTiles() {
     QVERIFY(inside >= 0);
     QCOMPARE(TileKey::level(map.keyOf(inside)), 0);
     QCOMPARE(top[size_t((cornerY + 4) * vp.width + cornerX + 4)], -1); // (past the base level's rounded extent too)
+}
+
+void TestDrawList::fieldOnTileBoundariesCullsCoarseTiles() {
+    // Fields whose edges lie on HR tile boundaries (a level's own scale on whole pixels with
+    // the field at a multiple of 256: where iris-bench's walk and the widget's presets land),
+    // and fields along the slide's top and left edges, everything resident: HR covers every
+    // pixel of the slide, so no base or LR tile is drawn, and no pixel changes. (The one-pixel
+    // margin of coveredBy once reached past the target into HR tiles outside the field, or past
+    // the slide's top or left edge, and drew every coarse tile along that edge, and the base
+    // level's one tile across the whole target.)
+    const SlideInfo s = scan();
+    FakeMap map;
+    for (int li = 0; li < 3; ++li) map.addLevel(s, li);
+    struct Case {
+        double x0, y0, ds;
+        uint32_t w, h;
+    };
+    for (const Case& c : {Case{2048, 1024, 1, 1920, 1024}, Case{2048 + 128, 1024, 1, 1920, 1080},
+                          Case{4096, 2048, 4, 1024, 768}, Case{4096, 2048, 2, 1024, 512},
+                          Case{2560, 1280, 1, 768, 512}, Case{15360, 0, 1, 1920, 1080},
+                          Case{0, 1000.5, 1.5, 640, 480}, Case{-300, -200, 2.2, 800, 600}}) {
+        const Viewport vp = viewport(c.x0 + c.w * c.ds / 2, c.y0 + c.h * c.ds / 2, c.ds, c.w, c.h);
+        const DrawList culled = build(s, vp, map);
+        QVERIFY(culled.hrComplete);
+        QVERIFY(culled.lrComplete);
+        const QByteArray where = QStringLiteral("field at (%1, %2), downsample %3, %4x%5")
+                                     .arg(c.x0).arg(c.y0).arg(c.ds).arg(c.w).arg(c.h).toUtf8();
+        QVERIFY2(culled.levels[0].instances.empty(), where.constData());
+        QVERIFY2(culled.levels[1].instances.empty(), where.constData());
+        QCOMPARE(uint32_t(culled.levels[2].instances.size()), culled.hrTiles);
+        const DrawList all = build(s, vp, map, DrawOptions{.drawCovered = true});
+        QVERIFY(all.levels[0].instances.size() + all.levels[1].instances.size() > 0);
+        QCOMPARE(rasterise(instancesOf(culled), vp.width, vp.height), rasterise(instancesOf(all), vp.width, vp.height));
+    }
 }
 
 void TestDrawList::instanceBudget() {

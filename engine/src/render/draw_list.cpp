@@ -60,16 +60,28 @@ bool coveredBy(const LevelInfo& coarse, int64_t tx, int64_t ty, const LevelInfo&
     double y1 = std::min(double(std::min<int64_t>((ty + 1) * kTileSize, coarse.height)) * coarse.downsample, field[3]);
     // One target pixel of margin: the two levels' tile edges are placed by different
     // expressions, so an edge they share in exact arithmetic may round to different pixels.
-    // With the margin, coarse tiles along the slide's edges (where the levels' extents differ
-    // by rounding anyway) are always drawn.
+    // With the margin, coarse tiles along the slide's right and bottom edges (where the levels'
+    // extents differ by rounding anyway) are always drawn. Its left and top edges are every
+    // level's 0, placed by the same expression: unless the view is turned, the margin stops
+    // there. (A turned view's filter reaches past the slide's edge, half a texel of the level
+    // it reads, farther for the coarse level: there its tiles stay.)
     x0 -= ds, y0 -= ds, x1 += ds, y1 += ds;
+    if (!drawn.area.turned) x0 = std::max(x0, 0.0), y0 = std::max(y0, 0.0);
     if (x0 < 0 || y0 < 0 || x1 > double(fine.width) * fine.downsample || y1 > double(fine.height) * fine.downsample)
         return false;
+    // Fine tiles outside the drawn range lie outside the field (the range holds every tile the
+    // field overlaps): the margin reaching them at the target's border covers no pixel, so they
+    // count as covering, as those outside the field's area do below. (A field whose edge lies
+    // on the fine level's tile boundary, as at a level's own scale on whole pixels, otherwise
+    // drew every coarse tile along that edge, and the base level's tile across the whole
+    // target: two layers of fill under the finer one.)
     const double span = double(kTileSize) * fine.downsample;
-    const int64_t fx0 = int64_t(std::floor(x0 / span)), fx1 = int64_t(std::floor(x1 / span));
-    const int64_t fy0 = int64_t(std::floor(y0 / span)), fy1 = int64_t(std::floor(y1 / span));
     const TileRange& r = drawn.range;
-    if (r.empty() || fx0 < r.x0 || fy0 < r.y0 || fx1 > r.x1 || fy1 > r.y1) return false;
+    if (r.empty()) return false;
+    const int64_t fx0 = std::max(r.x0, int64_t(std::floor(x0 / span)));
+    const int64_t fx1 = std::min(r.x1, int64_t(std::floor(x1 / span)));
+    const int64_t fy0 = std::max(r.y0, int64_t(std::floor(y0 / span)));
+    const int64_t fy1 = std::min(r.y1, int64_t(std::floor(y1 / span)));
     for (int64_t y = fy0; y <= fy1; ++y)
         for (int64_t x = fx0; x <= fx1; ++x)
             if (!drawn.isDrawn(x, y) && drawn.area.contains(x, y)) return false;

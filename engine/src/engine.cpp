@@ -51,7 +51,19 @@ struct Engine::Impl {
 
     Result init() {
         if (Result r = device.init(config); !r.ok()) return r;
-        if (Result r = atlas.init(config.vramBudgetBytes, config.tuning.deviceAllocationLimit); !r.ok()) return r;
+        // BGRA where the exact copy is on and the mips are made on the host (CPU devices): X11's
+        // swapchains are BGRA, and a copy cannot swap channels (a converting blit costs what
+        // drawing does on lavapipe). Tiles stay RGBA in RAM; the buffer thread swaps them as it
+        // stages them. The compute mip passes write rgba8 images, so they keep RGBA.
+        const bool cpuDevice = device.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
+        const auto schedule = config.tuning.mipSchedule; // resolved as MipPipeline::init does
+        const bool hostMips = schedule == EngineTuning::MipSchedule::Host ||
+                              (schedule == EngineTuning::MipSchedule::Auto && cpuDevice);
+        const VkFormat atlasFormat = RenderThread::copiesExact(config.tuning.exactCopy, cpuDevice) && hostMips
+                                         ? gpu::TileAtlas::kSwappedFormat
+                                         : gpu::TileAtlas::kFormat;
+        if (Result r = atlas.init(config.vramBudgetBytes, config.tuning.deviceAllocationLimit, atlasFormat); !r.ok())
+            return r;
         if (atlas.slotCount() < atlas.requestedSlots()) {
             const auto mib = [](uint64_t slots) { return std::to_string(slots * gpu::TileAtlas::bytesPerSlot() >> 20); };
             log.warn("VRAM: the device could not allocate a tile atlas of " + std::to_string(atlas.requestedSlots()) +
@@ -67,7 +79,7 @@ struct Engine::Impl {
         render = std::make_unique<RenderThread>(shared, device, atlas, pipeline, *handover, counters, log, config.tuning);
         if (Result r = render->init(); !r.ok()) return r;
         buffer = std::make_unique<BufferThread>(shared, cache, device, atlas, mips, *handover, counters, log,
-                                                int(config.perimeterTiles));
+                                                int(config.perimeterTiles), render->copiesExact());
         if (Result r = buffer->init(); !r.ok()) return r;
         shared.update([&](Snapshot& s) { s.background = config.background; });
         (void)bakeColor(nullptr, color, colorStatus); // the display profile's description
@@ -94,6 +106,7 @@ struct Engine::Impl {
         {
             std::unique_lock lock(gpuMutex); // memoryStats() and device() read the atlas
             if (atlas.slotCount()) atlasSlots = atlas.slotCount();
+            const VkFormat atlasFormat = atlas.format(); // as init chose it
             std::destroy_at(&mips);
             std::destroy_at(&pipeline);
             std::destroy_at(&atlas);
@@ -103,7 +116,7 @@ struct Engine::Impl {
             handover->reset();
             if (Result r = device.recreate(); !r.ok()) return r;
             const uint64_t budget = std::min<uint64_t>(config.vramBudgetBytes, uint64_t(atlasSlots) * gpu::TileAtlas::bytesPerSlot());
-            if (Result r = atlas.init(budget, config.tuning.deviceAllocationLimit); !r.ok()) return r;
+            if (Result r = atlas.init(budget, config.tuning.deviceAllocationLimit, atlasFormat); !r.ok()) return r;
             if (Result r = pipeline.init(RenderThread::kFramesInFlight, config.tuning.colorLookup); !r.ok()) return r;
             if (Result r = mips.init(config.tuning.mipSchedule); !r.ok()) return r;
         }

@@ -28,7 +28,7 @@ using namespace std::chrono_literals;
 namespace {
 
 constexpr const char* kVariables[] = {"IRIS_PACE_FRAMES", "IRIS_DRAW_COVERED", "IRIS_MIP_SCHEDULE", "IRIS_DEVICE",
-                                      "IRIS_QUEUES",      "IRIS_TILE_RESOLVE", "IRIS_COLOR_LOOKUP"};
+                                      "IRIS_QUEUES",      "IRIS_TILE_RESOLVE", "IRIS_COLOR_LOOKUP", "IRIS_EXACT_COPY"};
 
 // Sets the variables for its lifetime and puts back what was there before.
 class ScopedEnvironment {
@@ -83,6 +83,7 @@ private slots:
             QVERIFY(t->mipSchedule == T::MipSchedule::Auto);
             QVERIFY(t->deviceName.empty());
             QVERIFY(!t->singleQueue);
+            QVERIFY(t->exactCopy == T::ExactCopy::Auto);
         }
         {
             ScopedEnvironment env({{"IRIS_PACE_FRAMES", "1"},
@@ -91,9 +92,11 @@ private slots:
                                    {"IRIS_DEVICE", "llvmpipe"},
                                    {"IRIS_QUEUES", "single"},
                                    {"IRIS_TILE_RESOLVE", "quads"},
-                                   {"IRIS_COLOR_LOOKUP", "nodes"}});
+                                   {"IRIS_COLOR_LOOKUP", "nodes"},
+                                   {"IRIS_EXACT_COPY", "1"}});
             auto t = iris::tuningFromEnvironment();
             QVERIFY(t.ok());
+            QVERIFY(t->exactCopy == T::ExactCopy::On);
             QVERIFY(t->tileResolve == T::TileResolve::Quads);
             QVERIFY(t->colorLookup == T::ColorLookup::Nodes);
             QVERIFY(t->pacing == T::Pacing::On);
@@ -105,7 +108,7 @@ private slots:
         {
             ScopedEnvironment env({{"IRIS_PACE_FRAMES", "0"}, {"IRIS_MIP_SCHEDULE", "wide"}, {"IRIS_QUEUES", "auto"},
                                    {"IRIS_DRAW_COVERED", "0"}, {"IRIS_TILE_RESOLVE", "compute"},
-                                   {"IRIS_COLOR_LOOKUP", "sampler"}});
+                                   {"IRIS_COLOR_LOOKUP", "sampler"}, {"IRIS_EXACT_COPY", "0"}});
             T base;
             base.singleQueue = true;
             base.drawCovered = true;
@@ -117,6 +120,7 @@ private slots:
             QVERIFY(!t->drawCovered);
             QVERIFY(t->tileResolve == T::TileResolve::Compute);
             QVERIFY(t->colorLookup == T::ColorLookup::Sampler);
+            QVERIFY(t->exactCopy == T::ExactCopy::Off);
         }
         {
             ScopedEnvironment env(std::map<std::string, std::string>{{"IRIS_MIP_SCHEDULE", "host"}});
@@ -154,6 +158,7 @@ private slots:
         QTest::newRow("queues one") << "IRIS_QUEUES" << "one" << "single, auto";
         QTest::newRow("resolve pixels") << "IRIS_TILE_RESOLVE" << "pixels" << "auto, quads, compute";
         QTest::newRow("lookup Sampler") << "IRIS_COLOR_LOOKUP" << "Sampler" << "auto, sampler, nodes";
+        QTest::newRow("exact copy on") << "IRIS_EXACT_COPY" << "on" << "auto, 0, 1";
     }
     void badValuesAreErrorsNamingTheVariable() {
         QFETCH(QString, name);

@@ -66,6 +66,15 @@ struct EngineTuning {
     // 2-3× cheaper per frame on the H200 and on lavapipe.
     enum class ColorLookup { Auto, Sampler, Nodes };
     ColorLookup colorLookup = ColorLookup::Auto;
+    // Levels drawn exactly (1:1 on whole pixels, unturned, no colour step) whose tiles are
+    // opaque are copied from the atlas into the target (vkCmdCopyImage) instead of drawn, where
+    // the target's format is the atlas's. The bytes are the same; the copy skips the
+    // rasteriser. Auto: on for CPU devices (lavapipe copies a settled 1080p field about 5x
+    // faster than it draws it: docs/BENCHMARKS.md), off for GPUs. With the host mip schedule
+    // the atlas and offscreen targets are then BGRA, the order of X11's swapchains, so that
+    // windows get the copy too (frames read back are RGBA as always).
+    enum class ExactCopy { Auto, On, Off };
+    ExactCopy exactCopy = ExactCopy::Auto;
     // Fault injection for tests: a device allocation of the tile atlas larger than this many
     // bytes fails as VK_ERROR_OUT_OF_DEVICE_MEMORY would (0: no limit), so that the fallback to a
     // smaller atlas can be tested on any device.

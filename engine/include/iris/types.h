@@ -362,6 +362,7 @@ struct FrameStats {
     uint64_t bytesBuffered = 0;  // tile bytes whose upload (base level + all mips) completed since the previous frame
     double bufferRateGBps = 0;   // bytesBuffered / intervalMs
     uint32_t tilesDrawn = 0;
+    uint32_t tilesCopied = 0;    // of tilesDrawn: copied into the target, not drawn (EngineTuning::exactCopy)
     bool complete = false;
     View view;
 };

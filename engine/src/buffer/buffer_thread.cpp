@@ -2,22 +2,38 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstring>
 #include <unordered_set>
 
+#include "core/pixels.h"
 #include "gpu/mip_kernel.h"
 
 namespace iris {
 
 namespace {
 constexpr uint32_t kStagingTiles = BufferThread::kTilesPerTransaction * BufferThread::kMaxTransactions;
+constexpr size_t kTilePixels = size_t(kTileSize) * kTileSize;
+
+// Whether every pixel of the staged RGBA tile (padding included) has alpha 255: the AND of all
+// its 8-byte words, whose alpha bytes (3 and 7) must stay 0xFF.
+bool allOpaque(const uint8_t* tile) {
+    uint64_t acc = ~uint64_t(0);
+    for (size_t i = 0; i < size_t(kTileBytes); i += 8) {
+        uint64_t w;
+        std::memcpy(&w, tile + i, 8);
+        acc &= w;
+    }
+    uint8_t bytes[8];
+    std::memcpy(bytes, &acc, 8);
+    return bytes[3] == 0xFF && bytes[7] == 0xFF;
 }
+} // namespace
 
 BufferThread::BufferThread(SharedState& shared, TileCache& cache, gpu::Device& device, gpu::TileAtlas& atlas,
                            gpu::MipPipeline& mips, Handover& handover, UploadCounters& counters, const Log& log,
-                           int perimeter)
+                           int perimeter, bool trackOpacity)
     : shared_(shared), cache_(cache), device_(device), atlas_(atlas), mips_(mips), handover_(handover),
-      counters_(counters), log_(log),
-      perimeter_(perimeter) {}
+      counters_(counters), log_(log), perimeter_(perimeter), trackOpacity_(trackOpacity) {}
 
 BufferThread::~BufferThread() {
     stop(); // the uploads in flight finish before the pools, semaphores and staging ring go
@@ -263,16 +279,18 @@ bool BufferThread::pollCompleted() {
         // Single family: the compute submission made the tiles visible to fragment reads, so
         // they can be drawn now. Separate families: the render thread must first record the
         // acquire half of the compute → graphics ownership transfer; it activates them then.
-        for (int s : t.slots) {
+        for (size_t i = 0; i < t.slots.size(); ++i) {
             ++seq;
+            const bool opaque = t.opaque[i] != 0;
             if (handover_.needed)
-                handover_.push({s, t.signalValue, seq});
+                handover_.push({t.slots[i], t.signalValue, seq, opaque});
             else
-                atlas_.map().activate(s, seq);
+                atlas_.map().activate(t.slots[i], seq, opaque);
         }
         for (uint32_t s : t.staging) freeStaging_.push_back(s);
         t.slots.clear();
         t.staging.clear();
+        t.opaque.clear();
         t.signalValue = 0;
         any = true;
     }
@@ -311,6 +329,8 @@ bool BufferThread::submitNew(const Snapshot& snap) {
                 const uint32_t st = freeStaging_.back();
                 freeStaging_.pop_back();
                 fillFailedTilePlaceholder(base + size_t(st) * stagingStride_);
+                if (atlas_.swapped()) swapRedBlue(base + size_t(st) * stagingStride_, base + size_t(st) * stagingStride_, kTilePixels);
+                tx.opaque.push_back(trackOpacity_ && allOpaque(base + size_t(st) * stagingStride_));
                 if (hostMips_) makeHostMips(base + size_t(st) * stagingStride_, snap.enhance);
                 tx.slots.push_back(slot);
                 tx.staging.push_back(st);
@@ -332,6 +352,8 @@ bool BufferThread::submitNew(const Snapshot& snap) {
             continue;
         }
         freeStaging_.pop_back();
+        if (atlas_.swapped()) swapRedBlue(base + size_t(st) * stagingStride_, base + size_t(st) * stagingStride_, kTilePixels);
+        tx.opaque.push_back(trackOpacity_ && allOpaque(base + size_t(st) * stagingStride_));
         if (hostMips_) makeHostMips(base + size_t(st) * stagingStride_, snap.enhance);
         shared_.tileStages.stamp(TileStage::Staged);
         tx.slots.push_back(slot);
@@ -352,6 +374,7 @@ bool BufferThread::submitNew(const Snapshot& snap) {
         for (uint32_t s : tx.staging) freeStaging_.push_back(s);
         tx.slots.clear();
         tx.staging.clear();
+        tx.opaque.clear();
         return false;
     }
     tx.signalValue = ++nextValue_;

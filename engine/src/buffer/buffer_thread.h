@@ -37,7 +37,8 @@ namespace iris {
 class BufferThread {
 public:
     BufferThread(SharedState& shared, TileCache& cache, gpu::Device& device, gpu::TileAtlas& atlas,
-                 gpu::MipPipeline& mips, Handover& handover, UploadCounters& counters, const Log& log, int perimeter);
+                 gpu::MipPipeline& mips, Handover& handover, UploadCounters& counters, const Log& log, int perimeter,
+                 bool trackOpacity = false);
     ~BufferThread();
     Result init();
     void start();
@@ -62,6 +63,7 @@ private:
         bool enhance = true;      // Snapshot::enhance of the view this transaction was made for
         std::vector<int> slots;
         std::vector<uint32_t> staging;
+        std::vector<uint8_t> opaque; // per slot: every pixel's alpha is 255 (only with trackOpacity_)
     };
     void run();
     void releaseGpu();
@@ -100,6 +102,9 @@ private:
     double timestampPeriodNs_ = 0;
     bool separateCopy_ = false;
     bool hostMips_ = false;                 // MipPipeline::Schedule::Host: levels made here, uploaded by copy
+    // Look at each staged tile's alpha, so that the render thread may copy opaque tiles instead
+    // of drawing them (EngineTuning::exactCopy; TileMap::opaqueOf). About 5 µs a tile.
+    const bool trackOpacity_;
     VkDeviceSize stagingStride_ = kTileBytes; // one tile's staging (with its levels under the host schedule)
     uint32_t transferFamily_ = 0, computeFamily_ = 0, graphicsFamily_ = 0;
     uint64_t nextValue_ = 0;

@@ -22,6 +22,7 @@ struct HandoverItem {
     int slot;
     uint64_t uploadValue; // upload timeline value whose signal released the slot
     uint64_t uploadSeq;   // UploadCounters::tiles once this tile's upload was counted (TileMap::activate)
+    bool opaque = false;  // every pixel's alpha is 255 (TileMap::activate)
 };
 
 class Handover {

@@ -53,6 +53,13 @@ Expected<EngineTuning> tuningFromEnvironment(EngineTuning base) {
                                                    base.tileResolve);
         !r.ok())
         return r;
+    if (Result r = pick<EngineTuning::ExactCopy>("IRIS_EXACT_COPY",
+                                                 {{"auto", EngineTuning::ExactCopy::Auto},
+                                                  {"0", EngineTuning::ExactCopy::Off},
+                                                  {"1", EngineTuning::ExactCopy::On}},
+                                                 base.exactCopy);
+        !r.ok())
+        return r;
     if (Result r = pick<EngineTuning::ColorLookup>("IRIS_COLOR_LOOKUP",
                                                    {{"auto", EngineTuning::ColorLookup::Auto},
                                                     {"sampler", EngineTuning::ColorLookup::Sampler},

@@ -56,6 +56,9 @@ public:
     // The upload sequence number its activation gave `slot` (see activate()). Read it only
     // for a slot this thread has pinned: the pin's acquire of ACTIVE orders the stamp.
     uint64_t uploadSeqOf(int slot) const;
+    // Whether every pixel of `slot`'s tile is opaque (alpha 255), as its activation said; read
+    // like uploadSeqOf. False where nobody looked.
+    bool opaqueOf(int slot) const;
     uint32_t countActive() const;
 
     // --- the writer (buffer thread only) ------------------------------------------------
@@ -68,12 +71,12 @@ public:
     int allocate(uint64_t key, Keep&& keep);
     // Makes the slot ACTIVE, stamped with `uploadSeq`: the value of UploadCounters::tiles once
     // its upload was counted, so that metrics can tell a tile uploaded after a move from one
-    // resident before it (a revisit).
-    void activate(int slot, uint64_t uploadSeq = 0);
+    // resident before it (a revisit); `opaque`: every pixel of the tile has alpha 255.
+    void activate(int slot, uint64_t uploadSeq = 0, bool opaque = false);
     // Render thread, for tiles handed over from another queue family: makes the slot ACTIVE
     // already pinned by the frame that acquires it, so it cannot be reclaimed (and released
     // again) before that frame's acquire has executed. Unpin after the frame's fence.
-    void activatePinned(int slot, uint64_t frame, uint64_t uploadSeq = 0);
+    void activatePinned(int slot, uint64_t frame, uint64_t uploadSeq = 0, bool opaque = false);
     // Gives up a FILLING slot (its upload was abandoned): it becomes FREE and unindexed.
     void abandon(int slot);
 
@@ -86,6 +89,7 @@ private:
         // Stored relaxed before the status's release (or seq_cst) store to ACTIVE; read relaxed
         // after a pin's seq_cst load saw ACTIVE, which acquires it.
         std::atomic<uint64_t> uploadSeq{0};
+        std::atomic<bool> opaque{false}; // stored and read like uploadSeq
     };
     static_assert(sizeof(Slot) == kCacheLine, "one slot per cache line: readers and the writer touch different slots");
 

@@ -9,11 +9,11 @@ Result OffscreenTarget::init(uint32_t width, uint32_t height, bool storage) {
     width_ = width;
     height_ = height;
     const VkImageCreateInfo ici =
-        vk::image2D(kFormat, width, height, 1, 1,
-                    VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT |
+        vk::image2D(format_, width, height, 1, 1,
+                    VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT |
                         (storage ? VkImageUsageFlags(VK_IMAGE_USAGE_STORAGE_BIT) : VkImageUsageFlags(0)));
     if (Result r = vk::createDeviceImage(device_.physical(), dev, ici, image_, memory_); !r.ok()) return r;
-    if (Result r = vk::createImageView(dev, image_.get(), VK_IMAGE_VIEW_TYPE_2D, kFormat, vk::colorRange(0, 1, 0, 1),
+    if (Result r = vk::createImageView(dev, image_.get(), VK_IMAGE_VIEW_TYPE_2D, format_, vk::colorRange(0, 1, 0, 1),
                                        *view_.replace(dev));
         !r.ok())
         return r;
@@ -70,6 +70,7 @@ Result Swapchain::recreate(uint32_t width, uint32_t height) {
         chosen = formats[0];
     }
     format_ = chosen.format;
+    transferDst_ = (caps.supportedUsageFlags & VK_IMAGE_USAGE_TRANSFER_DST_BIT) != 0;
     uint32_t count = std::max(caps.minImageCount + 1, 3u);
     if (caps.maxImageCount) count = std::min(count, caps.maxImageCount);
     const VkSwapchainCreateInfoKHR sci{
@@ -82,7 +83,8 @@ Result Swapchain::recreate(uint32_t width, uint32_t height) {
         .imageColorSpace = chosen.colorSpace,
         .imageExtent = extent,
         .imageArrayLayers = 1,
-        .imageUsage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT,
+        .imageUsage = VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT |
+                      (caps.supportedUsageFlags & VK_IMAGE_USAGE_TRANSFER_DST_BIT),
         .imageSharingMode = VK_SHARING_MODE_EXCLUSIVE,
         .queueFamilyIndexCount = 0,
         .pQueueFamilyIndices = nullptr,

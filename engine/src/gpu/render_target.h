@@ -1,5 +1,6 @@
 // Render targets owned by the render thread: an offscreen RGBA8 image with a host-visible
-// readback buffer, or a swapchain on a host's VkSurfaceKHR.
+// readback buffer, or a swapchain on a host's VkSurfaceKHR. Both can be copied into (the
+// exact copy of levels at their own scale; a swapchain where its surface allows it).
 #pragma once
 
 #include <vector>
@@ -12,10 +13,13 @@ namespace iris::gpu {
 
 class OffscreenTarget {
 public:
-    OffscreenTarget(Device& device) : device_(device) {}
+    // format: RGBA8, or BGRA8 (the atlas's where it is swapped, so that tiles copy into it; the
+    // read-back is swapped back to RGBA by the render thread).
+    explicit OffscreenTarget(Device& device, VkFormat format = VK_FORMAT_R8G8B8A8_UNORM)
+        : device_(device), format_(format) {}
     // storage: the image can also be written by a compute shader (the per-pixel resolve).
     Result init(uint32_t width, uint32_t height, bool storage = false);
-    static constexpr VkFormat kFormat = VK_FORMAT_R8G8B8A8_UNORM;
+    VkFormat format() const { return format_; }
     VkImage image() const { return image_.get(); }
     VkImageView view() const { return view_.get(); }
     const vk::MappedBuffer& readback() const { return readback_; }
@@ -23,6 +27,7 @@ public:
 
 private:
     Device& device_;
+    VkFormat format_;
     vk::MappedBuffer readback_;
     vk::Memory memory_;
     vk::Image image_;
@@ -40,6 +45,8 @@ public:
     bool valid() const { return bool(swapchain_); }
     VkSwapchainKHR handle() const { return swapchain_.get(); }
     VkFormat format() const { return format_; }
+    // Its images can be copied into (the surface allows VK_IMAGE_USAGE_TRANSFER_DST_BIT).
+    bool transferDst() const { return transferDst_; }
     VkExtent2D extent() const { return extent_; }
     // The surface's current extent as the window system reports it now ({UINT32_MAX,
     // UINT32_MAX}: the application chooses; {0, 0} on an error).
@@ -54,6 +61,7 @@ private:
     VkSurfaceKHR surface_;
     vk::SwapchainKHR swapchain_; // declared first: it goes after its images' views and semaphores
     VkFormat format_ = VK_FORMAT_UNDEFINED;
+    bool transferDst_ = false;
     VkExtent2D extent_{};
     std::vector<VkImage> images_;           // the swapchain's own
     std::vector<vk::Semaphore> renderDone_; // one per image: present waits on it

@@ -1,5 +1,7 @@
 #include "gpu/tile_atlas.h"
 
+#include <string>
+
 #include <algorithm>
 
 #include "gpu/vk_util.h"
@@ -57,28 +59,29 @@ Result transitionToGeneral(Device& device, VkImage image) {
 }
 } // namespace
 
-Result TileAtlas::init(uint64_t vramBudgetBytes, uint64_t allocationLimit) {
+Result TileAtlas::init(uint64_t vramBudgetBytes, uint64_t allocationLimit, VkFormat format) {
     VkDevice dev = device_.device();
+    format_ = format;
     const auto& limits = device_.properties().limits;
     uint64_t n = vramBudgetBytes / bytesPerSlot();
     n = std::clamp<uint64_t>(n, 64, limits.maxImageArrayLayers);
     requested_ = uint32_t(n);
 
-    constexpr VkFormat kFormat = VK_FORMAT_R8G8B8A8_UNORM; // UNORM: bytes in, bytes out, no sRGB conversion
     VkFormatProperties fp;
-    vkGetPhysicalDeviceFormatProperties(device_.physical(), kFormat, &fp);
+    vkGetPhysicalDeviceFormatProperties(device_.physical(), format_, &fp);
     const VkFormatFeatureFlags need = VK_FORMAT_FEATURE_SAMPLED_IMAGE_BIT | VK_FORMAT_FEATURE_SAMPLED_IMAGE_FILTER_LINEAR_BIT |
                                       VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT;
     if ((fp.optimalTilingFeatures & need) != need) {
-        return Result(Status::Vulkan, "The device cannot sample (linear) and store RGBA8 images");
+        return Result(Status::Vulkan, std::string("The device cannot sample (linear) and store ") +
+                                          (swapped() ? "BGRA8" : "RGBA8") + " images");
     }
 
     Result made(Status::OutOfMemory, "no room for a tile atlas of 64 slots");
     // Halve the slot count until the allocation succeeds (a budget larger than the device).
     for (; n >= 64; n /= 2) {
         const VkImageCreateInfo ici =
-            vk::image2D(kFormat, uint32_t(kTileSize), uint32_t(kTileSize), kTileMipLevels, uint32_t(n),
-                        VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_STORAGE_BIT);
+            vk::image2D(format_, uint32_t(kTileSize), uint32_t(kTileSize), kTileMipLevels, uint32_t(n),
+                        VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_STORAGE_BIT);
         if (allocationLimit > 0 && n * bytesPerSlot() > allocationLimit) {
             made = Result(Status::OutOfMemory, "VK_ERROR_OUT_OF_DEVICE_MEMORY (the allocation limit set for tests)");
             continue;
@@ -88,12 +91,12 @@ Result TileAtlas::init(uint64_t vramBudgetBytes, uint64_t allocationLimit) {
     }
     if (!made.ok()) return made;
 
-    if (Result r = vk::createImageView(dev, image_.get(), VK_IMAGE_VIEW_TYPE_2D_ARRAY, kFormat, vk::colorRange(),
+    if (Result r = vk::createImageView(dev, image_.get(), VK_IMAGE_VIEW_TYPE_2D_ARRAY, format_, vk::colorRange(),
                                        *view_.replace(dev));
         !r.ok())
         return r;
     for (uint32_t m = 0; m < kTileMipLevels; ++m) {
-        if (Result r = vk::createImageView(dev, image_.get(), VK_IMAGE_VIEW_TYPE_2D_ARRAY, kFormat,
+        if (Result r = vk::createImageView(dev, image_.get(), VK_IMAGE_VIEW_TYPE_2D_ARRAY, format_,
                                            vk::colorRange(m, 1), *mipViews_[m].replace(dev));
             !r.ok())
             return r;

@@ -20,12 +20,20 @@ inline constexpr uint32_t kTileMipLevels = 9; // 256 → 1
 
 class TileAtlas {
 public:
+    // UNORM: bytes in, bytes out, no sRGB conversion. RGBA8, or BGRA8 where the exact copy goes
+    // into X11's BGRA swapchains (Engine::Impl::init: CPU devices, whose mips are made on the
+    // host; the buffer thread then swaps red and blue as it stages each tile).
+    static constexpr VkFormat kFormat = VK_FORMAT_R8G8B8A8_UNORM;
+    static constexpr VkFormat kSwappedFormat = VK_FORMAT_B8G8R8A8_UNORM;
     explicit TileAtlas(Device& device) : device_(device) {}
     // An atlas of vramBudgetBytes / bytesPerSlot() slots (64 .. maxImageArrayLayers), halved
     // while the device cannot allocate it (VK_ERROR_OUT_OF_DEVICE_MEMORY: a budget larger than
     // the device allows). allocationLimit > 0 makes every allocation above that many bytes fail
     // as if the device had run out (EngineTuning::deviceAllocationLimit, for tests).
-    Result init(uint64_t vramBudgetBytes, uint64_t allocationLimit = 0);
+    Result init(uint64_t vramBudgetBytes, uint64_t allocationLimit = 0, VkFormat format = kFormat);
+    VkFormat format() const { return format_; }
+    // The atlas holds BGRA: staged tiles (RGBA in RAM) have their red and blue swapped.
+    bool swapped() const { return format_ == kSwappedFormat; }
     // The slots the budget asked for; slotCount() is what the device gave.
     uint32_t requestedSlots() const { return requested_; }
 
@@ -42,6 +50,7 @@ public:
 
 private:
     Device& device_;
+    VkFormat format_ = kFormat;
     vk::Memory memory_;
     vk::Image image_;
     vk::ImageView view_;

@@ -95,7 +95,7 @@ void MetricsBoard::frameDrawn(const Snapshot& snap, const FieldProgress& p) {
 }
 
 FrameStats MetricsBoard::frameFinished(const Snapshot& snap, uint64_t serial, bool complete, uint32_t tilesDrawn,
-                                       double cpuMs, double gpuMs) {
+                                       double cpuMs, double gpuMs, uint32_t tilesCopied) {
     FrameStats stats;
     const auto now = std::chrono::steady_clock::now();
     stats.serial = serial;
@@ -110,6 +110,7 @@ FrameStats MetricsBoard::frameFinished(const Snapshot& snap, uint64_t serial, bo
     lastBytes_ = bytes;
     stats.bufferRateGBps = stats.intervalMs > 0 ? double(stats.bytesBuffered) / (stats.intervalMs * 1e6) : 0;
     stats.tilesDrawn = tilesDrawn;
+    stats.tilesCopied = tilesCopied;
     stats.complete = complete;
     stats.view = snap.viewport.view;
 

@@ -58,7 +58,7 @@ public:
     // (`gpuMs`: the GPU time of the last frame whose timestamps have come back, -1 when none)
     // and publishes them with the fields finished since the last frame.
     FrameStats frameFinished(const Snapshot& snap, uint64_t serial, bool complete, uint32_t tilesDrawn, double cpuMs,
-                             double gpuMs);
+                             double gpuMs, uint32_t tilesCopied = 0);
 
     // --- API threads ---------------------------------------------------------------------
     EngineMetrics read() const;

@@ -31,6 +31,8 @@ public:
     // The upload sequence number of the tile this frame pinned in `layer` (UploadCounters::tiles
     // once its upload was counted); 0 where unknown.
     virtual uint64_t uploadSeq(int /*layer*/) const { return 0; }
+    // Whether every pixel of the tile this frame pinned in `layer` is opaque; false where unknown.
+    virtual bool opaque(int /*layer*/) const { return false; }
 
 protected:
     ~TileResidency() = default;

@@ -49,6 +49,9 @@ struct FrameContext {
     uint64_t serial = 0; // frame serial: pins taken for this frame are held until its fence
     // The target has the size the view was published for (see DrawOptions::sizeMatches).
     bool sizeMatches = true;
+    // The tile pass may copy atlas tiles into the target (render/tile_pass.h, the exact copy):
+    // the copy is on, the target takes transfers and has the atlas's format.
+    bool copyTarget = false;
     TileResidency& tiles; // the GPU tile map, pinning what this frame samples
     InstanceArena& instances;
     // Tiles of the slide whose read failed for now (core/failing_tiles.h); null: none.

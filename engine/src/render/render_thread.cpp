@@ -5,6 +5,8 @@
 #include <cstring>
 #include <vector>
 
+#include "core/pixels.h"
+
 namespace iris {
 
 using Clock = std::chrono::steady_clock;
@@ -30,6 +32,7 @@ public:
     }
     bool isActive(uint64_t key) const override { return map_.statusOf(key) == TileMap::Status::Active; }
     uint64_t uploadSeq(int layer) const override { return map_.uploadSeqOf(layer); }
+    bool opaque(int layer) const override { return map_.opaqueOf(layer); }
 
 private:
     TileMap& map_;
@@ -69,6 +72,12 @@ void RenderThread::releaseGpu() {
     timestamps_ = {};
 }
 
+VkFormat RenderThread::offscreenFormat() const {
+    // The atlas's, so that the exact copy can go into it; RGBA where a compute shader writes it
+    // (the per-pixel resolve's rgba8 image).
+    return resolvePass_ ? VK_FORMAT_R8G8B8A8_UNORM : atlas_.format();
+}
+
 Result RenderThread::init() {
     switch (tuning_.pacing) {
     case EngineTuning::Pacing::Auto: paceFrames_ = device_.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU; break;
@@ -76,6 +85,8 @@ Result RenderThread::init() {
     case EngineTuning::Pacing::Off: paceFrames_ = false; break;
     }
     log_.info(std::string("frame pacing: ") + (paceFrames_ ? "on" : "off"));
+    copyExact_ = copiesExact(tuning_.exactCopy, device_.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU);
+    log_.info(std::string("exact copy: ") + (copyExact_ ? "on" : "off"));
     if (Result r = initGpu(); !r.ok()) return r;
     log_.info(resolvePass_ ? "tile resolve: compute (offscreen targets; a swapchain draws quads)" : "tile resolve: quads");
     return {};
@@ -247,7 +258,7 @@ void RenderThread::applyTargetRequest() {
     reqWidth_ = req.width;
     reqHeight_ = req.height;
     if (kind_ == TargetKind::Offscreen) {
-        offscreen_ = std::make_unique<gpu::OffscreenTarget>(device_);
+        offscreen_ = std::make_unique<gpu::OffscreenTarget>(device_, offscreenFormat());
         if (Result r = offscreen_->init(req.width, req.height, resolvePass_ != nullptr); !r.ok()) {
             shared_.setError(r);
             log_.error("offscreen target: " + r.message());
@@ -409,7 +420,7 @@ void RenderThread::recover() {
             // The target it had, on the new device: the same offscreen size, or a new swapchain
             // on the same surface (one the window system took away stays lost).
             if (kind_ == TargetKind::Offscreen) {
-                offscreen_ = std::make_unique<gpu::OffscreenTarget>(device_);
+                offscreen_ = std::make_unique<gpu::OffscreenTarget>(device_, offscreenFormat());
                 r = offscreen_->init(reqWidth_, reqHeight_, resolvePass_ != nullptr);
                 if (!r.ok()) offscreen_.reset();
             } else if (kind_ == TargetKind::Surface && surfacePhase_ != SurfacePhase::Lost) {
@@ -478,7 +489,7 @@ Result RenderThread::waitSlot(FrameSlot& f) {
 
 Expected<RenderThread::TargetImage> RenderThread::acquireTarget(FrameSlot& f) {
     if (kind_ == TargetKind::Offscreen)
-        return TargetImage{offscreen_->image(), offscreen_->view(), gpu::OffscreenTarget::kFormat, offscreen_->extent(), 0};
+        return TargetImage{offscreen_->image(), offscreen_->view(), offscreen_->format(), offscreen_->extent(), 0, true};
     uint32_t index = 0;
     const VkResult ar = vkAcquireNextImageKHR(device_.device(), swapchain_->handle(), 100'000'000, f.acquired.get(),
                                               VK_NULL_HANDLE, &index);
@@ -499,7 +510,8 @@ Expected<RenderThread::TargetImage> RenderThread::acquireTarget(FrameSlot& f) {
         return TargetImage{};
     default: return vk::check(ar, "vkAcquireNextImageKHR");
     }
-    return TargetImage{swapchain_->image(index), swapchain_->view(index), swapchain_->format(), swapchain_->extent(), index};
+    return TargetImage{swapchain_->image(index), swapchain_->view(index), swapchain_->format(), swapchain_->extent(), index,
+                       swapchain_->transferDst()};
 }
 
 Result RenderThread::renderFrame(const Snapshot& snap) {
@@ -523,7 +535,8 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
     // The per-pixel resolve samples the atlas in a compute shader, the quads in fragment shaders.
     const bool resolve = resolvePass_ && kind_ == TargetKind::Offscreen;
     const VkPipelineStageFlags2 sampleStages =
-        VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | (resolve ? VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT : VkPipelineStageFlags2(0));
+        VK_PIPELINE_STAGE_2_FRAGMENT_SHADER_BIT | (resolve ? VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT : VkPipelineStageFlags2(0)) |
+        (copyExact_ ? VK_PIPELINE_STAGE_2_COPY_BIT : VkPipelineStageFlags2(0));
     std::vector<VkImageMemoryBarrier2> acquires;
     uint64_t uploadWait = 0;
     if (handover_.needed) {
@@ -536,7 +549,7 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
             b.dstQueueFamilyIndex = device_.queueFamily();
             acquires.push_back(b);
             uploadWait = std::max(uploadWait, h.uploadValue);
-            atlas_.map().activatePinned(h.slot, serial, h.uploadSeq);
+            atlas_.map().activatePinned(h.slot, serial, h.uploadSeq, h.opaque);
             f.pinned.push_back(h.slot); // held until this frame's fence
         });
         if (!acquires.empty()) shared_.tileStages.stamp(TileStage::Drawable, uint32_t(acquires.size()));
@@ -562,6 +575,8 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
                                                   ? target.extent.width == snap.viewport.width &&
                                                         target.extent.height == snap.viewport.height
                                                   : surfacePhase_ != SurfacePhase::WaitingForWindow,
+                               .copyTarget = copyExact_ && !resolve && target.transferDst &&
+                                             target.format == atlas_.format(),
                                .tiles = pins,
                                .instances = instances,
                                .failing = failing.get()};
@@ -654,8 +669,24 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
         .pStencilAttachment = nullptr,
     };
     vkCmdBeginRendering(cmd, &ri);
-    for (render::FramePass* pass : passes_->list)
-        if (Result r = pass->recordDraws(cmd, frame); !r.ok()) passFailed(*pass, r);
+    if (passes_->tile.tilesCopied() > 0) {
+        // The exact copy (render/tile_pass.h): the levels still drawn, then the copied tiles
+        // over them, then the other passes over both in a second render pass that keeps them.
+        if (Result r = passes_->tile.recordDraws(cmd, frame); !r.ok()) passFailed(passes_->tile, r);
+        vkCmdEndRendering(cmd);
+        recordExactCopies(cmd, target);
+        VkRenderingAttachmentInfo keep = color;
+        keep.loadOp = VK_ATTACHMENT_LOAD_OP_LOAD;
+        VkRenderingInfo again = ri;
+        again.pColorAttachments = &keep;
+        vkCmdBeginRendering(cmd, &again);
+        for (render::FramePass* pass : passes_->list)
+            if (pass != &passes_->tile)
+                if (Result r = pass->recordDraws(cmd, frame); !r.ok()) passFailed(*pass, r);
+    } else {
+        for (render::FramePass* pass : passes_->list)
+            if (Result r = pass->recordDraws(cmd, frame); !r.ok()) passFailed(*pass, r);
+    }
     vkCmdEndRendering(cmd);
     recordTargetFinish(cmd, target);
     if (timestamps_) vkCmdWriteTimestamp2(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, timestamps_.get(), query + 1);
@@ -668,6 +699,38 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
                  std::chrono::duration<double, std::milli>(Clock::now() - t0).count(), passes_->hud.layout());
     if (frame.redraw) shared_.bump();
     return {};
+}
+
+void RenderThread::recordExactCopies(VkCommandBuffer cmd, const TargetImage& target) {
+    // The target from drawing to a copy destination; the atlas's tiles, written by earlier
+    // uploads (their barriers cover fragment reads, not transfers), to transfer reads.
+    const VkMemoryBarrier2 tiles{.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER_2,
+                                 .pNext = nullptr,
+                                 .srcStageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+                                 .srcAccessMask = VK_ACCESS_2_MEMORY_WRITE_BIT,
+                                 .dstStageMask = VK_PIPELINE_STAGE_2_COPY_BIT,
+                                 .dstAccessMask = VK_ACCESS_2_TRANSFER_READ_BIT};
+    const VkImageMemoryBarrier2 toCopy = vk::imageBarrier(
+        target.image, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
+        VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
+        VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, vk::colorRange(0, 1, 0, 1));
+    const VkDependencyInfo dep{.sType = VK_STRUCTURE_TYPE_DEPENDENCY_INFO,
+                               .pNext = nullptr,
+                               .dependencyFlags = 0,
+                               .memoryBarrierCount = 1,
+                               .pMemoryBarriers = &tiles,
+                               .bufferMemoryBarrierCount = 0,
+                               .pBufferMemoryBarriers = nullptr,
+                               .imageMemoryBarrierCount = 1,
+                               .pImageMemoryBarriers = &toCopy};
+    vkCmdPipelineBarrier2(cmd, &dep);
+    passes_->tile.recordCopies(cmd, atlas_.image(), target.image);
+    const VkImageMemoryBarrier2 toColor = vk::imageBarrier(
+        target.image, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+        VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+        VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
+        VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, vk::colorRange(0, 1, 0, 1));
+    vk::pipelineBarrier(cmd, &toColor, 1);
 }
 
 void RenderThread::recordTargetFinish(VkCommandBuffer cmd, const TargetImage& target) {
@@ -779,7 +842,11 @@ Result RenderThread::deliverFrame(FrameSlot& f, const TargetImage& target, const
     out->image.width = target.extent.width;
     out->image.height = target.extent.height;
     out->image.rgba.resize(size_t(target.extent.width) * target.extent.height * 4);
-    std::memcpy(out->image.rgba.data(), offscreen_->readback().mapped, out->image.rgba.size());
+    if (offscreen_->format() == VK_FORMAT_B8G8R8A8_UNORM)
+        swapRedBlue(static_cast<const uint8_t*>(offscreen_->readback().mapped), out->image.rgba.data(),
+                    size_t(target.extent.width) * target.extent.height);
+    else
+        std::memcpy(out->image.rgba.data(), offscreen_->readback().mapped, out->image.rgba.size());
     out->view = frame.viewport.view;
     out->serial = frame.serial;
     out->complete = frame.complete;
@@ -797,7 +864,8 @@ void RenderThread::publishFrame(const Snapshot& snap, bool complete, uint64_t bu
     const bool newlySettled = complete && buffered == snap.viewSerial &&
                               snap.viewSerial > settledViewSerial_.load(std::memory_order_relaxed);
     if (newlySettled) settledViewSerial_.store(snap.viewSerial, std::memory_order_seq_cst);
-    const FrameStats stats = metrics_.frameFinished(snap, serial_, complete, tiles, cpuMs, lastGpuMs_);
+    const FrameStats stats =
+        metrics_.frameFinished(snap, serial_, complete, tiles, cpuMs, lastGpuMs_, passes_->tile.tilesCopied());
     // After the metrics, so that a waiter that wakes sees this frame's figures. The lock is
     // taken only when a thread sleeps in waitForFrame (see frameWaiters_).
     if ((newlyComplete || newlySettled) && frameWaiters_.load(std::memory_order_seq_cst) > 0) {

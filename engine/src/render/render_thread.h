@@ -41,6 +41,13 @@ public:
                  Handover& handover, const UploadCounters& counters, const Log& log, const EngineTuning& tuning);
     ~RenderThread();
     Result init();
+    // Whether levels drawn exactly are copied where they can be (EngineTuning::exactCopy,
+    // resolved against the device by init()): the buffer thread then looks at tiles' opacity.
+    bool copiesExact() const { return copyExact_; }
+    // The same for a device that is (or is not) a CPU device, before there is a render thread.
+    static bool copiesExact(EngineTuning::ExactCopy setting, bool cpuDevice) {
+        return setting == EngineTuning::ExactCopy::On || (setting == EngineTuning::ExactCopy::Auto && cpuDevice);
+    }
     void start();
     void stop(); // shared.stopping must be set first
 
@@ -106,6 +113,7 @@ private:
         VkFormat format = VK_FORMAT_UNDEFINED;
         VkExtent2D extent{};
         uint32_t index = 0; // swapchain image index
+        bool transferDst = false; // can be copied into (the exact copy)
     };
     // What handleSurfaceChanges() leaves the loop to do.
     struct TargetStep {
@@ -132,6 +140,10 @@ private:
     void applyTargetRequest();
     Result renderFrame(const Snapshot& snap);
     Expected<TargetImage> acquireTarget(FrameSlot& f);
+    // The tile pass's exact copies into `target`, between its two render passes.
+    void recordExactCopies(VkCommandBuffer cmd, const TargetImage& target);
+    // The offscreen target's format (see the definition).
+    VkFormat offscreenFormat() const;
     void recordTargetFinish(VkCommandBuffer cmd, const TargetImage& target); // readback copy or present layout
     Result submitFrame(FrameSlot& f, const TargetImage& target, uint64_t uploadWait);
     Result deliverFrame(FrameSlot& f, const TargetImage& target, const render::FrameContext& frame); // present or read back
@@ -186,6 +198,7 @@ private:
     // layer whole. tuning_.pacing overrides the device-type default (A/B, tests).
     static constexpr double kPaceFactor = 2.0;
     bool paceFrames_ = false;
+    bool copyExact_ = false; // EngineTuning::exactCopy, resolved for this device
     uint64_t drawnViewSerial_ = UINT64_MAX;   // the view of the last frame drawn
     uint64_t lrWholeViewSerial_ = UINT64_MAX; // the view whose LR layer a frame has shown whole
     std::chrono::steady_clock::time_point paceUntil_{};

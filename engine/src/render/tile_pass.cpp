@@ -17,6 +17,7 @@ Result TilePass::prepare(FrameContext& frame) {
     progress_ = {};
     first_ = frame.instances.used;
     count_ = 0;
+    copies_.clear();
     pipe_ = seamPipe_ = exactPipe_ = VK_NULL_HANDLE;
     // The colour transform: the snapshot's table into the GPU's, and the pipelines with the step.
     Result colorError;
@@ -48,6 +49,7 @@ Result TilePass::prepare(FrameContext& frame) {
                               .placeholder = placeholderKey(frame.snap.slide->generation)};
     buildDrawList(frame.snap.slide->info, frame.snap.slide->generation, frame.viewport, options, frame.tiles,
                   drawList_);
+    takeCopies(frame, managed);
     count_ = drawList_.instanceCount();
     const auto drawnExactly = [](const LevelDraw& d) { return d.exact && !d.instances.empty(); };
     if (drawLevels_ && std::any_of(drawList_.levels.begin(), drawList_.levels.end(), drawnExactly)) {
@@ -80,6 +82,45 @@ Result TilePass::prepare(FrameContext& frame) {
                                        .newlyShown = newlyShown};
     if (!drawList_.hrComplete) frame.complete = false;
     return colorError;
+}
+
+void TilePass::takeCopies(const FrameContext& frame, bool managed) {
+    LevelDraw& hr = drawList_.levels[2];
+    if (!frame.copyTarget || !drawLevels_ || managed || !hr.exact || hr.instances.empty()) return;
+    // Unturned and unmirrored: a right-angle turn or a flip is drawn exactly, but not copied.
+    const ViewTransform t = ViewTransform::of(frame.viewport.view, frame.viewport.width, frame.viewport.height);
+    if (t.m != std::array<double, 4>{1, 0, 0, 1}) return;
+    const int64_t w = frame.extent.width, h = frame.extent.height;
+    size_t kept = 0;
+    for (const gpu::TileInstance& inst : hr.instances) {
+        // Exact: the tile's origin is on a whole pixel (drawsExact), one texel a pixel.
+        int64_t dx = std::llround(inst.rect[0]), dy = std::llround(inst.rect[1]);
+        int64_t sx = 0, sy = 0, cw = int64_t(inst.texel[0]), ch = int64_t(inst.texel[1]);
+        if (dx < 0) sx = -dx, cw += dx, dx = 0;
+        if (dy < 0) sy = -dy, ch += dy, dy = 0;
+        cw = std::min(cw, w - dx);
+        ch = std::min(ch, h - dy);
+        // Drawn as before: a tile not known opaque ("over" what lies beneath is not a copy), and
+        // one with nothing in the target (the rasteriser clips it away).
+        if (cw <= 0 || ch <= 0 || !frame.tiles.opaque(int(inst.texel[2]))) {
+            hr.instances[kept++] = inst;
+            continue;
+        }
+        copies_.push_back(VkImageCopy{
+            .srcSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, uint32_t(inst.texel[2]), 1},
+            .srcOffset = {int32_t(sx), int32_t(sy), 0},
+            .dstSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1},
+            .dstOffset = {int32_t(dx), int32_t(dy), 0},
+            .extent = {uint32_t(cw), uint32_t(ch), 1},
+        });
+    }
+    hr.instances.resize(kept);
+}
+
+void TilePass::recordCopies(VkCommandBuffer cmd, VkImage atlas, VkImage target) const {
+    if (copies_.empty()) return;
+    vkCmdCopyImage(cmd, atlas, VK_IMAGE_LAYOUT_GENERAL, target, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL,
+                   uint32_t(copies_.size()), copies_.data());
 }
 
 void TilePass::recordUploads(VkCommandBuffer cmd, const FrameContext& frame) {

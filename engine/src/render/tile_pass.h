@@ -2,6 +2,14 @@
 // where it is resident (render/draw_list builds the list, without Vulkan), with the seam bands
 // of levels drawn zoomed in (gpu/tile_pipeline.h). It also draws other spans of atlas tiles
 // for later passes: the overview map's thumbnail (render/hud_pass.h).
+//
+// The exact copy (EngineTuning::exactCopy): where the HR level is drawn exactly (drawsExact),
+// unturned and unmirrored, with no colour step, into a target that takes copies of the atlas's
+// format (FrameContext::copyTarget), its opaque tiles are copied from the atlas (vkCmdCopyImage)
+// instead of drawn. Their pixels are the texels' bytes either way: the exact pipeline fetches
+// them, and an opaque premultiplied pixel drawn "over" is itself. The render thread records the
+// copies after the levels still drawn (coarser tiles and tiles not known opaque, which no copied
+// tile overlaps), and the other passes after the copies.
 #pragma once
 
 #include "gpu/tile_pipeline.h"
@@ -23,8 +31,13 @@ public:
 
     // What the last prepared frame showed of its view's field (metrics/field_metrics.h).
     const metrics::FieldProgress& progress() const { return progress_; }
-    // Tiles the last prepared frame draws.
-    uint32_t tilesDrawn() const { return count_; }
+    // Tiles the last prepared frame shows, drawn or copied.
+    uint32_t tilesDrawn() const { return count_ + uint32_t(copies_.size()); }
+    // Of those, the tiles it copies (recordCopies).
+    uint32_t tilesCopied() const { return uint32_t(copies_.size()); }
+    // The exact copy's regions (target in TRANSFER_DST_OPTIMAL, the atlas in GENERAL), in one
+    // command; outside a render pass, after recordDraws' levels.
+    void recordCopies(VkCommandBuffer cmd, VkImage atlas, VkImage target) const;
     // The last prepared frame's draw list (the per-pixel resolve's page table comes from it).
     const DrawList& drawList() const { return drawList_; }
     // Off: the frame's levels are resolved elsewhere (render/resolve_pass.h); recordDraws then
@@ -41,10 +54,15 @@ public:
                   bool turned, bool exact = false);
 
 private:
+    // Moves the HR level's opaque instances out of the draw list into copies_, where the frame
+    // allows the exact copy.
+    void takeCopies(const FrameContext& frame, bool managed);
+
     gpu::TilePipeline& pipeline_;
     const bool drawCovered_;
     bool drawLevels_ = true;
     DrawList drawList_; // reused from frame to frame
+    std::vector<VkImageCopy> copies_; // this frame's exact copies, atlas → target
     metrics::FieldProgress progress_;
     std::vector<uint64_t> shownUploads_; // by atlas layer: the upload sequence number last drawn there
     uint32_t first_ = 0, count_ = 0;                               // this frame's span of the arena

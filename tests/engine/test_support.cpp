@@ -256,6 +256,27 @@ std::optional<iris::Frame> renderView(iris::Engine& engine, const iris::View& vi
     return f;
 }
 
+std::optional<iris::Frame> renderSettled(iris::Engine& engine, const iris::View& view, uint32_t width, uint32_t height,
+                                         std::chrono::milliseconds timeout, std::string* why) {
+    if (auto first = renderView(engine, view, width, height, timeout, why); !first) return first;
+    if (const iris::Result w = engine.waitForSettled(timeout); !w.ok()) {
+        if (why) *why = "waitForSettled: " + describe(w);
+        return std::nullopt;
+    }
+    auto settled = engine.readFrame();
+    if (!settled.ok()) {
+        if (why) *why = "readFrame: " + describe(settled.error());
+        return std::nullopt;
+    }
+    const iris::Frame& f = settled.value();
+    if (!f.complete || f.view.centerX != view.centerX || f.view.centerY != view.centerY ||
+        f.view.downsample != view.downsample) {
+        if (why) *why = "the settled frame is incomplete or shows another view";
+        return std::nullopt;
+    }
+    return std::move(settled.value());
+}
+
 iris::View turnedViewAt(int64_t kx, int64_t ky, double downsample, double rotation, bool flipH, bool flipV,
                         uint32_t width, uint32_t height) {
     iris::View v{0, 0, downsample, rotation, flipH, flipV};

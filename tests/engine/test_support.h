@@ -109,6 +109,12 @@ std::string describe(const iris::Result& r);
 std::optional<iris::Frame> renderView(iris::Engine& engine, const iris::View& view, uint32_t width, uint32_t height,
                                       std::chrono::milliseconds timeout, std::string* why);
 
+// renderView, then Engine::waitForSettled (every tile of the buffer region resident and
+// drawn) and the frame read again: what two engines are compared on, in the same state. The
+// settled frame must be complete and show `view` like renderView's.
+std::optional<iris::Frame> renderSettled(iris::Engine& engine, const iris::View& view, uint32_t width, uint32_t height,
+                                         std::chrono::milliseconds timeout, std::string* why);
+
 // The view whose frame (width × height at `downsample`) has its top-left corner at the
 // level-0 point (x0, y0): centre = (x0, y0) + (width, height)/2 · downsample.
 iris::View viewWithOrigin(double x0, double y0, double downsample, uint32_t width, uint32_t height);

@@ -23,29 +23,6 @@ namespace {
 
 constexpr uint32_t kW = 640, kH = 480;
 
-// The frame of `view` once the engine has nothing left to load for it (Engine::waitForSettled:
-// every tile of the buffer region resident and drawn), so that two engines are compared in the
-// same state.
-std::optional<iris::Frame> settledFrame(iris::Engine& e, const iris::View& view, std::string* why) {
-    auto f = renderView(e, view, kW, kH, 60s, why);
-    if (!f) return f;
-    if (const iris::Result w = e.waitForSettled(60s); !w.ok()) {
-        *why = "waitForSettled: " + describe(w);
-        return std::nullopt;
-    }
-    auto settled = e.readFrame();
-    if (!settled.ok()) {
-        *why = describe(settled.error());
-        return std::nullopt;
-    }
-    if (!settled.value().complete || settled.value().view.centerX != view.centerX ||
-        settled.value().view.downsample != view.downsample) {
-        *why = "the settled frame is incomplete or shows another view";
-        return std::nullopt;
-    }
-    return std::move(settled.value());
-}
-
 } // namespace
 
 class TstCulling : public QObject {
@@ -117,10 +94,10 @@ private slots:
         int fewer = 0;
         for (const Case& c : cases) {
             std::string why;
-            auto a = settledFrame(*culled_.engine, c.view, &why);
+            auto a = renderSettled(*culled_.engine, c.view, kW, kH, 60s, &why);
             QVERIFY2(a, (std::string(c.what) + ": " + why).c_str());
             const uint32_t drawnCulled = culled_->metrics().lastFrame.tilesDrawn;
-            auto b = settledFrame(*all_.engine, c.view, &why);
+            auto b = renderSettled(*all_.engine, c.view, kW, kH, 60s, &why);
             QVERIFY2(b, (std::string(c.what) + " (drawing every tile): " + why).c_str());
             const uint32_t drawnAll = all_->metrics().lastFrame.tilesDrawn;
             const DiffStats d = compareImages(a->image, b->image, nullptr, 4);

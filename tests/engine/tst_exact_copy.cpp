@@ -24,29 +24,6 @@ namespace {
 
 constexpr uint32_t kW = 640, kH = 480;
 
-// The settled frame of `view` (every tile of the buffer region resident and drawn), and the
-// stats of the frame that showed it.
-std::optional<iris::Frame> settledFrame(iris::Engine& e, const iris::View& view, iris::FrameStats* stats,
-                                        std::string* why) {
-    auto f = renderView(e, view, kW, kH, 60s, why);
-    if (!f) return f;
-    if (const iris::Result w = e.waitForSettled(60s); !w.ok()) {
-        *why = "waitForSettled: " + describe(w);
-        return std::nullopt;
-    }
-    auto settled = e.readFrame();
-    if (!settled.ok()) {
-        *why = describe(settled.error());
-        return std::nullopt;
-    }
-    if (!settled.value().complete) {
-        *why = "the settled frame is incomplete";
-        return std::nullopt;
-    }
-    *stats = e.metrics().lastFrame;
-    return std::move(settled.value());
-}
-
 } // namespace
 
 class TstExactCopy : public QObject {
@@ -120,11 +97,12 @@ private slots:
         };
         for (const Case& c : cases) {
             std::string why;
-            iris::FrameStats copied{}, drawn{};
-            auto a = settledFrame(*copying_.engine, c.view, &copied, &why);
+            auto a = renderSettled(*copying_.engine, c.view, kW, kH, 60s, &why);
             QVERIFY2(a, (std::string(c.what) + ": " + why).c_str());
-            auto b = settledFrame(*drawing_.engine, c.view, &drawn, &why);
+            const iris::FrameStats copied = copying_->metrics().lastFrame;
+            auto b = renderSettled(*drawing_.engine, c.view, kW, kH, 60s, &why);
             QVERIFY2(b, (std::string(c.what) + " (drawn): " + why).c_str());
+            const iris::FrameStats drawn = drawing_->metrics().lastFrame;
             const DiffStats d = compareImages(a->image, b->image, nullptr, 4);
             qInfo("%s: tiles %u, copied %u (drawing engine: %u, copied %u); %s", c.what, copied.tilesDrawn,
                   copied.tilesCopied, drawn.tilesDrawn, drawn.tilesCopied, d.summary().c_str());

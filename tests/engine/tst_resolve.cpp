@@ -20,20 +20,6 @@ using namespace std::chrono_literals;
 namespace {
 constexpr uint32_t kW = 640, kH = 480;
 
-std::optional<iris::Frame> settled(iris::Engine& e, const iris::View& v, std::string* why) {
-    auto f = renderView(e, v, kW, kH, 60s, why);
-    if (!f) return f;
-    if (const iris::Result r = e.waitForSettled(60s); !r.ok()) {
-        *why = "waitForSettled: " + describe(r);
-        return std::nullopt;
-    }
-    auto s = e.readFrame();
-    if (!s.ok()) {
-        *why = describe(s.error());
-        return std::nullopt;
-    }
-    return std::move(s.value());
-}
 } // namespace
 
 class TestResolve : public QObject {
@@ -99,9 +85,9 @@ private slots:
         };
         for (const Case& c : cases) {
             std::string why;
-            const auto a = settled(*quads_.engine, c.view, &why);
+            const auto a = renderSettled(*quads_.engine, c.view, kW, kH, 60s, &why);
             QVERIFY2(a, why.c_str());
-            const auto b = settled(*resolve_.engine, c.view, &why);
+            const auto b = renderSettled(*resolve_.engine, c.view, kW, kH, 60s, &why);
             QVERIFY2(b, why.c_str());
             const DiffStats d = compareImages(b->image, a->image);
             qInfo("%s, %s: %s", qPrintable(slide.section('/', -1)), c.what, d.summary().c_str());
@@ -129,9 +115,9 @@ private slots:
         // 1:1 with integer alignment, where the two paths give the same bytes (the overview's
         // thumbnail is drawn by the HUD pass through the tile pipeline in both).
         const iris::View v = viewWithOrigin(1000, 800, 1.0, kW, kH);
-        const auto a = settled(*quads_.engine, v, &why);
+        const auto a = renderSettled(*quads_.engine, v, kW, kH, 60s, &why);
         QVERIFY2(a, why.c_str());
-        const auto b = settled(*resolve_.engine, v, &why);
+        const auto b = renderSettled(*resolve_.engine, v, kW, kH, 60s, &why);
         QVERIFY2(b, why.c_str());
         const DiffStats d = compareImages(b->image, a->image);
         qInfo("1:1 with the scale bar and the overview: %s", d.summary().c_str());

@@ -162,6 +162,30 @@ inline void pipelineBarrier(VkCommandBuffer cmd, const VkBufferMemoryBarrier2& b
     pipelineBarrier(cmd, nullptr, 0, &barrier, 1);
 }
 
+// One vkCmdPipelineBarrier2 over a global memory barrier (src → dst) and image barriers.
+inline void memoryBarrier(VkCommandBuffer cmd, VkPipelineStageFlags2 srcStage, VkAccessFlags2 srcAccess,
+                          VkPipelineStageFlags2 dstStage, VkAccessFlags2 dstAccess,
+                          const VkImageMemoryBarrier2* images = nullptr, uint32_t imageCount = 0) {
+    const VkMemoryBarrier2 memory{.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER_2,
+                                  .pNext = nullptr,
+                                  .srcStageMask = srcStage,
+                                  .srcAccessMask = srcAccess,
+                                  .dstStageMask = dstStage,
+                                  .dstAccessMask = dstAccess};
+    const VkDependencyInfo dep{
+        .sType = VK_STRUCTURE_TYPE_DEPENDENCY_INFO,
+        .pNext = nullptr,
+        .dependencyFlags = 0,
+        .memoryBarrierCount = 1,
+        .pMemoryBarriers = &memory,
+        .bufferMemoryBarrierCount = 0,
+        .pBufferMemoryBarriers = nullptr,
+        .imageMemoryBarrierCount = imageCount,
+        .pImageMemoryBarriers = images,
+    };
+    vkCmdPipelineBarrier2(cmd, &dep);
+}
+
 // A colour view of `range` of an image.
 Result createImageView(VkDevice dev, VkImage image, VkImageViewType type, VkFormat format,
                        VkImageSubresourceRange range, VkImageView& out);

@@ -617,22 +617,9 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
     if (resolve) {
         // The atlas's tiles (and a new colour table) were written by earlier submissions and
         // commands; the quads' fragment reads are covered by their barriers, a compute read is not.
-        const VkMemoryBarrier2 reads{.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER_2,
-                                     .pNext = nullptr,
-                                     .srcStageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
-                                     .srcAccessMask = VK_ACCESS_2_MEMORY_WRITE_BIT,
-                                     .dstStageMask = VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                                     .dstAccessMask = VK_ACCESS_2_SHADER_SAMPLED_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_READ_BIT};
-        const VkDependencyInfo dep{.sType = VK_STRUCTURE_TYPE_DEPENDENCY_INFO,
-                                   .pNext = nullptr,
-                                   .dependencyFlags = 0,
-                                   .memoryBarrierCount = 1,
-                                   .pMemoryBarriers = &reads,
-                                   .bufferMemoryBarrierCount = 0,
-                                   .pBufferMemoryBarriers = nullptr,
-                                   .imageMemoryBarrierCount = 0,
-                                   .pImageMemoryBarriers = nullptr};
-        vkCmdPipelineBarrier2(cmd, &dep);
+        vk::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT,
+                          VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
+                          VK_ACCESS_2_SHADER_SAMPLED_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
         resolvePass_->record(cmd, frame, target.image);
     } else {
         // Previous contents are discarded (UNDEFINED); the wait on the previous frame's copy
@@ -704,26 +691,12 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
 void RenderThread::recordExactCopies(VkCommandBuffer cmd, const TargetImage& target) {
     // The target from drawing to a copy destination; the atlas's tiles, written by earlier
     // uploads (their barriers cover fragment reads, not transfers), to transfer reads.
-    const VkMemoryBarrier2 tiles{.sType = VK_STRUCTURE_TYPE_MEMORY_BARRIER_2,
-                                 .pNext = nullptr,
-                                 .srcStageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
-                                 .srcAccessMask = VK_ACCESS_2_MEMORY_WRITE_BIT,
-                                 .dstStageMask = VK_PIPELINE_STAGE_2_COPY_BIT,
-                                 .dstAccessMask = VK_ACCESS_2_TRANSFER_READ_BIT};
     const VkImageMemoryBarrier2 toCopy = vk::imageBarrier(
         target.image, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT, VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
         VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
         VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, vk::colorRange(0, 1, 0, 1));
-    const VkDependencyInfo dep{.sType = VK_STRUCTURE_TYPE_DEPENDENCY_INFO,
-                               .pNext = nullptr,
-                               .dependencyFlags = 0,
-                               .memoryBarrierCount = 1,
-                               .pMemoryBarriers = &tiles,
-                               .bufferMemoryBarrierCount = 0,
-                               .pBufferMemoryBarriers = nullptr,
-                               .imageMemoryBarrierCount = 1,
-                               .pImageMemoryBarriers = &toCopy};
-    vkCmdPipelineBarrier2(cmd, &dep);
+    vk::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT, VK_PIPELINE_STAGE_2_COPY_BIT,
+                      VK_ACCESS_2_TRANSFER_READ_BIT, &toCopy, 1);
     passes_->tile.recordCopies(cmd, atlas_.image(), target.image);
     const VkImageMemoryBarrier2 toColor = vk::imageBarrier(
         target.image, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,

@@ -439,6 +439,9 @@ Json resultJson(const Options& o, const SizeResult& r) {
                    {"color_lookup", o.tuning.colorLookup == iris::EngineTuning::ColorLookup::Sampler ? "sampler"
                                     : o.tuning.colorLookup == iris::EngineTuning::ColorLookup::Nodes ? "nodes"
                                                                                                      : "auto"},
+                   {"exact_copy", o.tuning.exactCopy == iris::EngineTuning::ExactCopy::On    ? "on"
+                                  : o.tuning.exactCopy == iris::EngineTuning::ExactCopy::Off ? "off"
+                                                                                             : "auto"},
                    {"device_filter", o.tuning.deviceName}};
     // Per stage, medians over the timed fields; then the typical field's own (see stageTimeline).
     Json timeline;

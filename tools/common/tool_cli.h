@@ -28,7 +28,9 @@ inline constexpr const char* kTuningEnvironmentHelp =
     "  IRIS_TILE_RESOLVE=auto|quads|compute  tiles as quads, or resolved per pixel\n"
     "                                 (default: compute offscreen on a GPU)\n"
     "  IRIS_COLOR_LOOKUP=auto|sampler|nodes  the colour table's interpolation\n"
-    "                                 (default: sampler)";
+    "                                 (default: sampler)\n"
+    "  IRIS_EXACT_COPY=auto|0|1       copy levels at their own scale, not draw them\n"
+    "                                 (default: on for CPU devices)";
 
 // "  -o, --output FILE       text (default: x)" within 80 columns.
 class HelpFormatter : public CLI::Formatter {

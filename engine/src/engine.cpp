@@ -56,9 +56,8 @@ struct Engine::Impl {
         // drawing does on lavapipe). Tiles stay RGBA in RAM; the buffer thread swaps them as it
         // stages them. The compute mip passes write rgba8 images, so they keep RGBA.
         const bool cpuDevice = device.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
-        const auto schedule = config.tuning.mipSchedule; // resolved as MipPipeline::init does
-        const bool hostMips = schedule == EngineTuning::MipSchedule::Host ||
-                              (schedule == EngineTuning::MipSchedule::Auto && cpuDevice);
+        const bool hostMips = gpu::MipPipeline::resolve(config.tuning.mipSchedule, device.properties()) ==
+                              gpu::MipPipeline::Schedule::Host;
         const VkFormat atlasFormat = RenderThread::copiesExact(config.tuning.exactCopy, cpuDevice) && hostMips
                                          ? gpu::TileAtlas::kSwappedFormat
                                          : gpu::TileAtlas::kFormat;

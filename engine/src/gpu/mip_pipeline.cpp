@@ -21,21 +21,20 @@ struct MipPush {
 static_assert(sizeof(MipPush) == 40);
 } // namespace
 
+MipPipeline::Schedule MipPipeline::resolve(EngineTuning::MipSchedule requested, const VkPhysicalDeviceProperties& device) {
+    using Requested = EngineTuning::MipSchedule;
+    if (requested == Requested::Host || (requested == Requested::Auto && device.deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU))
+        return Schedule::Host;
+    if (requested == Requested::Serial) return Schedule::Serial;
+    // 13.4 KiB of shared memory: within Vulkan's 16 KiB minimum, else the serial pass.
+    return device.limits.maxComputeSharedMemorySize < kSharedBytes ? Schedule::Serial : Schedule::Wide;
+}
+
 Result MipPipeline::init(EngineTuning::MipSchedule requested) {
     VkDevice dev = device_.device();
     const VkPhysicalDeviceLimits& limits = device_.properties().limits;
-    switch (requested) {
-    case EngineTuning::MipSchedule::Auto:
-        schedule_ = device_.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU ? Schedule::Host : Schedule::Wide;
-        break;
-    case EngineTuning::MipSchedule::Wide: schedule_ = Schedule::Wide; break;
-    case EngineTuning::MipSchedule::Serial: schedule_ = Schedule::Serial; break;
-    case EngineTuning::MipSchedule::Host: schedule_ = Schedule::Host; break;
-    }
+    schedule_ = resolve(requested, device_.properties());
     if (schedule_ == Schedule::Host) return {}; // the buffer thread makes the levels; no pipeline
-    if (schedule_ == Schedule::Wide && limits.maxComputeSharedMemorySize < kSharedBytes) {
-        schedule_ = Schedule::Serial; // 13.4 KiB: within Vulkan's 16 KiB minimum
-    }
     // Scratch: the level-4 sums, then the counters at an aligned offset.
     const VkDeviceSize align = std::max<VkDeviceSize>(limits.minStorageBufferOffsetAlignment, 16);
     const VkDeviceSize slots = std::max<uint32_t>(atlas_.slotCount(), 1);

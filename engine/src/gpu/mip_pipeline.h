@@ -28,6 +28,9 @@ public:
     MipPipeline(Device& device, TileAtlas& atlas) : device_(device), atlas_(atlas) {}
     // `requested`: EngineConfig::tuning.mipSchedule (Auto picks by device type).
     Result init(EngineTuning::MipSchedule requested);
+    // The schedule `requested` comes to on a device of these properties (init's choice, before
+    // there is a pipeline: the engine sizes the atlas's format by it).
+    static Schedule resolve(EngineTuning::MipSchedule requested, const VkPhysicalDeviceProperties& device);
     Schedule schedule() const { return schedule_; }
     static const char* scheduleName(Schedule s) {
         return s == Schedule::Wide ? "wide" : s == Schedule::Serial ? "serial" : "host";

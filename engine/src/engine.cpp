@@ -61,8 +61,20 @@ struct Engine::Impl {
         const VkFormat atlasFormat = RenderThread::copiesExact(config.tuning.exactCopy, cpuDevice) && hostMips
                                          ? gpu::TileAtlas::kSwappedFormat
                                          : gpu::TileAtlas::kFormat;
-        if (Result r = atlas.init(config.vramBudgetBytes, config.tuning.deviceAllocationLimit, atlasFormat); !r.ok())
+        // Tiles written into the atlas from the host (EngineTuning::tileUpload): only where the
+        // buffer thread makes the levels itself, since the compute mip pass writes after an upload.
+        const EngineTuning::TileUpload upload = config.tuning.tileUpload;
+        const bool wantHostWrites =
+            upload == EngineTuning::TileUpload::Host || (upload == EngineTuning::TileUpload::Auto && cpuDevice);
+        if (upload == EngineTuning::TileUpload::Host && !hostMips)
+            log.warn("tile upload: host writes need the host mip schedule; uploading by queue copies");
+        if (Result r = atlas.init(config.vramBudgetBytes, config.tuning.deviceAllocationLimit, atlasFormat,
+                                  wantHostWrites && hostMips);
+            !r.ok())
             return r;
+        if (!atlas.hostFallback().empty())
+            log.warn("tile upload: no host-written atlas (" + atlas.hostFallback() + "); uploading by queue copies");
+        log.info(std::string("tile upload: ") + (atlas.hostWritten() ? "host writes into a linear atlas" : "queue copies"));
         if (atlas.slotCount() < atlas.requestedSlots()) {
             const auto mib = [](uint64_t slots) { return std::to_string(slots * gpu::TileAtlas::bytesPerSlot() >> 20); };
             log.warn("VRAM: the device could not allocate a tile atlas of " + std::to_string(atlas.requestedSlots()) +
@@ -105,7 +117,8 @@ struct Engine::Impl {
         {
             std::unique_lock lock(gpuMutex); // memoryStats() and device() read the atlas
             if (atlas.slotCount()) atlasSlots = atlas.slotCount();
-            const VkFormat atlasFormat = atlas.format(); // as init chose it
+            const VkFormat atlasFormat = atlas.format(); // as init chose them
+            const bool hostWritten = atlas.hostWritten();
             std::destroy_at(&mips);
             std::destroy_at(&pipeline);
             std::destroy_at(&atlas);
@@ -115,7 +128,8 @@ struct Engine::Impl {
             handover->reset();
             if (Result r = device.recreate(); !r.ok()) return r;
             const uint64_t budget = std::min<uint64_t>(config.vramBudgetBytes, uint64_t(atlasSlots) * gpu::TileAtlas::bytesPerSlot());
-            if (Result r = atlas.init(budget, config.tuning.deviceAllocationLimit, atlasFormat); !r.ok()) return r;
+            if (Result r = atlas.init(budget, config.tuning.deviceAllocationLimit, atlasFormat, hostWritten); !r.ok())
+                return r;
             if (Result r = pipeline.init(RenderThread::kFramesInFlight, config.tuning.colorLookup); !r.ok()) return r;
             if (Result r = mips.init(config.tuning.mipSchedule); !r.ok()) return r;
         }
@@ -796,6 +810,7 @@ DeviceInfo Engine::device() const {
     std::shared_lock lock(impl_->gpuMutex);
     d.atlasSlots = impl_->atlas.slotCount();
     d.mipSchedule = gpu::MipPipeline::scheduleName(impl_->mips.schedule());
+    d.tileUpload = impl_->atlas.hostWritten() ? "host" : "queue";
     return d;
 }
 

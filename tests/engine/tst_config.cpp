@@ -84,6 +84,7 @@ private slots:
             QVERIFY(t->deviceName.empty());
             QVERIFY(!t->singleQueue);
             QVERIFY(t->exactCopy == T::ExactCopy::Auto);
+            QVERIFY(t->tileUpload == T::TileUpload::Auto);
         }
         {
             ScopedEnvironment env({{"IRIS_PACE_FRAMES", "1"},
@@ -93,10 +94,12 @@ private slots:
                                    {"IRIS_QUEUES", "single"},
                                    {"IRIS_TILE_RESOLVE", "quads"},
                                    {"IRIS_COLOR_LOOKUP", "nodes"},
-                                   {"IRIS_EXACT_COPY", "1"}});
+                                   {"IRIS_EXACT_COPY", "1"},
+                                   {"IRIS_TILE_UPLOAD", "host"}});
             auto t = iris::tuningFromEnvironment();
             QVERIFY(t.ok());
             QVERIFY(t->exactCopy == T::ExactCopy::On);
+            QVERIFY(t->tileUpload == T::TileUpload::Host);
             QVERIFY(t->tileResolve == T::TileResolve::Quads);
             QVERIFY(t->colorLookup == T::ColorLookup::Nodes);
             QVERIFY(t->pacing == T::Pacing::On);
@@ -108,7 +111,8 @@ private slots:
         {
             ScopedEnvironment env({{"IRIS_PACE_FRAMES", "0"}, {"IRIS_MIP_SCHEDULE", "wide"}, {"IRIS_QUEUES", "auto"},
                                    {"IRIS_DRAW_COVERED", "0"}, {"IRIS_TILE_RESOLVE", "compute"},
-                                   {"IRIS_COLOR_LOOKUP", "sampler"}, {"IRIS_EXACT_COPY", "0"}});
+                                   {"IRIS_COLOR_LOOKUP", "sampler"}, {"IRIS_EXACT_COPY", "0"},
+                                   {"IRIS_TILE_UPLOAD", "queue"}});
             T base;
             base.singleQueue = true;
             base.drawCovered = true;
@@ -121,6 +125,7 @@ private slots:
             QVERIFY(t->tileResolve == T::TileResolve::Compute);
             QVERIFY(t->colorLookup == T::ColorLookup::Sampler);
             QVERIFY(t->exactCopy == T::ExactCopy::Off);
+            QVERIFY(t->tileUpload == T::TileUpload::Queue);
         }
         {
             ScopedEnvironment env(std::map<std::string, std::string>{{"IRIS_MIP_SCHEDULE", "host"}});

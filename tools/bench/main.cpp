@@ -106,6 +106,7 @@ struct SizeResult {
     bool colorApplied = false; // a transform was applied (the slide has a usable profile)
     std::string device;
     std::string mipSchedule;
+    std::string tileUpload; // as the engine resolved it
     std::vector<double> lrTefov, hrTefov, lrTpt, hrTpt, rate, frameMs;
     std::vector<double> settledGpuMs; // GPU time of frames redrawing a loaded field (nothing to upload)
     std::vector<std::string> condition; // per field: magnification label
@@ -203,6 +204,7 @@ SizeResult runSize(const Options& o, uint32_t W, uint32_t H, bool colorManaged) 
     iris::Engine& e = **created;
     res.device = e.device().name;
     res.mipSchedule = e.device().mipSchedule;
+    res.tileUpload = e.device().tileUpload;
     if (auto r = e.bindOffscreen(W, H, /*readback=*/false); !r) {
         res.notes = r.message();
         return res;
@@ -426,6 +428,7 @@ Json resultJson(const Options& o, const SizeResult& r) {
                    {"hr_tefov_vs_decode_floor", jsonNumber(hr.median / flo.median)}};
     j["moves"] = r.movesDone;
     j["mip_schedule"] = r.mipSchedule;
+    j["tile_upload"] = r.tileUpload;
     // What IRIS_* asked for (an A/B run's JSON says which side it is).
     const auto pacing = o.tuning.pacing == iris::EngineTuning::Pacing::On    ? "on"
                         : o.tuning.pacing == iris::EngineTuning::Pacing::Off ? "off"
@@ -442,6 +445,9 @@ Json resultJson(const Options& o, const SizeResult& r) {
                    {"exact_copy", o.tuning.exactCopy == iris::EngineTuning::ExactCopy::On    ? "on"
                                   : o.tuning.exactCopy == iris::EngineTuning::ExactCopy::Off ? "off"
                                                                                              : "auto"},
+                   {"tile_upload", o.tuning.tileUpload == iris::EngineTuning::TileUpload::Host    ? "host"
+                                   : o.tuning.tileUpload == iris::EngineTuning::TileUpload::Queue ? "queue"
+                                                                                                : "auto"},
                    {"device_filter", o.tuning.deviceName}};
     // Per stage, medians over the timed fields; then the typical field's own (see stageTimeline).
     Json timeline;

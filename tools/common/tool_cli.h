@@ -30,7 +30,9 @@ inline constexpr const char* kTuningEnvironmentHelp =
     "  IRIS_COLOR_LOOKUP=auto|sampler|nodes  the colour table's interpolation\n"
     "                                 (default: sampler)\n"
     "  IRIS_EXACT_COPY=auto|0|1       copy levels at their own scale, not draw them\n"
-    "                                 (default: on for CPU devices)";
+    "                                 (default: on for CPU devices)\n"
+    "  IRIS_TILE_UPLOAD=auto|queue|host  tiles into the atlas by a queue copy or by\n"
+    "                                 host writes (default: host for CPU devices)";
 
 // "  -o, --output FILE       text (default: x)" within 80 columns.
 class HelpFormatter : public CLI::Formatter {

@@ -75,6 +75,17 @@ struct EngineTuning {
     // windows get the copy too (frames read back are RGBA as always).
     enum class ExactCopy { Auto, On, Off };
     ExactCopy exactCopy = ExactCopy::Auto;
+    // How decoded tiles reach the atlas. Queue: staged in a host buffer and copied by a
+    // transfer on the device's queue (the only way into a GPU's own memory). Host: the atlas is
+    // a linear image in host-visible memory and the buffer thread writes each tile and its
+    // levels into it directly, with no command and no queue submission; the next frame's
+    // submission makes the writes visible. On a CPU device the device's memory is the host's
+    // and its one queue runs the frames: an upload submitted there waited behind a frame in
+    // flight (docs/BENCHMARKS.md). Auto: Host for CPU devices whose mips are made on the host
+    // and that can sample a linear, host-visible atlas; Queue otherwise. On: Host wherever
+    // the device allows it (else Queue, with a log line).
+    enum class TileUpload { Auto, Queue, Host };
+    TileUpload tileUpload = TileUpload::Auto;
     // Fault injection for tests: a device allocation of the tile atlas larger than this many
     // bytes fails as VK_ERROR_OUT_OF_DEVICE_MEMORY would (0: no limit), so that the fallback to a
     // smaller atlas can be tested on any device.

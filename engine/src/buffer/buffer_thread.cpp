@@ -48,6 +48,9 @@ Result BufferThread::init() {
     // The host schedule uploads every level with one copy and dispatches nothing, so its copy
     // goes on the compute queue with the rest of the transaction.
     hostMips_ = mips_.schedule() == gpu::MipPipeline::Schedule::Host;
+    // A host-written atlas takes each tile from this thread's writes (its levels made here too,
+    // as the engine asks for it only under the host schedule): no queue is involved.
+    hostWrites_ = atlas_.hostWritten() && hostMips_;
     separateCopy_ = transferFamily_ != computeFamily_ && !hostMips_;
     stagingStride_ = hostMips_ ? (VkDeviceSize(kTileBytes) + gpu::mipkernel::kChainBytes + 255) / 256 * 256
                                : VkDeviceSize(kTileBytes);
@@ -79,7 +82,8 @@ Result BufferThread::init() {
                                                *mipTimestamps_.replace(dev), timestampPeriodNs_);
             !r.ok())
             return r;
-    handover_.needed = computeFamily_ != graphicsFamily_;
+    // Tiles written from the host were never owned by the compute family: nothing to hand over.
+    handover_.needed = computeFamily_ != graphicsFamily_ && !hostWrites_;
     handover_.srcFamily = computeFamily_;
     handover_.uploadTimeline = timeline_.get();
     // The host schedule reads each base level back from staging to make its levels: cached
@@ -257,45 +261,53 @@ bool BufferThread::pollCompleted() {
     bool any = false;
     for (Transaction& t : txns_) {
         if (!t.signalValue || t.signalValue > done) continue;
-        // Counted before the tiles become drawable, so that a field the render thread sees
-        // complete has all its uploads counted (TPT).
-        if (mipTimestamps_) {
-            uint64_t ts[2] = {0, 0};
-            const uint32_t q = uint32_t(&t - txns_.data()) * 2;
-            if (vkGetQueryPoolResults(device_.device(), mipTimestamps_.get(), q, 2, sizeof(ts), ts, sizeof(uint64_t),
-                                      VK_QUERY_RESULT_64_BIT) == VK_SUCCESS &&
-                ts[1] >= ts[0]) {
-                counters_.mipNs.fetch_add(uint64_t(double(ts[1] - ts[0]) * timestampPeriodNs_), std::memory_order_relaxed);
-                counters_.mipTiles.fetch_add(t.slots.size(), std::memory_order_relaxed);
-            }
-        }
-        // Each tile's sequence number: the counter's value once it is counted (the stamp that
-        // tells metrics whether a tile was uploaded after a move).
-        uint64_t seq = counters_.tiles.fetch_add(t.slots.size(), std::memory_order_relaxed);
-        const auto now = StageLog::Clock::now();
-        shared_.tileStages.stamp(TileStage::GpuDone, uint32_t(t.slots.size()), now);
-        if (!handover_.needed) shared_.tileStages.stamp(TileStage::Drawable, uint32_t(t.slots.size()), now);
-        counters_.bytes.fetch_add(t.slots.size() * gpu::TileAtlas::bytesPerSlot(), std::memory_order_relaxed);
-        // Single family: the compute submission made the tiles visible to fragment reads, so
-        // they can be drawn now. Separate families: the render thread must first record the
-        // acquire half of the compute → graphics ownership transfer; it activates them then.
-        for (size_t i = 0; i < t.slots.size(); ++i) {
-            ++seq;
-            const bool opaque = t.opaque[i] != 0;
-            if (handover_.needed)
-                handover_.push({t.slots[i], t.signalValue, seq, opaque});
-            else
-                atlas_.map().activate(t.slots[i], seq, opaque);
-        }
-        for (uint32_t s : t.staging) freeStaging_.push_back(s);
-        t.slots.clear();
-        t.staging.clear();
-        t.opaque.clear();
-        t.signalValue = 0;
+        finish(t);
         any = true;
     }
     if (any) shared_.bump(); // the render thread has new tiles to draw
     return any;
+}
+
+// A transaction's tiles are in the atlas (its upload has completed, or it was written from the
+// host): count them, then hand them to rendering.
+void BufferThread::finish(Transaction& t) {
+    // Counted before the tiles become drawable, so that a field the render thread sees
+    // complete has all its uploads counted (TPT).
+    if (mipTimestamps_) {
+        uint64_t ts[2] = {0, 0};
+        const uint32_t q = uint32_t(&t - txns_.data()) * 2;
+        if (vkGetQueryPoolResults(device_.device(), mipTimestamps_.get(), q, 2, sizeof(ts), ts, sizeof(uint64_t),
+                                  VK_QUERY_RESULT_64_BIT) == VK_SUCCESS &&
+            ts[1] >= ts[0]) {
+            counters_.mipNs.fetch_add(uint64_t(double(ts[1] - ts[0]) * timestampPeriodNs_), std::memory_order_relaxed);
+            counters_.mipTiles.fetch_add(t.slots.size(), std::memory_order_relaxed);
+        }
+    }
+    // Each tile's sequence number: the counter's value once it is counted (the stamp that
+    // tells metrics whether a tile was uploaded after a move).
+    uint64_t seq = counters_.tiles.fetch_add(t.slots.size(), std::memory_order_relaxed);
+    const auto now = StageLog::Clock::now();
+    shared_.tileStages.stamp(TileStage::GpuDone, uint32_t(t.slots.size()), now);
+    if (!handover_.needed) shared_.tileStages.stamp(TileStage::Drawable, uint32_t(t.slots.size()), now);
+    counters_.bytes.fetch_add(t.slots.size() * gpu::TileAtlas::bytesPerSlot(), std::memory_order_relaxed);
+    // Single family: the compute submission made the tiles visible to fragment reads, so
+    // they can be drawn now. Host writes: the submission of the first frame that draws them
+    // makes them visible (a queue submission takes every host write before it). Separate
+    // families: the render thread must first record the acquire half of the compute → graphics
+    // ownership transfer; it activates them then.
+    for (size_t i = 0; i < t.slots.size(); ++i) {
+        ++seq;
+        const bool opaque = t.opaque[i] != 0;
+        if (handover_.needed)
+            handover_.push({t.slots[i], t.signalValue, seq, opaque});
+        else
+            atlas_.map().activate(t.slots[i], seq, opaque);
+    }
+    for (uint32_t s : t.staging) freeStaging_.push_back(s);
+    t.slots.clear();
+    t.staging.clear();
+    t.opaque.clear();
+    t.signalValue = 0;
 }
 
 bool BufferThread::submitNew(const Snapshot& snap) {
@@ -363,6 +375,13 @@ bool BufferThread::submitNew(const Snapshot& snap) {
     if (map.takeReclaimAborted()) shared_.bump();
     if (tx.slots.empty()) return false;
     tx.enhance = snap.enhance;
+    if (hostWrites_) {
+        writeToAtlas(tx);
+        shared_.tileStages.stamp(TileStage::Submitted, uint32_t(tx.slots.size()));
+        finish(tx);
+        shared_.bump(); // the render thread has new tiles to draw
+        return true;
+    }
     if (Result r = vk::flush(device_.device(), staging_); !r.ok()) { // non-coherent memory only
         shared_.setError(r);
         log_.error(r.message());
@@ -400,6 +419,29 @@ void BufferThread::makeHostMips(uint8_t* tile, bool enhance) {
     const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count();
     counters_.mipNs.fetch_add(uint64_t(ns), std::memory_order_relaxed);
     counters_.mipTiles.fetch_add(1, std::memory_order_relaxed);
+}
+
+// The host-written atlas: each staged tile's nine levels, row by row, into its slot's layer.
+// The slots are this thread's (FILLING): no frame samples them until finish() activates them,
+// and the frames that sampled a reclaimed slot before have ended (the tile map reclaims only
+// slots that no frame has pinned, and frames unpin after their fence).
+void BufferThread::writeToAtlas(const Transaction& tx) {
+    const auto* base = static_cast<const uint8_t*>(staging_.mapped);
+    for (size_t i = 0; i < tx.slots.size(); ++i) {
+        const uint8_t* tile = base + size_t(tx.staging[i]) * stagingStride_;
+        for (uint32_t m = 0; m < gpu::kTileMipLevels; ++m) {
+            const size_t side = size_t(kTileSize) >> m;
+            const size_t row = side * 4;
+            const uint8_t* src = m == 0 ? tile : tile + kTileBytes + gpu::mipkernel::chainOffset(int(m));
+            uint8_t* dst = atlas_.hostLevel(tx.slots[i], m);
+            const size_t pitch = size_t(atlas_.hostRowPitch(m));
+            if (pitch == row) {
+                std::memcpy(dst, src, row * side);
+            } else {
+                for (size_t y = 0; y < side; ++y) std::memcpy(dst + y * pitch, src + y * row, row);
+            }
+        }
+    }
 }
 
 Result BufferThread::submit(Transaction& tx) {

@@ -6,7 +6,10 @@
 // waiting, and only then are the tiles handed to rendering.
 //
 // Under the host mip schedule (CPU devices) this thread makes a tile's levels itself while it
-// stages it, and the transaction is one copy of all nine levels on the compute queue.
+// stages it, and the transaction is one copy of all nine levels on the compute queue. Where
+// the atlas is host-written (EngineTuning::tileUpload; CPU devices) there is no copy either:
+// this thread writes the nine levels into the atlas's mapped memory and activates the tiles
+// at once, so that no upload waits behind a frame on the device's one queue.
 //
 // Queues: the copy runs on the transfer queue, the mip dispatch on the compute queue, drawing
 // on the graphics queue. Where those families differ, each crossing is a matched release /
@@ -68,6 +71,8 @@ private:
     void run();
     void releaseGpu();
     bool pollCompleted();
+    void finish(Transaction& t);
+    void writeToAtlas(const Transaction& t);
     bool submitNew(const Snapshot& snap);
     Result record(Transaction& t);
     // The host mip schedule: levels 1..8 of the staged tile at `tile`, packed after it.
@@ -102,6 +107,7 @@ private:
     double timestampPeriodNs_ = 0;
     bool separateCopy_ = false;
     bool hostMips_ = false;                 // MipPipeline::Schedule::Host: levels made here, uploaded by copy
+    bool hostWrites_ = false;               // ... and written into the host-written atlas here, not uploaded
     // Look at each staged tile's alpha, so that the render thread may copy opaque tiles instead
     // of drawing them (EngineTuning::exactCopy; TileMap::opaqueOf). About 5 µs a tile.
     const bool trackOpacity_;

@@ -60,6 +60,13 @@ Expected<EngineTuning> tuningFromEnvironment(EngineTuning base) {
                                                  base.exactCopy);
         !r.ok())
         return r;
+    if (Result r = pick<EngineTuning::TileUpload>("IRIS_TILE_UPLOAD",
+                                                  {{"auto", EngineTuning::TileUpload::Auto},
+                                                   {"queue", EngineTuning::TileUpload::Queue},
+                                                   {"host", EngineTuning::TileUpload::Host}},
+                                                  base.tileUpload);
+        !r.ok())
+        return r;
     if (Result r = pick<EngineTuning::ColorLookup>("IRIS_COLOR_LOOKUP",
                                                    {{"auto", EngineTuning::ColorLookup::Auto},
                                                     {"sampler", EngineTuning::ColorLookup::Sampler},

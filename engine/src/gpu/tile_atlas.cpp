@@ -59,9 +59,49 @@ Result transitionToGeneral(Device& device, VkImage image) {
 }
 } // namespace
 
-Result TileAtlas::init(uint64_t vramBudgetBytes, uint64_t allocationLimit, VkFormat format) {
+Result TileAtlas::create(uint32_t n, bool host) {
+    VkDevice dev = device_.device();
+    image_.reset();
+    memory_.reset(); // a mapping goes with its memory
+    mapped_ = nullptr;
+    VkImageCreateInfo ici =
+        vk::image2D(format_, uint32_t(kTileSize), uint32_t(kTileSize), kTileMipLevels, n,
+                    VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_STORAGE_BIT);
+    if (!host) return vk::createDeviceImage(device_.physical(), dev, ici, image_, memory_);
+    ici.tiling = VK_IMAGE_TILING_LINEAR;
+    vk::Image img;
+    vk::Memory mem;
+    IRIS_VK_TRY(vkCreateImage(dev, &ici, nullptr, img.replace(dev)));
+    VkMemoryRequirements req;
+    vkGetImageMemoryRequirements(dev, img.get(), &req);
+    constexpr VkMemoryPropertyFlags kHost = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+    const uint32_t type = vk::findMemoryType(device_.physical(), req.memoryTypeBits, kHost, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
+    if (type == UINT32_MAX) return Result(Status::Vulkan, "no host-visible, coherent memory type holds a linear image");
+    const VkMemoryAllocateInfo mai{
+        .sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO, .pNext = nullptr, .allocationSize = req.size, .memoryTypeIndex = type};
+    IRIS_VK_TRY(vkAllocateMemory(dev, &mai, nullptr, mem.replace(dev)));
+    IRIS_VK_TRY(vkBindImageMemory(dev, img.get(), mem.get(), 0));
+    void* p = nullptr;
+    IRIS_VK_TRY(vkMapMemory(dev, mem.get(), 0, VK_WHOLE_SIZE, 0, &p));
+    for (uint32_t m = 0; m < kTileMipLevels; ++m) {
+        const VkImageSubresource sub{.aspectMask = VK_IMAGE_ASPECT_COLOR_BIT, .mipLevel = m, .arrayLayer = 0};
+        VkSubresourceLayout l;
+        vkGetImageSubresourceLayout(dev, img.get(), &sub, &l);
+        const VkDeviceSize side = VkDeviceSize(kTileSize) >> m;
+        if (l.rowPitch < side * 4 || (n > 1 && l.arrayPitch < l.rowPitch * side))
+            return Result(Status::Vulkan, "the linear atlas's layout has rows or layers shorter than a tile's");
+        levels_[m] = {l.offset, l.rowPitch, l.arrayPitch};
+    }
+    mapped_ = static_cast<uint8_t*>(p);
+    memory_ = std::move(mem);
+    image_ = std::move(img);
+    return {};
+}
+
+Result TileAtlas::init(uint64_t vramBudgetBytes, uint64_t allocationLimit, VkFormat format, bool hostWritten) {
     VkDevice dev = device_.device();
     format_ = format;
+    hostFallback_.clear();
     const auto& limits = device_.properties().limits;
     uint64_t n = vramBudgetBytes / bytesPerSlot();
     n = std::clamp<uint64_t>(n, 64, limits.maxImageArrayLayers);
@@ -75,19 +115,41 @@ Result TileAtlas::init(uint64_t vramBudgetBytes, uint64_t allocationLimit, VkFor
         return Result(Status::Vulkan, std::string("The device cannot sample (linear) and store ") +
                                           (swapped() ? "BGRA8" : "RGBA8") + " images");
     }
+    bool host = hostWritten;
+    if (host) {
+        // Sampled with filtering, copied from (the exact copy) and bound as storage (the mip
+        // pipeline's descriptors), like the optimal atlas; and of this many levels and layers.
+        const VkFormatFeatureFlags linearNeed = need | VK_FORMAT_FEATURE_TRANSFER_SRC_BIT | VK_FORMAT_FEATURE_TRANSFER_DST_BIT;
+        VkImageFormatProperties ip{};
+        const VkResult r = vkGetPhysicalDeviceImageFormatProperties(
+            device_.physical(), format_, VK_IMAGE_TYPE_2D, VK_IMAGE_TILING_LINEAR,
+            VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_STORAGE_BIT,
+            0, &ip);
+        if ((fp.linearTilingFeatures & linearNeed) != linearNeed) {
+            hostFallback_ = "the device cannot sample, store and copy linear images of this format";
+        } else if (r != VK_SUCCESS || ip.maxMipLevels < kTileMipLevels || ip.maxArrayLayers < 64) {
+            hostFallback_ = "the device allows no linear image of 9 levels and 64 layers";
+        } else {
+            n = std::min<uint64_t>(n, ip.maxArrayLayers);
+        }
+        host = hostFallback_.empty();
+    }
 
     Result made(Status::OutOfMemory, "no room for a tile atlas of 64 slots");
     // Halve the slot count until the allocation succeeds (a budget larger than the device).
-    for (; n >= 64; n /= 2) {
-        const VkImageCreateInfo ici =
-            vk::image2D(format_, uint32_t(kTileSize), uint32_t(kTileSize), kTileMipLevels, uint32_t(n),
-                        VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_STORAGE_BIT);
+    for (const uint64_t first = n; n >= 64; n /= 2) {
         if (allocationLimit > 0 && n * bytesPerSlot() > allocationLimit) {
             made = Result(Status::OutOfMemory, "VK_ERROR_OUT_OF_DEVICE_MEMORY (the allocation limit set for tests)");
             continue;
         }
-        made = vk::createDeviceImage(device_.physical(), dev, ici, image_, memory_);
+        made = create(uint32_t(n), host);
         if (made.ok()) break;
+        if (host && made.status() != Status::OutOfMemory) {
+            // Not a question of size: the usual atlas instead, from the first size again.
+            hostFallback_ = made.message();
+            host = false;
+            n = first * 2;
+        }
     }
     if (!made.ok()) return made;
 

@@ -9,6 +9,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <string>
 
 #include "gpu/device.h"
 #include "core/tile_map.h"
@@ -30,8 +31,24 @@ public:
     // while the device cannot allocate it (VK_ERROR_OUT_OF_DEVICE_MEMORY: a budget larger than
     // the device allows). allocationLimit > 0 makes every allocation above that many bytes fail
     // as if the device had run out (EngineTuning::deviceAllocationLimit, for tests).
-    Result init(uint64_t vramBudgetBytes, uint64_t allocationLimit = 0, VkFormat format = kFormat);
+    //
+    // hostWritten asks for an atlas the buffer thread writes from the host (EngineTuning::
+    // tileUpload): a linear image in host-visible, host-coherent memory, mapped for the atlas's
+    // life. Where the device cannot sample such an image of this size, or has no such memory,
+    // the atlas is made the usual way (optimal tiling, device-local) and hostFallback() says
+    // why; hostWritten() tells which it is.
+    Result init(uint64_t vramBudgetBytes, uint64_t allocationLimit = 0, VkFormat format = kFormat,
+                bool hostWritten = false);
     VkFormat format() const { return format_; }
+    bool hostWritten() const { return mapped_ != nullptr; }
+    const std::string& hostFallback() const { return hostFallback_; }
+    // A host-written atlas: where level `level` of `slot` lies in the mapped memory, and the
+    // bytes from one of its rows to the next. The caller owns the slot (TileMap FILLING): no
+    // frame samples it until it is activated, and frames that sampled it before have ended.
+    uint8_t* hostLevel(int slot, uint32_t level) const {
+        return mapped_ + levels_[level].offset + VkDeviceSize(slot) * levels_[level].arrayPitch;
+    }
+    VkDeviceSize hostRowPitch(uint32_t level) const { return levels_[level].rowPitch; }
     // The atlas holds BGRA: staged tiles (RGBA in RAM) have their red and blue swapped.
     bool swapped() const { return format_ == kSwappedFormat; }
     // The slots the budget asked for; slotCount() is what the device gave.
@@ -49,8 +66,18 @@ public:
     const TileMap& map() const { return *map_; }
 
 private:
+    // Makes image_ and memory_ for n slots: optimal tiling and device-local, or (host) linear
+    // tiling in host-visible, coherent memory, mapped into mapped_ with levels_ filled.
+    Result create(uint32_t n, bool host);
+    struct HostLevel {
+        VkDeviceSize offset = 0, rowPitch = 0, arrayPitch = 0;
+    };
+
     Device& device_;
     VkFormat format_ = kFormat;
+    uint8_t* mapped_ = nullptr; // host-written atlas: memory_ mapped (unmapped when it is freed)
+    HostLevel levels_[kTileMipLevels];
+    std::string hostFallback_;
     vk::Memory memory_;
     vk::Image image_;
     vk::ImageView view_;

@@ -1,5 +1,6 @@
 // Device loss (issue 14, "Faults the engine survives"): VK_ERROR_DEVICE_LOST from a frame
-// submission, an upload submission or a frame's fence wait, injected with
+// submission, an upload submission (an engine uploading by queue copies: a host-written atlas,
+// the default on CPU devices, submits none) or a frame's fence wait, injected with
 // Engine::injectFault, is recovered by the engine alone. After each loss the engine reports
 // it (error(), the fault callback, an Error line), recreates its device, atlas and pipelines,
 // and draws the view again from the RAM cache: the frames after a recovery equal byte for byte
@@ -75,22 +76,27 @@ class TestDeviceLoss : public QObject {
 
     // One injected loss: arm `fault`, show views_[i], and expect a complete frame equal to the
     // reference, one more recovery, the loss in error() and the callback told of the loss and
-    // then of the recovery.
-    void lossThenView(Fault fault, size_t i, const char* round) {
-        const std::string what = std::string(faultName(fault)) + ", " + round + ", view " + std::to_string(i);
-        const uint32_t before = e_->device().recoveries;
-        e_->clearError();
-        e_->injectFault(fault);
+    // then of the recovery. On `engine` (the suite's engine when null), whose fault callback
+    // writes into `faults` (faults_ when null).
+    void lossThenView(Fault fault, size_t i, const char* round, TestEngine* engine = nullptr,
+                      FaultLog* faults = nullptr) {
+        TestEngine& e = engine ? *engine : e_;
+        FaultLog& log = faults ? *faults : *faults_;
+        const std::string what = std::string(faultName(fault)) + ", " + round + ", view " + std::to_string(i) +
+                                 ", uploads by " + e->device().tileUpload;
+        const uint32_t before = e->device().recoveries;
+        e->clearError();
+        e->injectFault(fault);
         std::string why;
-        auto frame = renderView(*e_.engine, views_[i], kW, kH, 120s, &why);
+        auto frame = renderView(*e.engine, views_[i], kW, kH, 120s, &why);
         QVERIFY2(frame.has_value(), (what + ": " + why).c_str());
-        const iris::DeviceInfo d = e_->device();
+        const iris::DeviceInfo d = e->device();
         QVERIFY2(d.recoveries == before + 1,
                  (what + ": " + std::to_string(d.recoveries - before) + " recoveries, expected 1").c_str());
         QVERIFY(!d.lost);
-        QCOMPARE(e_->error().status(), iris::Status::DeviceLost);
-        e_->clearError();
-        const auto events = faults_->take();
+        QCOMPARE(e->error().status(), iris::Status::DeviceLost);
+        e->clearError();
+        const auto events = log.take();
         QVERIFY2(events.size() == 2, (what + ": " + std::to_string(events.size()) + " fault callbacks, expected 2").c_str());
         QCOMPARE(events[0].status(), iris::Status::DeviceLost);
         QCOMPARE(events[1].status(), iris::Status::Ok);
@@ -101,8 +107,18 @@ class TestDeviceLoss : public QObject {
             QFAIL((what + ": the frame after recovery differs from the one before: " + diff.summary() + "; " + where)
                       .c_str());
         }
-        checkErrorLines();
+        for (const std::string& line : e.log->takeErrors())
+            QVERIFY2(expectedLossLine(line), ("unexpected Error line: " + line).c_str());
     }
+
+    // The upload fault needs uploads on the queue: where the suite's engine writes tiles into a
+    // host-written atlas (CPU devices), an engine that uploads by queue copies takes it.
+    static iris::EngineConfig uploadingBy(Fault fault) {
+        iris::EngineConfig c;
+        if (fault == Fault::DeviceLostAtUploadSubmit) c.tuning.tileUpload = iris::EngineTuning::TileUpload::Queue;
+        return c;
+    }
+    bool hostWrites() const { return e_->device().tileUpload == "host"; }
 
 private Q_SLOTS:
     void initTestCase() {
@@ -144,14 +160,33 @@ private Q_SLOTS:
         const int rounds = qEnvironmentVariableIsSet("IRIS_DEVICE_LOSS_ROUNDS")
                                ? qEnvironmentVariableIntValue("IRIS_DEVICE_LOSS_ROUNDS")
                                : 3;
-        size_t next = 0;
-        for (int round = 0; round < rounds; ++round) {
-            for (Fault f : {Fault::DeviceLostAtFrameSubmit, Fault::DeviceLostAtUploadSubmit, Fault::DeviceLostAtFrameWait}) {
-                lossThenView(f, next % views_.size(), ("round " + std::to_string(round)).c_str());
-                if (QTest::currentTestFailed()) return;
-                ++next;
+        // The suite's engine (where it writes tiles from the host it submits no uploads: its
+        // upload faults are skipped), and then an engine that uploads by queue copies, which
+        // takes every kind (its frames are the same: engine.tile_upload). Each loss empties the
+        // atlas, so every view after one needs uploads again.
+        const auto walk = [&](TestEngine* engine, FaultLog* faults, bool uploads) {
+            size_t next = 0;
+            for (int round = 0; round < rounds; ++round) {
+                for (Fault f : {Fault::DeviceLostAtFrameSubmit, Fault::DeviceLostAtUploadSubmit, Fault::DeviceLostAtFrameWait}) {
+                    if (f == Fault::DeviceLostAtUploadSubmit && !uploads) continue;
+                    lossThenView(f, next % views_.size(), ("round " + std::to_string(round)).c_str(), engine, faults);
+                    if (QTest::currentTestFailed()) return;
+                    ++next;
+                }
             }
-        }
+        };
+        walk(nullptr, nullptr, !hostWrites());
+        if (QTest::currentTestFailed() || !hostWrites()) return;
+        TestEngine uploader = createTestEngine(uploadingBy(Fault::DeviceLostAtUploadSubmit));
+        QVERIFY2(uploader, describe(uploader.error).c_str());
+        QCOMPARE(uploader->device().tileUpload, std::string("queue"));
+        auto uploaderFaults = std::make_shared<FaultLog>();
+        uploader->setFaultCallback([log = uploaderFaults](const iris::Result& r) { log->add(r); });
+        QVERIFY(uploader->bindOffscreen(kW, kH).ok());
+        QVERIFY(uploader->open(sampleSlidePath()->string()).ok());
+        walk(&uploader, uploaderFaults.get(), true);
+        const std::string why = uploader.finish();
+        QVERIFY2(why.empty(), why.c_str());
     }
 
     // The host's calls while the device is being recreated are kept: a view and a new target
@@ -196,8 +231,9 @@ private Q_SLOTS:
             });
         }
         for (size_t i = 0; i < 4 && !QTest::currentTestFailed(); ++i) {
-            lossThenView(i % 2 ? Fault::DeviceLostAtUploadSubmit : Fault::DeviceLostAtFrameSubmit, (i * 4 + 1) % views_.size(),
-                         "readers");
+            // (a host-written atlas submits no uploads: its buffer thread's part is the rebuild)
+            const Fault odd = hostWrites() ? Fault::DeviceLostAtFrameWait : Fault::DeviceLostAtUploadSubmit;
+            lossThenView(i % 2 ? odd : Fault::DeviceLostAtFrameSubmit, (i * 4 + 1) % views_.size(), "readers");
         }
         stop = true;
         for (auto& r : readers) r.join();
@@ -209,7 +245,8 @@ private Q_SLOTS:
     void destroyedDuringRecovery() {
         const auto sample = sampleSlidePath();
         for (int i = 0; i < 6; ++i) {
-            TestEngine t = createTestEngine();
+            const Fault fault = i % 2 ? Fault::DeviceLostAtUploadSubmit : Fault::DeviceLostAtFrameSubmit;
+            TestEngine t = createTestEngine(uploadingBy(fault));
             QVERIFY2(t, describe(t.error).c_str());
             struct Noticed {
                 std::mutex m;
@@ -227,7 +264,7 @@ private Q_SLOTS:
             QVERIFY(t->open(sample->string()).ok());
             std::string why;
             QVERIFY2(renderView(*t.engine, views_[0], kW, kH, 60s, &why).has_value(), why.c_str());
-            t->injectFault(i % 2 ? Fault::DeviceLostAtUploadSubmit : Fault::DeviceLostAtFrameSubmit);
+            t->injectFault(fault);
             t->setView(views_[3 + i % 3]);
             if (i >= 2) { // else: destroyed before the fault may even have been hit
                 std::unique_lock lock(noticed->m);

@@ -56,7 +56,9 @@ void TestMetrics::scriptedMoves() {
     QVERIFY(std::abs(f.hrTptUs - f.hrTeFovMs * 1000.0 / 5) < 1e-6);
     QCOMPARE(f.view.centerX, b.centerX);
     // Its tiles' way, stage by stage (issue 20's timeline): every stage saw them, in order,
-    // within the field's time; the five uploads completed and were shown.
+    // within the field's time; the five uploads completed, and the four HR tiles were shown
+    // (the LR tile only when a frame drew it before the HR tiles covered it: with tiles written
+    // from the host, the default on CPU devices, they can all be drawable before any frame).
     for (int s = 0; s < iris::kTileStageCount; ++s) {
         const iris::StageTimes& t = f.stages[size_t(s)];
         const QByteArray name = iris::tileStageName(iris::TileStage(s));
@@ -66,7 +68,7 @@ void TestMetrics::scriptedMoves() {
         if (s > 0) QVERIFY2(t.lastMs + 1e-3 >= f.stages[size_t(s - 1)].firstMs, name);
     }
     QCOMPARE(f.stages[size_t(iris::TileStage::GpuDone)].tiles, 5u);
-    QVERIFY(f.stages[size_t(iris::TileStage::Shown)].tiles >= 5u);
+    QVERIFY(f.stages[size_t(iris::TileStage::Shown)].tiles >= f.hrTiles);
 
     // Back to A: its tiles are still resident (a revisit): no new sample.
     e.setView(a);

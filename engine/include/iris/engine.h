@@ -333,7 +333,8 @@ public:
     // submission fail until the engine has recreated the device, as a real loss does.
     enum class InjectedFault {
         DeviceLostAtFrameSubmit,  // the render thread's next frame submission
-        DeviceLostAtUploadSubmit, // the buffer thread's next upload (copy or mip) submission
+        DeviceLostAtUploadSubmit, // the buffer thread's next upload (copy or mip) submission; a
+                                  // host-written atlas submits none (EngineTuning::tileUpload)
         DeviceLostAtFrameWait,    // the render thread's next wait on a frame's fence
         DeviceLostAtPresent,      // the next vkQueuePresentKHR (a bound surface only)
         SurfaceLostAtPresent,     // the next vkQueuePresentKHR reports VK_ERROR_SURFACE_LOST_KHR

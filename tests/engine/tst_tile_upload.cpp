@@ -9,6 +9,9 @@
 //   * both atlases are the smallest there is (64 slots) and the walk needs several times that
 //     many tiles, so slots are reclaimed and written again while earlier frames were drawn from
 //     them; the walk's first view, drawn again at the end from rewritten slots, is the same;
+//   * tiles written for a view that reads them at level 0 alone get their other levels later;
+//     a shrunk view of the same place right after draws them only once those are made, and
+//     then equal to the engine that uploaded every level at once;
 //   * on a CPU device Auto chooses host writes and the engine says so (DeviceInfo::tileUpload);
 //     a GPU may or may not allow a linear atlas (the engine then logs why and uploads by copy).
 #include <QtTest>
@@ -93,11 +96,15 @@ private slots:
         // needs several times the 64 slots and reclaims most of them more than once.
         const Step steps[] = {
             {"1:1, first field", first, true},
+            // Tiles uploaded for a level's own scale wait for their levels (BufferThread::
+            // levelsWaitFor); shrunk at once, the same place needs them made.
+            {"downsample 1.6 at the first field", {first.centerX, first.centerY, 1.6}, true},
             {"1:1, second field", {std::round(w * 0.7), std::round(h * 0.25), 1.0}, true},
             {"1:1 a quarter pixel off: filtered", {std::round(w * 0.45) + 0.25, std::round(h * 0.6), 1.0}, true},
             {"turned 30 degrees", turnedViewAt(int64_t(w * 0.3), int64_t(h * 0.7), 1.0, 30, false, false, kW, kH), true},
             {"downsample 1.37", {w * 0.8 + 0.37, h * 0.8 + 0.61, 1.37}, true},
             {"level 1 at its own scale", {std::round(w / 2 / ds1) * ds1, std::round(h / 3 / ds1) * ds1, ds1}, true},
+            {"level 1 shrunk by 1.3 there", {std::round(w / 2 / ds1) * ds1, std::round(h / 3 / ds1) * ds1, ds1 * 1.3}, true},
             {"1:1, enhancement off", {std::round(w * 0.55), std::round(h * 0.45), 1.0}, false},
             {"downsample 2.6, enhancement off", {w * 0.35, h * 0.4, 2.6}, false},
             {"1:1, third field", {std::round(w * 0.85), std::round(h * 0.55), 1.0}, true},

@@ -4,10 +4,10 @@
 // shows: culling must never change it.
 #include <QtTest>
 
-#include <set>
-
+#include <algorithm>
 #include <cmath>
 #include <random>
+#include <set>
 #include <unordered_map>
 #include <unordered_set>
 #include <vector>
@@ -71,10 +71,15 @@ public:
     bool isActive(uint64_t key) const override { return layers_.count(key) != 0; }
     uint64_t uploadSeq(int layer) const override { return uint64_t(layer) + 1000; } // a stamp per tile
     uint64_t keyOf(int layer) const { return keys_[size_t(layer)]; }
+    // A resident tile whose mip levels are still to come (TileMap::mipsReadyOf).
+    void withoutMips(uint64_t key) { noMips_.insert(layers_.at(key)); }
+    bool mipsReady(int layer) const override { return noMips_.count(layer) == 0; }
+    int layerOf(uint64_t key) const { return layers_.at(key); }
     int pins = 0;
 
 private:
     std::unordered_map<uint64_t, int> layers_;
+    std::unordered_set<int> noMips_;
     std::vector<uint64_t> keys_;
 };
 
@@ -217,6 +222,7 @@ private slots:
     void syntheticBase();
     void thumbnail();
     void zoomedInTilesNameTheirNeighbours();
+    void tilesWithoutLevelsOnlyWhereLevelZeroIsRead();
     void exactLevels_data();
     void exactLevels();
     void viewTransformRoundTrips();
@@ -767,6 +773,53 @@ void TestDrawList::thumbnail() {
     FakeMap none;
     out.clear();
     QVERIFY(iris::render::appendThumbnail(big, kGen, 1, viewport(4096, 4096, 64, 128, 128), 0, 0, 100, none, out));
+}
+
+// A resident tile whose mip levels are still to come (a host-written atlas makes them after the
+// base level: BufferThread::completeMips) is drawn where its level is read at level 0 alone
+// (lod 0: the level's own scale or enlarged) and left out where it is shrunk: not drawn, not
+// named as a neighbour, the frame incomplete; the overview's thumbnail (shrunk) leaves it out.
+void TestDrawList::tilesWithoutLevelsOnlyWhereLevelZeroIsRead() {
+    const SlideInfo s = scan();
+    FakeMap map;
+    map.addLevel(s, 0);
+    map.addLevel(s, 1);
+    map.addLevel(s, 2);
+    const uint64_t waiting = TileKey::make(kGen, 0, 20, 14); // the tile under (5200, 3700)
+    map.withoutMips(waiting);
+    const int layer = map.layerOf(waiting);
+    const auto drawsLayer = [](const LevelDraw& d, int l) {
+        return std::any_of(d.instances.begin(), d.instances.end(), [&](const auto& t) { return int(t.texel[2]) == l; });
+    };
+    const auto namesLayer = [](const LevelDraw& d, int l) {
+        return std::any_of(d.instances.begin(), d.instances.end(), [&](const auto& t) {
+            return std::any_of(std::begin(t.sides), std::end(t.sides), [&](float v) { return int(v) == l; }) ||
+                   std::any_of(std::begin(t.corners), std::end(t.corners), [&](float v) { return int(v) == l; });
+        });
+    };
+    for (const double ds : {1.0, 0.5}) { // the level's own scale, enlarged: level 0 alone is read
+        const DrawList list = build(s, viewport(5200.3, 3700.6, ds, 640, 480), map);
+        QCOMPARE(list.levels[2].level, 0);
+        QVERIFY2(drawsLayer(list.levels[2], layer), qPrintable(QString("downsample %1").arg(ds)));
+        QVERIFY(list.hrComplete);
+    }
+    const DrawList shrunk = build(s, viewport(5200.3, 3700.6, 1.7, 640, 480), map);
+    QCOMPARE(shrunk.levels[2].level, 0);
+    QVERIFY(!drawsLayer(shrunk.levels[2], layer));
+    QVERIFY(!shrunk.hrComplete);
+    // Its neighbours are drawn and linked, without it.
+    QVERIFY(!shrunk.levels[2].instances.empty() && shrunk.levels[2].linked);
+    QVERIFY(!namesLayer(shrunk.levels[2], layer));
+    // Beside the view: not named as a neighbour when shrunk either.
+    const DrawList beside = build(s, viewport(20 * 256 + 256 + 320 + 0.3, 14 * 256 + 100.6, 1.0 + 1.0 / 256, 640, 480), map);
+    QVERIFY(!drawsLayer(beside.levels[2], layer));
+    QVERIFY(!namesLayer(beside.levels[2], layer));
+    // The thumbnail draws the base level shrunk: a base tile without its levels is left out.
+    const uint64_t baseTile = TileKey::make(kGen, 2, 1, 1);
+    map.withoutMips(baseTile);
+    std::vector<iris::gpu::TileInstance> out;
+    QVERIFY(!iris::render::appendThumbnail(s, kGen, 2, viewport(10000, 7500, 100, 200, 150), 0, 0, 100, map, out));
+    QCOMPARE(out.size(), size_t(19));
 }
 
 // Each instance names the atlas layers of its eight neighbours in the level for the seam pass:

@@ -93,6 +93,7 @@ Result BufferThread::init() {
         !r.ok())
         return r;
     for (uint32_t i = kStagingTiles; i-- > 0;) freeStaging_.push_back(i);
+    if (hostWrites_) mipScratch_.assign(size_t(kTileBytes) + gpu::mipkernel::kChainBytes, 0);
     txns_.resize(kMaxTransactions);
     const auto alloc = [&](VkCommandPool pool, VkCommandBuffer* out) -> Result {
         const VkCommandBufferAllocateInfo cai{.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO,
@@ -154,6 +155,7 @@ void BufferThread::releaseGpu() {
     pool_ = {};
     nextValue_ = submittedValue_ = 0;
     handover_.uploadTimeline = VK_NULL_HANDLE;
+    pendingMips_.clear();
     regionSlide_ = nullptr; // the region is planned again against the new atlas
     regionSerial_ = 0;
     atlasFull_ = false;
@@ -201,7 +203,13 @@ void BufferThread::run() {
         }
         bool progress = pollCompleted();
         const Snapshot snap = shared_.snapshot();
-        if (snap.slide) progress |= submitNew(snap);
+        if (snap.slide) {
+            // Levels this view needs first (its frames leave those tiles out until then), then new
+            // tiles, and with nothing else to do the levels still to come (host-written atlas).
+            progress |= completeMips(snap, /*neededOnly=*/true, kTilesPerTransaction);
+            progress |= submitNew(snap);
+            if (!progress) progress |= completeMips(snap, /*neededOnly=*/false, 2);
+        }
         if (progress) continue;
         const bool inFlight = std::any_of(txns_.begin(), txns_.end(), [](const Transaction& t) { return t.signalValue; });
         if (inFlight) {
@@ -243,6 +251,7 @@ void BufferThread::run() {
 
 bool BufferThread::regionDone(const Snapshot& snap) const {
     if (regionSlide_ != snap.slide.get() || regionSerial_ != snap.viewSerial) return false; // not planned yet
+    if (!pendingMips_.empty()) return false; // done with the levels made too
     if (atlasFull_) return true;
     const TileMap& map = atlas_.map();
     return std::all_of(region_.begin(), region_.end(), [&](const TileRef& t) { return map.contains(t.key); });
@@ -301,12 +310,13 @@ void BufferThread::finish(Transaction& t) {
         if (handover_.needed)
             handover_.push({t.slots[i], t.signalValue, seq, opaque});
         else
-            atlas_.map().activate(t.slots[i], seq, opaque);
+            atlas_.map().activate(t.slots[i], seq, opaque, t.mipsReady[i] != 0);
     }
     for (uint32_t s : t.staging) freeStaging_.push_back(s);
     t.slots.clear();
     t.staging.clear();
     t.opaque.clear();
+    t.mipsReady.clear();
     t.signalValue = 0;
 }
 
@@ -344,6 +354,7 @@ bool BufferThread::submitNew(const Snapshot& snap) {
                 if (atlas_.swapped()) swapRedBlue(base + size_t(st) * stagingStride_, base + size_t(st) * stagingStride_, kTilePixels);
                 tx.opaque.push_back(trackOpacity_ && allOpaque(base + size_t(st) * stagingStride_));
                 if (hostMips_) makeHostMips(base + size_t(st) * stagingStride_, snap.enhance);
+                tx.mipsReady.push_back(true);
                 tx.slots.push_back(slot);
                 tx.staging.push_back(st);
             }
@@ -366,7 +377,10 @@ bool BufferThread::submitNew(const Snapshot& snap) {
         freeStaging_.pop_back();
         if (atlas_.swapped()) swapRedBlue(base + size_t(st) * stagingStride_, base + size_t(st) * stagingStride_, kTilePixels);
         tx.opaque.push_back(trackOpacity_ && allOpaque(base + size_t(st) * stagingStride_));
-        if (hostMips_) makeHostMips(base + size_t(st) * stagingStride_, snap.enhance);
+        const bool defer = hostWrites_ && levelsWaitFor(snap, t.level);
+        if (hostMips_ && !defer) makeHostMips(base + size_t(st) * stagingStride_, snap.enhance);
+        tx.mipsReady.push_back(!defer);
+        if (defer) pendingMips_.push_back({slot, t.key, snap.enhance}); // made once the tile is written
         shared_.tileStages.stamp(TileStage::Staged);
         tx.slots.push_back(slot);
         tx.staging.push_back(st);
@@ -377,6 +391,7 @@ bool BufferThread::submitNew(const Snapshot& snap) {
     tx.enhance = snap.enhance;
     if (hostWrites_) {
         writeToAtlas(tx);
+
         shared_.tileStages.stamp(TileStage::Submitted, uint32_t(tx.slots.size()));
         finish(tx);
         shared_.bump(); // the render thread has new tiles to draw
@@ -394,6 +409,7 @@ bool BufferThread::submitNew(const Snapshot& snap) {
         tx.slots.clear();
         tx.staging.clear();
         tx.opaque.clear();
+        tx.mipsReady.clear();
         return false;
     }
     tx.signalValue = ++nextValue_;
@@ -421,27 +437,91 @@ void BufferThread::makeHostMips(uint8_t* tile, bool enhance) {
     counters_.mipTiles.fetch_add(1, std::memory_order_relaxed);
 }
 
-// The host-written atlas: each staged tile's nine levels, row by row, into its slot's layer.
-// The slots are this thread's (FILLING): no frame samples them until finish() activates them,
-// and the frames that sampled a reclaimed slot before have ended (the tile map reclaims only
-// slots that no frame has pinned, and frames unpin after their fence).
-void BufferThread::writeToAtlas(const Transaction& tx) {
-    const auto* base = static_cast<const uint8_t*>(staging_.mapped);
-    for (size_t i = 0; i < tx.slots.size(); ++i) {
-        const uint8_t* tile = base + size_t(tx.staging[i]) * stagingStride_;
-        for (uint32_t m = 0; m < gpu::kTileMipLevels; ++m) {
-            const size_t side = size_t(kTileSize) >> m;
-            const size_t row = side * 4;
-            const uint8_t* src = m == 0 ? tile : tile + kTileBytes + gpu::mipkernel::chainOffset(int(m));
-            uint8_t* dst = atlas_.hostLevel(tx.slots[i], m);
-            const size_t pitch = size_t(atlas_.hostRowPitch(m));
-            if (pitch == row) {
-                std::memcpy(dst, src, row * side);
-            } else {
-                for (size_t y = 0; y < side; ++y) std::memcpy(dst + y * pitch, src + y * row, row);
-            }
+// The host-written atlas: levels [first, end) of a tile (`entry`: the base level, then the 8
+// levels packed behind it), row by row, into `slot`'s layer. The slot is this thread's: FILLING
+// (no frame samples it until finish() activates it), or ACTIVE without its levels (frames draw
+// it only where they sample level 0 alone: TileMap::mipsReadyOf). The frames that sampled a
+// reclaimed slot before have ended (the tile map reclaims only slots that no frame has pinned,
+// and frames unpin after their fence).
+void BufferThread::writeLevels(const uint8_t* entry, int slot, uint32_t first, uint32_t end) {
+    for (uint32_t m = first; m < end; ++m) {
+        const size_t side = size_t(kTileSize) >> m;
+        const size_t row = side * 4;
+        const uint8_t* src = m == 0 ? entry : entry + kTileBytes + gpu::mipkernel::chainOffset(int(m));
+        uint8_t* dst = atlas_.hostLevel(slot, m);
+        const size_t pitch = size_t(atlas_.hostRowPitch(m));
+        if (pitch == row) {
+            std::memcpy(dst, src, row * side);
+        } else {
+            for (size_t y = 0; y < side; ++y) std::memcpy(dst + y * pitch, src + y * row, row);
         }
     }
+}
+
+// Each staged tile of a transaction into the host-written atlas: all nine levels, or the base
+// level alone where its levels wait (Transaction::mipsReady).
+void BufferThread::writeToAtlas(const Transaction& tx) {
+    const auto* base = static_cast<const uint8_t*>(staging_.mapped);
+    for (size_t i = 0; i < tx.slots.size(); ++i)
+        writeLevels(base + size_t(tx.staging[i]) * stagingStride_, tx.slots[i], 0, tx.mipsReady[i] ? gpu::kTileMipLevels : 1);
+}
+
+// A tile of `level` uploaded for this view waits for its levels 1..8 when the view samples it
+// at level 0 alone: the view shows that level at its own scale or enlarged (lod 0; LR is always
+// enlarged), and it is not the base level, whose tiles the overview also draws, shrunk. Its
+// levels are made when the buffer thread has nothing to upload, or at once when a view needs
+// them (completeMips). On a CPU device the levels are a third of the CPU a new field costs
+// (0.3 ms a tile), and most fields are shown at a level's own scale.
+bool BufferThread::levelsWaitFor(const Snapshot& snap, int level) const {
+    const SlideInfo& info = snap.slide->info;
+    if (level < 0 || size_t(level) >= info.levels.size()) return false;
+    if (level == chooseLevels(info, snap.viewport.view.downsample).base) return false;
+    return !(snap.viewport.view.downsample > info.levels[size_t(level)].downsample);
+}
+
+// Levels 1..8 of tiles activated without them, read back from the atlas's base level (the
+// atlas's memory is the host's). With neededOnly, only those of levels the current view shrinks
+// (whose tiles its frames leave out until then), else in the order they were uploaded; at most
+// maxTiles a call, so that a new view is looked at between. Entries whose slot was reclaimed
+// since, or whose slide generation is gone, are dropped.
+bool BufferThread::completeMips(const Snapshot& snap, bool neededOnly, size_t maxTiles) {
+    if (pendingMips_.empty()) return false;
+    TileMap& map = atlas_.map();
+    const SlideInfo* info = snap.slide ? &snap.slide->info : nullptr;
+    size_t made = 0;
+    bool any = false;
+    for (size_t i = 0; i < pendingMips_.size() && made < maxTiles;) {
+        const PendingMips p = pendingMips_[i];
+        const int level = TileKey::level(p.key);
+        const bool current = info && TileKey::generation(p.key) == (snap.slide->generation & 0xFFFF) &&
+                             size_t(level) < info->levels.size();
+        if (!current || map.slotOf(p.key) != p.slot) {
+            pendingMips_.erase(pendingMips_.begin() + ptrdiff_t(i));
+            continue;
+        }
+        if (neededOnly && !(snap.viewport.view.downsample > info->levels[size_t(level)].downsample)) {
+            ++i;
+            continue;
+        }
+        const auto t0 = std::chrono::steady_clock::now();
+        const size_t row = size_t(kTileSize) * 4, pitch = size_t(atlas_.hostRowPitch(0));
+        const uint8_t* base = atlas_.hostLevel(p.slot, 0);
+        if (pitch != row) { // the base level into the scratch's first part, contiguous
+            for (size_t y = 0; y < size_t(kTileSize); ++y) std::memcpy(mipScratch_.data() + y * row, base + y * pitch, row);
+            base = mipScratch_.data();
+        }
+        gpu::mipkernel::reduceChain8(base, mipScratch_.data() + kTileBytes, p.enhance);
+        writeLevels(mipScratch_.data(), p.slot, 1, gpu::kTileMipLevels);
+        map.setMipsReady(p.slot);
+        const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count();
+        counters_.mipNs.fetch_add(uint64_t(ns), std::memory_order_relaxed);
+        counters_.mipTiles.fetch_add(1, std::memory_order_relaxed);
+        pendingMips_.erase(pendingMips_.begin() + ptrdiff_t(i));
+        ++made;
+        any = true;
+    }
+    if (any && neededOnly) shared_.bump(); // frames that left those tiles out can draw them now
+    return any;
 }
 
 Result BufferThread::submit(Transaction& tx) {

@@ -67,12 +67,16 @@ private:
         std::vector<int> slots;
         std::vector<uint32_t> staging;
         std::vector<uint8_t> opaque; // per slot: every pixel's alpha is 255 (only with trackOpacity_)
+        std::vector<uint8_t> mipsReady; // per slot: its levels 1..8 go with it (else they wait: completeMips)
     };
     void run();
     void releaseGpu();
     bool pollCompleted();
     void finish(Transaction& t);
     void writeToAtlas(const Transaction& t);
+    void writeLevels(const uint8_t* entry, int slot, uint32_t first, uint32_t end);
+    bool levelsWaitFor(const Snapshot& snap, int level) const;
+    bool completeMips(const Snapshot& snap, bool neededOnly, size_t maxTiles);
     bool submitNew(const Snapshot& snap);
     Result record(Transaction& t);
     // The host mip schedule: levels 1..8 of the staged tile at `tile`, packed after it.
@@ -108,6 +112,15 @@ private:
     bool separateCopy_ = false;
     bool hostMips_ = false;                 // MipPipeline::Schedule::Host: levels made here, uploaded by copy
     bool hostWrites_ = false;               // ... and written into the host-written atlas here, not uploaded
+    // Host-written atlas: tiles activated with their base level alone, whose levels 1..8 this
+    // thread makes later (levelsWaitFor, completeMips), oldest first; and the scratch for them.
+    struct PendingMips {
+        int slot;
+        uint64_t key;
+        bool enhance;
+    };
+    std::vector<PendingMips> pendingMips_;
+    std::vector<uint8_t> mipScratch_;
     // Look at each staged tile's alpha, so that the render thread may copy opaque tiles instead
     // of drawing them (EngineTuning::exactCopy; TileMap::opaqueOf). About 5 µs a tile.
     const bool trackOpacity_;

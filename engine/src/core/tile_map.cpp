@@ -187,10 +187,11 @@ int TileMap::claimFree(uint64_t key) {
     return -1;
 }
 
-void TileMap::activate(int slot, uint64_t uploadSeq, bool opaque) {
+void TileMap::activate(int slot, uint64_t uploadSeq, bool opaque, bool mipsReady) {
     Slot& s = slots_[size_t(slot)];
     s.uploadSeq.store(uploadSeq, std::memory_order_relaxed); // published by the release below
     s.opaque.store(opaque, std::memory_order_relaxed);
+    s.mipsReady.store(mipsReady, std::memory_order_relaxed);
     // release: pairs with pin()'s seq_cst (acquiring) status load; the upload's completion,
     // observed by the writer on the timeline semaphore, happens-before a reader drawing it.
     s.status.store(uint32_t(Status::Active), std::memory_order_release);
@@ -206,10 +207,24 @@ bool TileMap::opaqueOf(int slot) const {
     return slots_[size_t(slot)].opaque.load(std::memory_order_relaxed); // as uploadSeqOf
 }
 
+bool TileMap::mipsReadyOf(int slot) const {
+    return slots_[size_t(slot)].mipsReady.load(std::memory_order_acquire);
+}
+
+void TileMap::setMipsReady(int slot) {
+    // release: the levels' writes happen-before a reader that loads true (mipsReadyOf).
+    slots_[size_t(slot)].mipsReady.store(true, std::memory_order_release);
+}
+
+int TileMap::slotOf(uint64_t key) const {
+    return find(*current_.load(std::memory_order_relaxed), key); // the writer's own table, as contains()
+}
+
 void TileMap::activatePinned(int slot, uint64_t frame, uint64_t uploadSeq, bool opaque) {
     Slot& s = slots_[size_t(slot)];
     s.uploadSeq.store(uploadSeq, std::memory_order_relaxed); // published by the seq_cst store below
     s.opaque.store(opaque, std::memory_order_relaxed);
+    s.mipsReady.store(true, std::memory_order_relaxed); // uploaded with its levels
     // The count is raised before the status flips, so the writer's CAS (which needs ACTIVE)
     // can only happen once refs ≥ 1 is visible to its seq_cst load: it backs off.
     s.refs.fetch_add(1, std::memory_order_seq_cst);

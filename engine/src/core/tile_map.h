@@ -59,6 +59,11 @@ public:
     // Whether every pixel of `slot`'s tile is opaque (alpha 255), as its activation said; read
     // like uploadSeqOf. False where nobody looked.
     bool opaqueOf(int slot) const;
+    // Whether `slot`'s tile has its mip levels 1..8 (activate() may leave them to come, for a
+    // host-written atlas: setMipsReady()). Read for a slot this thread has pinned. Acquire: the
+    // levels were written before the writer's release store, and a frame recorded after this
+    // load saw true may sample them.
+    bool mipsReadyOf(int slot) const;
     uint32_t countActive() const;
 
     // --- the writer (buffer thread only) ------------------------------------------------
@@ -72,7 +77,12 @@ public:
     // Makes the slot ACTIVE, stamped with `uploadSeq`: the value of UploadCounters::tiles once
     // its upload was counted, so that metrics can tell a tile uploaded after a move from one
     // resident before it (a revisit); `opaque`: every pixel of the tile has alpha 255.
-    void activate(int slot, uint64_t uploadSeq = 0, bool opaque = false);
+    // mipsReady false: only level 0 is in the atlas yet (a frame may draw the tile only where
+    // it samples level 0 alone); the writer makes the rest and calls setMipsReady.
+    void activate(int slot, uint64_t uploadSeq = 0, bool opaque = false, bool mipsReady = true);
+    void setMipsReady(int slot);
+    // The slot holding `key` (FILLING or ACTIVE), -1 when none: the writer's own lookup.
+    int slotOf(uint64_t key) const;
     // Render thread, for tiles handed over from another queue family: makes the slot ACTIVE
     // already pinned by the frame that acquires it, so it cannot be reclaimed (and released
     // again) before that frame's acquire has executed. Unpin after the frame's fence.
@@ -90,6 +100,7 @@ private:
         // after a pin's seq_cst load saw ACTIVE, which acquires it.
         std::atomic<uint64_t> uploadSeq{0};
         std::atomic<bool> opaque{false}; // stored and read like uploadSeq
+        std::atomic<bool> mipsReady{true}; // stored like uploadSeq by activate(); setMipsReady() releases it
     };
     static_assert(sizeof(Slot) == kCacheLine, "one slot per cache line: readers and the writer touch different slots");
 

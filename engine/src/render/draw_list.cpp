@@ -88,7 +88,15 @@ bool coveredBy(const LevelInfo& coarse, int64_t tx, int64_t ty, const LevelInfo&
     return true;
 }
 
-void linkNeighbours(const LevelInfo& level, int levelIndex, uint32_t generation, TileResidency& tiles, LevelDraw& d) {
+// The atlas layer of `key` for a draw at `lod`: pinned, or -1 when the tile is not resident,
+// or when its mip levels are still to come and the draw would sample them.
+static int pinFor(TileResidency& tiles, uint64_t key, double lod) {
+    const int layer = tiles.pin(key);
+    return layer >= 0 && lod > 0 && !tiles.mipsReady(layer) ? -1 : layer;
+}
+
+void linkNeighbours(const LevelInfo& level, int levelIndex, uint32_t generation, TileResidency& tiles, double lod,
+                    LevelDraw& d) {
     const TileRange& r = d.range;
     const int64_t w = r.x1 - r.x0 + 1, h = r.y1 - r.y0 + 1;
     constexpr int32_t kUnknown = -2;
@@ -100,7 +108,7 @@ void linkNeighbours(const LevelInfo& level, int levelIndex, uint32_t generation,
         int32_t& cached = d.around[size_t((ty - r.y0 + 1) * (w + 2) + (tx - r.x0 + 1))];
         if (cached == kUnknown) {
             const int32_t drawn = r.contains(tx, ty) ? d.layers[size_t((ty - r.y0) * w + (tx - r.x0))] : -1;
-            cached = drawn >= 0 ? drawn : tiles.pin(TileKey::make(generation, levelIndex, tx, ty));
+            cached = drawn >= 0 ? drawn : pinFor(tiles, TileKey::make(generation, levelIndex, tx, ty), lod);
         }
         return cached;
     };
@@ -207,7 +215,7 @@ void buildDrawList(const SlideInfo& info, uint32_t generation, const Viewport& v
                     if (isLr && !tiles.isActive(key)) out.lrComplete = false;
                     continue;
                 }
-                int layer = budget > 0 ? tiles.pin(key) : -1;
+                int layer = budget > 0 ? pinFor(tiles, key, lod) : -1;
                 if (layer < 0) {
                     if (isHr) hrComplete = false;
                     if (isLr) out.lrComplete = false;
@@ -232,7 +240,7 @@ void buildDrawList(const SlideInfo& info, uint32_t generation, const Viewport& v
         // one drawn exactly has nothing to filter.
         d.exact = drawsExact(level, vp);
         if (!d.instances.empty() && !d.exact) {
-            linkNeighbours(level, li, generation, tiles, d);
+            linkNeighbours(level, li, generation, tiles, lod, d);
             d.linked = true;
         }
     }
@@ -251,7 +259,7 @@ bool appendThumbnail(const SlideInfo& info, uint32_t generation, double viewDown
     bool complete = true;
     for (int64_t ty = range.y0; ty <= range.y1; ++ty) {
         for (int64_t tx = range.x0; tx <= range.x1; ++tx) {
-            const int layer = out.size() < budget ? tiles.pin(TileKey::make(generation, base, tx, ty)) : -1;
+            const int layer = out.size() < budget ? pinFor(tiles, TileKey::make(generation, base, tx, ty), lod) : -1;
             if (layer < 0) {
                 if (keptWhole) complete = false;
                 continue;

@@ -33,6 +33,10 @@ public:
     virtual uint64_t uploadSeq(int /*layer*/) const { return 0; }
     // Whether every pixel of the tile this frame pinned in `layer` is opaque; false where unknown.
     virtual bool opaque(int /*layer*/) const { return false; }
+    // Whether the tile this frame pinned in `layer` has its mip levels (TileMap::mipsReadyOf).
+    // One without them is drawn only where it samples level 0 alone (lod 0), else left out as
+    // if it were not resident.
+    virtual bool mipsReady(int /*layer*/) const { return true; }
 
 protected:
     ~TileResidency() = default;
@@ -95,8 +99,10 @@ void buildDrawList(const SlideInfo& info, uint32_t generation, const Viewport& v
 
 // Names in each of `d`'s instances (a level not drawn exactly) the atlas layers of the
 // tile's eight neighbours in the level, so that the tile shader interpolates across the seams:
-// drawn tiles' layers as they are, any other neighbour pinned for the frame when resident.
-void linkNeighbours(const LevelInfo& level, int levelIndex, uint32_t generation, TileResidency& tiles, LevelDraw& d);
+// drawn tiles' layers as they are, any other neighbour pinned for the frame when resident (and,
+// drawn at `lod` > 0, when it has its mip levels).
+void linkNeighbours(const LevelInfo& level, int levelIndex, uint32_t generation, TileResidency& tiles, double lod,
+                    LevelDraw& d);
 
 // Whether `level` is drawn exactly in `vp`: one texel a target pixel, the view unturned or
 // turned by a multiple of 90° (flips included), and every target pixel's centre on a texel's

@@ -33,6 +33,7 @@ public:
     bool isActive(uint64_t key) const override { return map_.statusOf(key) == TileMap::Status::Active; }
     uint64_t uploadSeq(int layer) const override { return map_.uploadSeqOf(layer); }
     bool opaque(int layer) const override { return map_.opaqueOf(layer); }
+    bool mipsReady(int layer) const override { return map_.mipsReadyOf(layer); }
 
 private:
     TileMap& map_;

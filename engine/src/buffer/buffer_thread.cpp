@@ -208,7 +208,8 @@ void BufferThread::run() {
             // tiles, and with nothing else to do the levels still to come (host-written atlas).
             progress |= completeMips(snap, /*neededOnly=*/true, kTilesPerTransaction);
             progress |= submitNew(snap);
-            if (!progress) progress |= completeMips(snap, /*neededOnly=*/false, 2);
+            // (Only once this view's tiles are all in: a new field's decodes and uploads come first.)
+            if (!progress && regionUploaded(snap)) progress |= completeMips(snap, /*neededOnly=*/false, 2);
         }
         if (progress) continue;
         const bool inFlight = std::any_of(txns_.begin(), txns_.end(), [](const Transaction& t) { return t.signalValue; });
@@ -250,8 +251,11 @@ void BufferThread::run() {
 }
 
 bool BufferThread::regionDone(const Snapshot& snap) const {
+    return pendingMips_.empty() && regionUploaded(snap); // done with the levels made too
+}
+
+bool BufferThread::regionUploaded(const Snapshot& snap) const {
     if (regionSlide_ != snap.slide.get() || regionSerial_ != snap.viewSerial) return false; // not planned yet
-    if (!pendingMips_.empty()) return false; // done with the levels made too
     if (atlasFull_) return true;
     const TileMap& map = atlas_.map();
     return std::all_of(region_.begin(), region_.end(), [&](const TileRef& t) { return map.contains(t.key); });
@@ -312,7 +316,8 @@ void BufferThread::finish(Transaction& t) {
         else
             atlas_.map().activate(t.slots[i], seq, opaque, t.mipsReady[i] != 0);
     }
-    for (uint32_t s : t.staging) freeStaging_.push_back(s);
+    for (uint32_t s : t.staging)
+        if (s != kWritten) freeStaging_.push_back(s);
     t.slots.clear();
     t.staging.clear();
     t.opaque.clear();
@@ -368,8 +373,28 @@ bool BufferThread::submitNew(const Snapshot& snap) {
             atlasFull_ = true;
             break;
         }
-        const uint32_t st = freeStaging_.back();
         bool failed = false;
+        const bool defer = hostWrites_ && levelsWaitFor(snap, t.level);
+        if (defer && atlas_.hostRowPitch(0) == VkDeviceSize(kTileSize) * 4) {
+            // Its base level alone, straight from the RAM cache into the atlas: one pass that
+            // copies, swaps the channels where the atlas is BGRA and looks at the alpha.
+            bool opaque = false;
+            uint8_t* dst = atlas_.hostLevel(slot, 0);
+            if (!cache_.readOut(
+                    t.key, [&](const uint8_t* src) { opaque = copyPixels(src, dst, kTilePixels, atlas_.swapped()); },
+                    &failed)) {
+                map.abandon(slot); // evicted from RAM meanwhile; a loader will decode it again
+                continue;
+            }
+            tx.opaque.push_back(trackOpacity_ && opaque);
+            tx.mipsReady.push_back(false);
+            pendingMips_.push_back({slot, t.key, snap.enhance});
+            shared_.tileStages.stamp(TileStage::Staged);
+            tx.slots.push_back(slot);
+            tx.staging.push_back(kWritten);
+            continue;
+        }
+        const uint32_t st = freeStaging_.back();
         if (!cache_.copyOut(t.key, base + size_t(st) * stagingStride_, &failed)) {
             map.abandon(slot); // evicted from RAM meanwhile; a loader will decode it again
             continue;
@@ -377,7 +402,6 @@ bool BufferThread::submitNew(const Snapshot& snap) {
         freeStaging_.pop_back();
         if (atlas_.swapped()) swapRedBlue(base + size_t(st) * stagingStride_, base + size_t(st) * stagingStride_, kTilePixels);
         tx.opaque.push_back(trackOpacity_ && allOpaque(base + size_t(st) * stagingStride_));
-        const bool defer = hostWrites_ && levelsWaitFor(snap, t.level);
         if (hostMips_ && !defer) makeHostMips(base + size_t(st) * stagingStride_, snap.enhance);
         tx.mipsReady.push_back(!defer);
         if (defer) pendingMips_.push_back({slot, t.key, snap.enhance}); // made once the tile is written
@@ -459,11 +483,14 @@ void BufferThread::writeLevels(const uint8_t* entry, int slot, uint32_t first, u
 }
 
 // Each staged tile of a transaction into the host-written atlas: all nine levels, or the base
-// level alone where its levels wait (Transaction::mipsReady).
+// level alone where its levels wait (Transaction::mipsReady); those written straight from the
+// RAM cache (kWritten) are there already.
 void BufferThread::writeToAtlas(const Transaction& tx) {
     const auto* base = static_cast<const uint8_t*>(staging_.mapped);
     for (size_t i = 0; i < tx.slots.size(); ++i)
-        writeLevels(base + size_t(tx.staging[i]) * stagingStride_, tx.slots[i], 0, tx.mipsReady[i] ? gpu::kTileMipLevels : 1);
+        if (tx.staging[i] != kWritten)
+            writeLevels(base + size_t(tx.staging[i]) * stagingStride_, tx.slots[i], 0,
+                        tx.mipsReady[i] ? gpu::kTileMipLevels : 1);
 }
 
 // A tile of `level` uploaded for this view waits for its levels 1..8 when the view samples it

@@ -75,6 +75,8 @@ private:
     void finish(Transaction& t);
     void writeToAtlas(const Transaction& t);
     void writeLevels(const uint8_t* entry, int slot, uint32_t first, uint32_t end);
+    // Transaction::staging's value for a tile written into the atlas straight from the cache.
+    static constexpr uint32_t kWritten = UINT32_MAX;
     bool levelsWaitFor(const Snapshot& snap, int level) const;
     bool completeMips(const Snapshot& snap, bool neededOnly, size_t maxTiles);
     bool submitNew(const Snapshot& snap);
@@ -97,8 +99,10 @@ private:
     uint64_t regionSerial_ = 0;
     bool atlasFull_ = false; // the last pass over the region found no slot it could reclaim
     // Whether every tile of the current region is in the tile map (or the atlas is full), with
-    // nothing in flight: the region is done (SharedState::bufferedView).
+    // nothing in flight and no levels still to make: the region is done (SharedState::bufferedView).
     bool regionDone(const Snapshot& snap) const;
+    // ... every tile of it in the tile map (or the atlas full), levels still to come or not.
+    bool regionUploaded(const Snapshot& snap) const;
     std::vector<TileRef> region_;
     std::unordered_set<uint64_t> keep_;
 

@@ -64,6 +64,10 @@ void TileCache::abandon(uint64_t key, std::unique_ptr<uint8_t[]> buffer) {
 }
 
 bool TileCache::copyOut(uint64_t key, uint8_t* dst, bool* failed) {
+    return readOut(key, [&](const uint8_t* src) { std::memcpy(dst, src, kTileBytes); }, failed);
+}
+
+bool TileCache::readOut(uint64_t key, const std::function<void(const uint8_t*)>& use, bool* failed) {
     const uint8_t* src = nullptr;
     {
         std::lock_guard lock(mutex_);
@@ -76,7 +80,7 @@ bool TileCache::copyOut(uint64_t key, uint8_t* dst, bool* failed) {
     }
     // The buffer stays as it is while listed in copying_: an eviction or a drop moves it to
     // orphans_ instead of recycling it, and only recycled buffers are written (acquireBuffer).
-    std::memcpy(dst, src, kTileBytes);
+    use(src);
     std::lock_guard lock(mutex_);
     copying_.erase(std::find(copying_.begin(), copying_.end(), src));
     if (std::find(copying_.begin(), copying_.end(), src) == copying_.end()) {

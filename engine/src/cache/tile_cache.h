@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <list>
 #include <memory>
 #include <mutex>
@@ -28,6 +29,9 @@ public:
     // Copies a ready tile into dst; false when not ready. `failed` tells a placeholder. The copy
     // runs without the cache's lock; any number of threads may copy at once.
     bool copyOut(uint64_t key, uint8_t* dst, bool* failed);
+    // Calls use(pixels) with a ready tile's kTileBytes, which stay as they are during the call;
+    // false (and no call) when not ready. Runs `use` without the cache's lock, like copyOut.
+    bool readOut(uint64_t key, const std::function<void(const uint8_t*)>& use, bool* failed);
     bool isReady(uint64_t key) const;
     // Forgets every tile whose generation differs from `generation`.
     void dropOtherGenerations(uint32_t generation);

@@ -74,7 +74,8 @@ struct Engine::Impl {
             return r;
         if (!atlas.hostFallback().empty())
             log.warn("tile upload: no host-written atlas (" + atlas.hostFallback() + "); uploading by queue copies");
-        log.info(std::string("tile upload: ") + (atlas.hostWritten() ? "host writes into a linear atlas" : "queue copies"));
+        log.info(std::string("tile upload: ") +
+                 (atlas.hostWritten() ? "host writes into a linear atlas" : "queue copies"));
         if (atlas.slotCount() < atlas.requestedSlots()) {
             const auto mib = [](uint64_t slots) { return std::to_string(slots * gpu::TileAtlas::bytesPerSlot() >> 20); };
             log.warn("VRAM: the device could not allocate a tile atlas of " + std::to_string(atlas.requestedSlots()) +

@@ -109,9 +109,13 @@ private slots:
             QVERIFY(t->singleQueue);
         }
         {
-            ScopedEnvironment env({{"IRIS_PACE_FRAMES", "0"}, {"IRIS_MIP_SCHEDULE", "wide"}, {"IRIS_QUEUES", "auto"},
-                                   {"IRIS_DRAW_COVERED", "0"}, {"IRIS_TILE_RESOLVE", "compute"},
-                                   {"IRIS_COLOR_LOOKUP", "sampler"}, {"IRIS_EXACT_COPY", "0"},
+            ScopedEnvironment env({{"IRIS_PACE_FRAMES", "0"},
+                                   {"IRIS_MIP_SCHEDULE", "wide"},
+                                   {"IRIS_QUEUES", "auto"},
+                                   {"IRIS_DRAW_COVERED", "0"},
+                                   {"IRIS_TILE_RESOLVE", "compute"},
+                                   {"IRIS_COLOR_LOOKUP", "sampler"},
+                                   {"IRIS_EXACT_COPY", "0"},
                                    {"IRIS_TILE_UPLOAD", "queue"}});
             T base;
             base.singleQueue = true;

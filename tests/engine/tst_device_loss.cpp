@@ -167,7 +167,8 @@ private Q_SLOTS:
         const auto walk = [&](TestEngine* engine, FaultLog* faults, bool uploads) {
             size_t next = 0;
             for (int round = 0; round < rounds; ++round) {
-                for (Fault f : {Fault::DeviceLostAtFrameSubmit, Fault::DeviceLostAtUploadSubmit, Fault::DeviceLostAtFrameWait}) {
+                for (Fault f :
+                     {Fault::DeviceLostAtFrameSubmit, Fault::DeviceLostAtUploadSubmit, Fault::DeviceLostAtFrameWait}) {
                     if (f == Fault::DeviceLostAtUploadSubmit && !uploads) continue;
                     lossThenView(f, next % views_.size(), ("round " + std::to_string(round)).c_str(), engine, faults);
                     if (QTest::currentTestFailed()) return;

@@ -62,8 +62,10 @@ private slots:
         // An Auto engine on a CPU device writes from the host too.
         TestEngine autoEngine = createTestEngine();
         QVERIFY2(autoEngine, describe(autoEngine.error).c_str());
-        if (isCpuDevice(hd.name)) QCOMPARE(autoEngine->device().tileUpload, std::string("host"));
-        else QCOMPARE(autoEngine->device().tileUpload, std::string("queue"));
+        if (isCpuDevice(hd.name))
+            QCOMPARE(autoEngine->device().tileUpload, std::string("host"));
+        else
+            QCOMPARE(autoEngine->device().tileUpload, std::string("queue"));
         const std::string done = autoEngine.finish();
         QVERIFY2(done.empty(), done.c_str());
     }
@@ -101,10 +103,13 @@ private slots:
             {"downsample 1.6 at the first field", {first.centerX, first.centerY, 1.6}, true},
             {"1:1, second field", {std::round(w * 0.7), std::round(h * 0.25), 1.0}, true},
             {"1:1 a quarter pixel off: filtered", {std::round(w * 0.45) + 0.25, std::round(h * 0.6), 1.0}, true},
-            {"turned 30 degrees", turnedViewAt(int64_t(w * 0.3), int64_t(h * 0.7), 1.0, 30, false, false, kW, kH), true},
+            {"turned 30 degrees", turnedViewAt(int64_t(w * 0.3), int64_t(h * 0.7), 1.0, 30, false, false, kW, kH),
+             true},
             {"downsample 1.37", {w * 0.8 + 0.37, h * 0.8 + 0.61, 1.37}, true},
             {"level 1 at its own scale", {std::round(w / 2 / ds1) * ds1, std::round(h / 3 / ds1) * ds1, ds1}, true},
-            {"level 1 shrunk by 1.3 there", {std::round(w / 2 / ds1) * ds1, std::round(h / 3 / ds1) * ds1, ds1 * 1.3}, true},
+            {"level 1 shrunk by 1.3 there",
+             {std::round(w / 2 / ds1) * ds1, std::round(h / 3 / ds1) * ds1, ds1 * 1.3},
+             true},
             {"1:1, enhancement off", {std::round(w * 0.55), std::round(h * 0.45), 1.0}, false},
             {"downsample 2.6, enhancement off", {w * 0.35, h * 0.4, 2.6}, false},
             {"1:1, third field", {std::round(w * 0.85), std::round(h * 0.55), 1.0}, true},
@@ -123,7 +128,9 @@ private slots:
             qInfo("%s: %s; tiles drawn %u, atlas slots active %u", s.what, d.summary().c_str(),
                   host_->metrics().lastFrame.tilesDrawn, host_->memoryStats().atlasActive);
             if (d.differing)
-                qWarning("%s", saveFailureArtefacts(std::string("tile_upload.") + s.what, a->image, b->image, nullptr).c_str());
+                qWarning(
+                    "%s",
+                    saveFailureArtefacts(std::string("tile_upload.") + s.what, a->image, b->image, nullptr).c_str());
             QVERIFY2(d.differing == 0, s.what);
             if (!firstFrame) {
                 firstFrame = a->image;

@@ -811,7 +811,8 @@ void TestDrawList::tilesWithoutLevelsOnlyWhereLevelZeroIsRead() {
     QVERIFY(!shrunk.levels[2].instances.empty() && shrunk.levels[2].linked);
     QVERIFY(!namesLayer(shrunk.levels[2], layer));
     // Beside the view: not named as a neighbour when shrunk either.
-    const DrawList beside = build(s, viewport(20 * 256 + 256 + 320 + 0.3, 14 * 256 + 100.6, 1.0 + 1.0 / 256, 640, 480), map);
+    const DrawList beside =
+        build(s, viewport(20 * 256 + 256 + 320 + 0.3, 14 * 256 + 100.6, 1.0 + 1.0 / 256, 640, 480), map);
     QVERIFY(!drawsLayer(beside.levels[2], layer));
     QVERIFY(!namesLayer(beside.levels[2], layer));
     // The thumbnail draws the base level shrunk: a base tile without its levels is left out.

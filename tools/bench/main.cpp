@@ -447,7 +447,7 @@ Json resultJson(const Options& o, const SizeResult& r) {
                                                                                              : "auto"},
                    {"tile_upload", o.tuning.tileUpload == iris::EngineTuning::TileUpload::Host    ? "host"
                                    : o.tuning.tileUpload == iris::EngineTuning::TileUpload::Queue ? "queue"
-                                                                                                : "auto"},
+                                                                                                  : "auto"},
                    {"device_filter", o.tuning.deviceName}};
     // Per stage, medians over the timed fields; then the typical field's own (see stageTimeline).
     Json timeline;

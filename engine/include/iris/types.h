@@ -428,7 +428,7 @@ struct DeviceInfo {
     uint32_t transferFamily = 0;
     uint32_t atlasSlots = 0;     // tile slots the VRAM budget bought
     std::string mipSchedule;     // "wide" (16 workgroups per tile, GPUs), "serial" (one) or "host" (the CPU, CPU devices)
-    std::string tileUpload;      // "host" (written into a linear, host-visible atlas: EngineTuning::tileUpload) or "queue"
+    std::string tileUpload; // "host" (written into a linear, host-visible atlas: EngineTuning::tileUpload) or "queue"
     uint32_t recoveries = 0;     // lost devices the engine recreated since create() (Engine::injectFault)
     bool lost = false;           // the device is lost now and not yet recreated
 };

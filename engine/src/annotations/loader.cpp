@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "annotations/format_support.h"
+#include "core/thread_name.h"
 
 namespace iris {
 
@@ -104,7 +105,10 @@ struct AnnotationLoader::Impl {
 
 AnnotationLoader::AnnotationLoader(AnnotationStore& store, std::string path, Callbacks callbacks, Mode mode)
     : impl_(std::make_unique<Impl>(store, std::move(path), std::move(callbacks), mode)) {
-    impl_->worker = std::thread([this] { impl_->run(); });
+    impl_->worker = std::thread([this] {
+        nameThisThread("iris-annotation");
+        impl_->run();
+    });
 }
 
 AnnotationLoader::~AnnotationLoader() {

@@ -7,6 +7,7 @@
 
 #include "core/pixels.h"
 #include "gpu/mip_kernel.h"
+#include "core/thread_name.h"
 
 namespace iris {
 
@@ -113,7 +114,10 @@ Result BufferThread::init() {
 }
 
 void BufferThread::start() {
-    thread_ = std::thread([this] { run(); });
+    thread_ = std::thread([this] {
+        nameThisThread("iris-buffer");
+        run();
+    });
 }
 
 void BufferThread::stop() {
@@ -534,13 +538,15 @@ bool BufferThread::completeMips(const Snapshot& snap, bool neededOnly, size_t ma
         const size_t row = size_t(kTileSize) * 4, pitch = size_t(atlas_.hostRowPitch(0));
         const uint8_t* base = atlas_.hostLevel(p.slot, 0);
         if (pitch != row) { // the base level into the scratch's first part, contiguous
-            for (size_t y = 0; y < size_t(kTileSize); ++y) std::memcpy(mipScratch_.data() + y * row, base + y * pitch, row);
+            for (size_t y = 0; y < size_t(kTileSize); ++y)
+                std::memcpy(mipScratch_.data() + y * row, base + y * pitch, row);
             base = mipScratch_.data();
         }
         gpu::mipkernel::reduceChain8(base, mipScratch_.data() + kTileBytes, p.enhance);
         writeLevels(mipScratch_.data(), p.slot, 1, gpu::kTileMipLevels);
         map.setMipsReady(p.slot);
-        const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count();
+        const auto ns =
+            std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count();
         counters_.mipNs.fetch_add(uint64_t(ns), std::memory_order_relaxed);
         counters_.mipTiles.fetch_add(1, std::memory_order_relaxed);
         pendingMips_.erase(pendingMips_.begin() + ptrdiff_t(i));

@@ -1,4 +1,5 @@
 #include "cache/loader_pool.h"
+#include "core/thread_name.h"
 
 namespace iris {
 
@@ -6,7 +7,11 @@ LoaderPool::LoaderPool(SharedState& shared, TileCache& cache, const Log& log, un
     : shared_(shared), cache_(cache), log_(log), perimeter_(perimeter) {
     if (threads == 0) threads = defaultThreads(std::thread::hardware_concurrency());
     syntheticCap_ = std::max(1u, threads - 1);
-    for (unsigned i = 0; i < threads; ++i) threads_.emplace_back([this] { run(); });
+    for (unsigned i = 0; i < threads; ++i)
+        threads_.emplace_back([this] {
+            nameThisThread("iris-loader");
+            run();
+        });
 }
 
 LoaderPool::~LoaderPool() {

@@ -64,7 +64,8 @@ void TileCache::abandon(uint64_t key, std::unique_ptr<uint8_t[]> buffer) {
 }
 
 bool TileCache::copyOut(uint64_t key, uint8_t* dst, bool* failed) {
-    return readOut(key, [&](const uint8_t* src) { std::memcpy(dst, src, kTileBytes); }, failed);
+    return readOut(
+        key, [&](const uint8_t* src) { std::memcpy(dst, src, kTileBytes); }, failed);
 }
 
 bool TileCache::readOut(uint64_t key, const std::function<void(const uint8_t*)>& use, bool* failed) {

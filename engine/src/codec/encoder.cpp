@@ -26,6 +26,7 @@
 #include "slide/iris_file.h"
 #include "slide/slide_source.h"
 #include "slide/synthetic_source.h"
+#include "core/thread_name.h"
 
 namespace iris {
 
@@ -186,7 +187,11 @@ public:
         tiles.reserve(total);
         if (o_.progress) o_.progress(0, total);
         try {
-            for (uint32_t t = 0; t < threads_; ++t) workers_.emplace_back([this] { work(); });
+            for (uint32_t t = 0; t < threads_; ++t)
+                workers_.emplace_back([this] {
+                    nameThisThread("iris-encode");
+                    work();
+                });
         } catch (const std::exception& e) {
             fail(Result(Status::OutOfMemory, std::string("Cannot start the encoder's threads: ") + e.what()));
         }

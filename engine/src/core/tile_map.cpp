@@ -207,9 +207,7 @@ bool TileMap::opaqueOf(int slot) const {
     return slots_[size_t(slot)].opaque.load(std::memory_order_relaxed); // as uploadSeqOf
 }
 
-bool TileMap::mipsReadyOf(int slot) const {
-    return slots_[size_t(slot)].mipsReady.load(std::memory_order_acquire);
-}
+bool TileMap::mipsReadyOf(int slot) const { return slots_[size_t(slot)].mipsReady.load(std::memory_order_acquire); }
 
 void TileMap::setMipsReady(int slot) {
     // release: the levels' writes happen-before a reader that loads true (mipsReadyOf).

@@ -64,9 +64,9 @@ Result TileAtlas::create(uint32_t n, bool host) {
     image_.reset();
     memory_.reset(); // a mapping goes with its memory
     mapped_ = nullptr;
-    VkImageCreateInfo ici =
-        vk::image2D(format_, uint32_t(kTileSize), uint32_t(kTileSize), kTileMipLevels, n,
-                    VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_STORAGE_BIT);
+    VkImageCreateInfo ici = vk::image2D(format_, uint32_t(kTileSize), uint32_t(kTileSize), kTileMipLevels, n,
+                                        VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT |
+                                            VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_STORAGE_BIT);
     if (!host) return vk::createDeviceImage(device_.physical(), dev, ici, image_, memory_);
     ici.tiling = VK_IMAGE_TILING_LINEAR;
     vk::Image img;
@@ -75,10 +75,13 @@ Result TileAtlas::create(uint32_t n, bool host) {
     VkMemoryRequirements req;
     vkGetImageMemoryRequirements(dev, img.get(), &req);
     constexpr VkMemoryPropertyFlags kHost = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
-    const uint32_t type = vk::findMemoryType(device_.physical(), req.memoryTypeBits, kHost, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
+    const uint32_t type =
+        vk::findMemoryType(device_.physical(), req.memoryTypeBits, kHost, VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT);
     if (type == UINT32_MAX) return Result(Status::Vulkan, "no host-visible, coherent memory type holds a linear image");
-    const VkMemoryAllocateInfo mai{
-        .sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO, .pNext = nullptr, .allocationSize = req.size, .memoryTypeIndex = type};
+    const VkMemoryAllocateInfo mai{.sType = VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO,
+                                   .pNext = nullptr,
+                                   .allocationSize = req.size,
+                                   .memoryTypeIndex = type};
     IRIS_VK_TRY(vkAllocateMemory(dev, &mai, nullptr, mem.replace(dev)));
     IRIS_VK_TRY(vkBindImageMemory(dev, img.get(), mem.get(), 0));
     void* p = nullptr;
@@ -119,11 +122,13 @@ Result TileAtlas::init(uint64_t vramBudgetBytes, uint64_t allocationLimit, VkFor
     if (host) {
         // Sampled with filtering, copied from (the exact copy) and bound as storage (the mip
         // pipeline's descriptors), like the optimal atlas; and of this many levels and layers.
-        const VkFormatFeatureFlags linearNeed = need | VK_FORMAT_FEATURE_TRANSFER_SRC_BIT | VK_FORMAT_FEATURE_TRANSFER_DST_BIT;
+        const VkFormatFeatureFlags linearNeed =
+            need | VK_FORMAT_FEATURE_TRANSFER_SRC_BIT | VK_FORMAT_FEATURE_TRANSFER_DST_BIT;
         VkImageFormatProperties ip{};
         const VkResult r = vkGetPhysicalDeviceImageFormatProperties(
             device_.physical(), format_, VK_IMAGE_TYPE_2D, VK_IMAGE_TILING_LINEAR,
-            VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_STORAGE_BIT,
+            VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT |
+                VK_IMAGE_USAGE_STORAGE_BIT,
             0, &ip);
         if ((fp.linearTilingFeatures & linearNeed) != linearNeed) {
             hostFallback_ = "the device cannot sample, store and copy linear images of this format";

@@ -1,4 +1,5 @@
 #include "net/http_client.h"
+#include "core/thread_name.h"
 
 #include <pthread.h>
 #include <signal.h>
@@ -154,7 +155,10 @@ Expected<std::unique_ptr<HttpClient>> HttpClient::create(const NetworkOptions& o
     }
     std::unique_ptr<HttpClient> c(new HttpClient(options, base));
     if (!c->multi_ || !c->share_) return Result(Status::OutOfMemory, "libcurl could not make a multi handle");
-    c->thread_ = std::thread([p = c.get()] { p->run(); });
+    c->thread_ = std::thread([p = c.get()] {
+        nameThisThread("iris-http");
+        p->run();
+    });
     return c;
 }
 

@@ -1,4 +1,5 @@
 #include "render/layer_streamer.h"
+#include "core/thread_name.h"
 
 #include <algorithm>
 
@@ -11,7 +12,10 @@ size_t ChunkKeyHash::operator()(const ChunkKey& k) const noexcept {
 }
 
 LayerStreamer::LayerStreamer(std::function<void()> wake) : wake_(std::move(wake)) {
-    thread_ = std::thread([this] { run(); });
+    thread_ = std::thread([this] {
+        nameThisThread("iris-layers");
+        run();
+    });
 }
 
 LayerStreamer::~LayerStreamer() {

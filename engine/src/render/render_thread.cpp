@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "core/pixels.h"
+#include "core/thread_name.h"
 
 namespace iris {
 
@@ -134,7 +135,10 @@ Result RenderThread::initGpu() {
 }
 
 void RenderThread::start() {
-    thread_ = std::thread([this] { run(); });
+    thread_ = std::thread([this] {
+        nameThisThread("iris-render");
+        run();
+    });
 }
 
 void RenderThread::stop() {

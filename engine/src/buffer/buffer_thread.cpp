@@ -419,7 +419,6 @@ bool BufferThread::submitNew(const Snapshot& snap) {
     tx.enhance = snap.enhance;
     if (hostWrites_) {
         writeToAtlas(tx);
-
         shared_.tileStages.stamp(TileStage::Submitted, uint32_t(tx.slots.size()));
         finish(tx);
         shared_.bump(); // the render thread has new tiles to draw
@@ -514,7 +513,7 @@ bool BufferThread::levelsWaitFor(const Snapshot& snap, int level) const {
 // atlas's memory is the host's). With neededOnly, only those of levels the current view shrinks
 // (whose tiles its frames leave out until then), else in the order they were uploaded; at most
 // maxTiles a call, so that a new view is looked at between. Entries whose slot was reclaimed
-// since, or whose slide generation is gone, are dropped.
+// since, whose slot has its levels already, or whose slide generation is gone, are dropped.
 bool BufferThread::completeMips(const Snapshot& snap, bool neededOnly, size_t maxTiles) {
     if (pendingMips_.empty()) return false;
     TileMap& map = atlas_.map();
@@ -526,7 +525,8 @@ bool BufferThread::completeMips(const Snapshot& snap, bool neededOnly, size_t ma
         const int level = TileKey::level(p.key);
         const bool current = info && TileKey::generation(p.key) == (snap.slide->generation & 0xFFFF) &&
                              size_t(level) < info->levels.size();
-        if (!current || map.slotOf(p.key) != p.slot) {
+        // (Ready already: the tile left the slot and came back to it with its levels.)
+        if (!current || map.slotOf(p.key) != p.slot || map.mipsReadyOf(p.slot)) {
             pendingMips_.erase(pendingMips_.begin() + ptrdiff_t(i));
             continue;
         }

@@ -95,6 +95,13 @@ void CompareWindow::setNetworkCredentials(const IrisSlideView::NetworkCredential
         pane->view()->setNetworkCredentials(credentials); // for the slides they open from now on
 }
 
+void CompareWindow::setFrameCacheDirectory(const QString &directory)
+{
+    m_frameCache = directory;
+    for (ComparePane *pane : std::as_const(m_panes))
+        pane->view()->setFrameCacheDirectory(directory);
+}
+
 bool CompareWindow::addSlide(const QString &path, const Pose *start)
 {
     if (count() >= kMaxSlides)
@@ -102,6 +109,7 @@ bool CompareWindow::addSlide(const QString &path, const Pose *start)
     auto *pane = new ComparePane;
     IrisSlideView *view = pane->view();
     view->setNetworkCredentials(m_credentials);
+    view->setFrameCacheDirectory(m_frameCache);
     m_panes << pane;
     m_group->addView(view);
     connect(pane, &ComparePane::linkToggled, this, [this, view](bool on) { m_group->setLinked(view, on); });

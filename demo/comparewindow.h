@@ -41,6 +41,9 @@ public:
     // each one added later (the main window passes its own view's, which a view cannot give
     // back, so that a protected series it shows opens here too). Memory only, never logged.
     void setNetworkCredentials(const IrisSlideView::NetworkCredentials &credentials);
+    // The folder where DICOMweb frames are kept (IrisSlideView::setFrameCacheDirectory), for
+    // every view and each one added later; empty: none kept.
+    void setFrameCacheDirectory(const QString &directory);
 
     // Adds a view showing `path` (opened once the view is on screen), linked; with a pose,
     // it starts there and the others follow. False when there are kMaxSlides already.
@@ -74,6 +77,7 @@ private:
     ComparePane *m_startPane = nullptr; // the pane that starts at m_start
     Pose m_start;
     IrisSlideView::NetworkCredentials m_credentials;
+    QString m_frameCache;
     OrientationActions *m_orientation;
     QAction *m_addAction = nullptr;
     QAction *m_fitAction = nullptr;

@@ -5,6 +5,7 @@
 #include <QtCore/QLocale>
 #include <QtCore/QMimeData>
 #include <QtCore/QSettings>
+#include <QtCore/QStandardPaths>
 #include <QtGui/QAction>
 #include <QtGui/QActionGroup>
 #include <QtGui/QCloseEvent>
@@ -117,6 +118,8 @@ MainWindow::MainWindow(QWidget *parent)
     restoreGeometry(settings.value(QStringLiteral("window/geometry")).toByteArray());
     restoreState(settings.value(QStringLiteral("window/state")).toByteArray());
     m_enhanceAction->setChecked(settings.value(QStringLiteral("view/enhance"), true).toBool());
+    m_keepFramesAction->setChecked(settings.value(QStringLiteral("network/keepFrames"), true).toBool());
+    m_view->setFrameCacheDirectory(frameCacheDirectory());
     m_colorAction->setChecked(settings.value(QStringLiteral("view/colorManaged"), m_view->colorManaged()).toBool());
     if (settings.value(QStringLiteral("view/renderingIntent")).toString() == QLatin1String("relative"))
         m_relativeAction->trigger();
@@ -146,6 +149,18 @@ void MainWindow::createActions()
     m_serverAction = new QAction(tr("Open from Ser&ver…"), this);
     m_serverAction->setObjectName(QStringLiteral("openFromServerAction"));
     connect(m_serverAction, &QAction::triggered, this, &MainWindow::showServerBrowser);
+    m_keepFramesAction = new QAction(tr("&Keep Server Frames on This Computer"), this);
+    m_keepFramesAction->setObjectName(QStringLiteral("keepFramesAction"));
+    m_keepFramesAction->setCheckable(true);
+    m_keepFramesAction->setStatusTip(
+        tr("Keep the frames fetched from a DICOMweb server in %1 (yours alone, at most "
+           "2 GiB), so that a slide opened again loads from this computer")
+            .arg(QDir::toNativeSeparators(
+                QStandardPaths::writableLocation(QStandardPaths::CacheLocation) + QStringLiteral("/dicomweb-frames"))));
+    connect(m_keepFramesAction, &QAction::toggled, this, [this](bool on) {
+        QSettings().setValue(QStringLiteral("network/keepFrames"), on);
+        m_view->setFrameCacheDirectory(frameCacheDirectory()); // for the series opened from now on
+    });
 
     m_sampleAction = new QAction(tr("Open &Sample Slide"), this);
     connect(m_sampleAction, &QAction::triggered, this, [this] {
@@ -251,6 +266,7 @@ void MainWindow::createMenus()
     m_recent = new RecentFiles(recent, this);
     connect(m_recent, &RecentFiles::openRequested, this, [this](const QString &path) { openSlide(path, true); });
     file->addAction(m_serverAction);
+    file->addAction(m_keepFramesAction);
     file->addAction(m_sampleAction);
     file->addSeparator();
     file->addAction(m_closeAction);
@@ -362,6 +378,13 @@ void MainWindow::createMenus()
     help->addAction(tr("About &Qt"), qApp, &QApplication::aboutQt);
 }
 
+QString MainWindow::frameCacheDirectory() const
+{
+    if (!m_keepFramesAction->isChecked())
+        return {};
+    return QStandardPaths::writableLocation(QStandardPaths::CacheLocation) + QStringLiteral("/dicomweb-frames");
+}
+
 ServerBrowser *MainWindow::showServerBrowser()
 {
     // Made once and kept (hidden when closed): the credentials typed in stay for the session,
@@ -447,6 +470,7 @@ CompareWindow *MainWindow::compare(const QStringList &others)
     auto *window = new CompareWindow(this);
     window->setAttribute(Qt::WA_DeleteOnClose);
     window->setNetworkCredentials(m_credentials); // a protected series the main view shows opens there too
+    window->setFrameCacheDirectory(frameCacheDirectory());
     if (m_view->hasSlide()) {
         const CompareWindow::Pose here{m_view->centre(), m_view->downsample(), m_view->rotation(),
                                        m_view->isFlippedHorizontally(), m_view->isFlippedVertically()};

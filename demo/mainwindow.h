@@ -59,6 +59,9 @@ public Q_SLOTS:
     void createAnnotationMenu();
     // File › Open from Server…: the QIDO-RS browser (made on first use, kept for the session).
     ServerBrowser *showServerBrowser();
+    // Where DICOMweb frames are kept while File › Keep Server Frames on This Computer is on
+    // (the default): <cache location>/dicomweb-frames; empty while it is off.
+    QString frameCacheDirectory() const;
     void exportAsIris();
     // View › Compare…: asks for up to three more slides and shows them beside the open one.
     void showCompareDialog();
@@ -152,6 +155,7 @@ private:
     QAction *m_openFolderAction = nullptr;
     QAction *m_sampleAction = nullptr;
     QAction *m_serverAction = nullptr;
+    QAction *m_keepFramesAction = nullptr; // keep DICOMweb frames on this computer (QSettings network/keepFrames)
     ServerBrowser *m_serverBrowser = nullptr;
     // What the server browser last gave m_view (a view cannot give its secret back): handed on
     // to the Compare window's views. Memory only, for the session.

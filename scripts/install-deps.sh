@@ -20,6 +20,7 @@ PACKAGES=(
   # openssl, and terminate TLS in their own proxy with libssl (Debian 12's Orthanc cannot serve HTTPS);
   # nghttpx (nghttp2-proxy) puts HTTP/2 in front of it, since Orthanc speaks HTTP/1.1 only.
   libcurl4-openssl-dev orthanc orthanc-dicomweb openssl libssl-dev nghttp2-proxy
+  zlib1g-dev  # the DICOMweb frame cache on disk checks its files with zlib's CRC-32
   libfreetype-dev libfontconfig-dev fonts-dejavu-core
   xvfb xauth gnuplot-nox
   # The fuzz preset (clang, libFuzzer). lld: configuring with clang, CMake picks ld.lld as

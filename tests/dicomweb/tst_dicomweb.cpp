@@ -10,6 +10,8 @@
 //   * frames come in frame lists (…/frames/a,b,c, many a request: counted by a proxy), and a
 //     server that lies about lists (parts missing or swapped, a broken answer) or refuses them
 //     (400, 404) still gives every tile exactly, one frame a request;
+//   * frames kept on disk (NetworkOptions::frameCacheDirectory): a series opened again asks
+//     the server for no frame, a damaged file is fetched again, an unusable folder is reported;
 //   * faults, through a proxy that misbehaves on purpose (fault_proxy.h): a truncated multipart
 //     body, a wrong content type, a 404 frame (the placeholder is drawn), a slow server (one that
 //     holds every answer back: views keep moving, superseded requests are dropped), the server stopped in the middle of
@@ -533,6 +535,128 @@ private slots:
               tiles, keptAsked, noneAsked);
         QCOMPARE(keptAsked, 0);
         QVERIFY2(noneAsked >= tiles - 1, "frames read before were kept beyond the store's budget");
+    }
+
+    // NetworkOptions::frameCacheDirectory: frames fetched once are kept on disk (net::
+    // FrameDiskCache), so that the series opened again asks the server for its metadata only
+    // (open's first frames and every tile come from the folder), tiles still equal the local
+    // series' byte for byte; a damaged file is a miss (fetched again, never drawn); a folder that
+    // cannot be used costs the cache, not the slide. Counted by a proxy that passes everything on.
+    void framesKeptOnDisk() {
+        std::string why;
+        auto local = openSource(sampleJpeg_.string(), {}, &why);
+        QVERIFY2(local, why.c_str());
+        auto proxy = FaultProxy::start(server_->port(), &why);
+        QVERIFY2(proxy, why.c_str());
+        const fs::path dir = outDir() / "frame-cache";
+        fs::remove_all(dir);
+        iris::NetworkOptions o;
+        o.frameCacheDirectory = dir.string();
+        const std::string url = through(*proxy, sampleUrl_);
+        const int level = 1; // 12 × 8 tiles
+        std::vector<uint8_t> ta(kTileBytes), tb(kTileBytes);
+        // Every tile of the level, hinted at once as the loaders do, equals the local one.
+        const auto readLevel = [&](iris::SlideSource& web) {
+            const iris::LevelInfo& l = web.info().levels[level];
+            std::vector<iris::TileAddress> all;
+            for (int64_t ty = 0; ty < l.tilesY; ++ty)
+                for (int64_t tx = 0; tx < l.tilesX; ++tx) all.push_back({level, tx, ty});
+            web.prefetch(all, [] {});
+            for (const iris::TileAddress& a : all) {
+                const iris::Result r = web.readTile(a.level, a.tx, a.ty, ta.data());
+                QVERIFY2(r.ok(), describe(r).c_str());
+                QVERIFY(local->readTile(a.level, a.tx, a.ty, tb.data()).ok());
+                QVERIFY2(ta == tb, qPrintable(QString("tile (%1, %2) differs").arg(a.tx).arg(a.ty)));
+            }
+        };
+        const auto keptFiles = [&] {
+            std::vector<fs::path> files;
+            for (const auto& e : fs::recursive_directory_iterator(dir))
+                if (e.is_regular_file() && e.path().filename().string().size() == 16) files.push_back(e.path());
+            std::sort(files.begin(), files.end());
+            return files;
+        };
+        proxy->resetCount();
+        {
+            auto web = openSource(url, o, &why);
+            QVERIFY2(web, why.c_str());
+            CHECKED(readLevel(*web));
+        } // the source lets the cache go: what it queued is written before this returns
+        const int fetched = proxy->framesAsked();
+        QVERIFY2(fetched > 0, "nothing was fetched the first time");
+        QVERIFY2(fs::status(dir).permissions() == fs::perms::owner_all, "the folder is not the user's alone");
+        const std::vector<fs::path> files = keptFiles();
+        qInfo("first open: %d frames fetched, %zu files kept", fetched, files.size());
+        QVERIFY2(int(files.size()) >= fetched, "not every fetched frame was kept");
+
+        // Opened again: the metadata from the server, every frame from the disk.
+        proxy->resetCount();
+        {
+            auto web = openSource(url, o, &why);
+            QVERIFY2(web, why.c_str());
+            QCOMPARE(proxy->frameRequests(), 0); // open's first frames too
+            CHECKED(readLevel(*web));
+            QCOMPARE(proxy->frameRequests(), 0);
+            for (const auto& [key, value] : web->info().properties)
+                QVERIFY2(key != "dicomweb.FrameCacheError", value.c_str());
+        }
+
+        // Three files damaged (a byte flipped, one cut short, one emptied): those frames are
+        // fetched again, and every tile still equals the local one.
+        QVERIFY(files.size() > 8);
+        {
+            std::fstream f(files[2], std::ios::in | std::ios::out | std::ios::binary);
+            f.seekg(-10, std::ios::end);
+            char c = 0;
+            f.get(c);
+            f.seekp(-10, std::ios::end);
+            f.put(char(c ^ 0x20));
+        }
+        fs::resize_file(files[5], fs::file_size(files[5]) - 1);
+        fs::resize_file(files[8], 0);
+        proxy->resetCount();
+        {
+            auto web = openSource(url, o, &why);
+            QVERIFY2(web, why.c_str());
+            CHECKED(readLevel(*web));
+        }
+        qInfo("3 files damaged: %d frames fetched again", proxy->framesAsked());
+        QVERIFY2(proxy->framesAsked() >= 1 && proxy->framesAsked() <= 3,
+                 "the damaged frames were not fetched again, or intact ones were");
+        QCOMPARE(keptFiles().size(), files.size()); // and kept again
+
+        // A folder that cannot be used: the slide opens and reads without it, and says why.
+        const fs::path notAFolder = outDir() / "frame-cache-is-a-file";
+        { std::ofstream(notAFolder) << "x"; }
+        o.frameCacheDirectory = notAFolder.string();
+        auto web = openSource(url, o, &why);
+        QVERIFY2(web, why.c_str());
+        std::string error;
+        for (const auto& [key, value] : web->info().properties)
+            if (key == "dicomweb.FrameCacheError") error = value;
+        qInfo("unusable folder: %s", error.c_str());
+        QVERIFY2(error.find("not a folder") != std::string::npos, error.c_str());
+        CHECKED(readLevel(*web));
+    }
+
+    // Through the Engine with the cache on: the frames drawn from kept frames equal the local
+    // series' (at 1:1 and at level 1's downsample), opened twice.
+    void engineWithFramesKeptOnDisk() {
+        const fs::path dir = outDir() / "frame-cache-engine";
+        fs::remove_all(dir);
+        iris::NetworkOptions o;
+        o.frameCacheDirectory = dir.string();
+        e_->setNetworkOptions(o);
+        e_.beginTest();
+        for (int pass = 0; pass < 2; ++pass) {
+            CHECKED(expectSameFrame(sampleJpeg_, sampleUrl_, viewWithOrigin(2222, 1111, 1, kW, kH), "kept frames"));
+            CHECKED(expectSameFrame(sampleJpeg_, sampleUrl_, viewWithOrigin(768, 512, 4, kW, kH), "kept frames"));
+            e_->close();
+        }
+        e_->setNetworkOptions({});
+        const std::string lines = e_.endTest();
+        QVERIFY2(lines.empty(), lines.c_str());
+        QVERIFY2(fs::exists(dir), "the engine kept no frame");
     }
 
     // Each fault twice: for a frame read alone (a read nobody hinted), and for frames hinted

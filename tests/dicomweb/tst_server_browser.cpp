@@ -7,12 +7,18 @@
 //   * Open hands the credentials to the view and opens the series URL: the slide opens and a
 //     frame is presented; the recent-files list holds the URL exactly, and nothing in the
 //     settings holds the password;
+//   * File › Keep Server Frames on This Computer (on by default) keeps the fetched frames in the
+//     user's cache folder (its own, mode 0700), for the Compare window's views too; turned off,
+//     nothing is kept;
 //   * View › Compare shows the protected series too (the Compare window's views get the main
 //     view's credentials).
 // Every wait is a signal (QSignalSpy, QTRY_*) with a bounded timeout; nothing sleeps a guess.
 #include <memory>
 
+#include <QtCore/QDirIterator>
+#include <QtCore/QFileInfo>
 #include <QtCore/QSettings>
+#include <QtCore/QStandardPaths>
 #include <QtGui/QFont>
 #include <QtTest/QSignalSpy>
 #include <QtTest/QTest>
@@ -213,6 +219,26 @@ private Q_SLOTS:
         QTRY_VERIFY_WITH_TIMEOUT(frames.count() > 0, kTimeoutMs);
         QTRY_VERIFY_WITH_TIMEOUT(!browser->isVisible(), kTimeoutMs);
 
+        // File › Keep Server Frames on This Computer is on by default: the frames fetched are
+        // kept in the user's cache folder (written by the cache's own thread: polled).
+        auto* keep = m_main->findChild<QAction*>(QStringLiteral("keepFramesAction"));
+        QVERIFY(keep && keep->isChecked());
+        const QString cacheDir =
+            QStandardPaths::writableLocation(QStandardPaths::CacheLocation) + QStringLiteral("/dicomweb-frames");
+        QCOMPARE(view->frameCacheDirectory(), cacheDir);
+        const auto keptFiles = [&] {
+            int n = 0;
+            QDirIterator it(cacheDir, QDir::Files, QDirIterator::Subdirectories);
+            while (it.hasNext()) {
+                it.next();
+                n += it.fileName().size() == 16;
+            }
+            return n;
+        };
+        QTRY_VERIFY_WITH_TIMEOUT(keptFiles() > 0, kTimeoutMs);
+        QCOMPARE(QFileInfo(cacheDir).permissions() & (QFile::ReadGroup | QFile::ReadOther | QFile::ExeOther),
+                 QFileDevice::Permissions());
+
         // View › Compare: the protected series opens in the Compare window's view too (its
         // views get the main view's credentials; without them Orthanc answers 401).
         {
@@ -220,6 +246,7 @@ private Q_SLOTS:
             QVERIFY(compare);
             QCOMPARE(compare->count(), 1);
             QVERIFY(compare->view(0)->hasNetworkCredentials());
+            QCOMPARE(compare->view(0)->frameCacheDirectory(), cacheDir);
             // Opened (or failed) once its view is on screen.
             QTRY_VERIFY_WITH_TIMEOUT(compare->pane(0)->pendingPath().isEmpty(), kTimeoutMs);
             QVERIFY2(compare->view(0)->hasSlide(), "the Compare window could not open the protected series");
@@ -228,6 +255,13 @@ private Q_SLOTS:
             QTRY_VERIFY_WITH_TIMEOUT(compareFrames.count() > 0, kTimeoutMs);
             compare->close(); // deleted on close
         }
+
+        // Turned off: remembered, and the series opened from then on keep nothing.
+        keep->trigger();
+        QVERIFY(view->frameCacheDirectory().isEmpty());
+        QCOMPARE(QSettings().value(QStringLiteral("network/keepFrames")).toBool(), false);
+        keep->trigger();
+        QCOMPARE(view->frameCacheDirectory(), cacheDir);
 
         // The recent list keeps the URL as it is; no setting holds the password.
         QSettings settings;

@@ -2,6 +2,7 @@
 
 #include "iris/annotations.h"
 
+#include <algorithm>
 #include <cstring>
 
 #include <QtCore/QFile>
@@ -97,9 +98,26 @@ void IrisSlideView::setNetworkCredentials(const NetworkCredentials &credentials)
     }
     o.caFile = QFile::encodeName(credentials.caFile).toStdString();
     o.verifyTls = credentials.verifyTls;
+    o.frameCacheDirectory = d->settings.network.frameCacheDirectory; // not a credential: kept
+    o.frameCacheBytes = d->settings.network.frameCacheBytes;
     d->settings.network = o; // for an engine made later (the first slide, a budget change)
     if (d->engine())
         d->engine()->setNetworkOptions(o);
+}
+
+void IrisSlideView::setFrameCacheDirectory(const QString &directory, qint64 maxBytes)
+{
+    Q_D(IrisSlideView);
+    d->settings.network.frameCacheDirectory = QFile::encodeName(directory).toStdString();
+    d->settings.network.frameCacheBytes = uint64_t(std::max<qint64>(maxBytes, 0));
+    if (d->engine())
+        d->engine()->setNetworkOptions(d->settings.network);
+}
+
+QString IrisSlideView::frameCacheDirectory() const
+{
+    Q_D(const IrisSlideView);
+    return QFile::decodeName(d->settings.network.frameCacheDirectory.c_str());
 }
 
 bool IrisSlideView::hasNetworkCredentials() const

@@ -82,8 +82,8 @@ struct EngineTuning {
     // submission makes the writes visible. On a CPU device the device's memory is the host's
     // and its one queue runs the frames: an upload submitted there waited behind a frame in
     // flight (docs/BENCHMARKS.md). Auto: Host for CPU devices whose mips are made on the host
-    // and that can sample a linear, host-visible atlas; Queue otherwise. On: Host wherever
-    // the device allows it (else Queue, with a log line).
+    // and that can sample a linear, host-visible atlas; Queue otherwise. Host chosen: Host
+    // wherever the device allows it (else Queue, with a log line).
     enum class TileUpload { Auto, Queue, Host };
     TileUpload tileUpload = TileUpload::Auto;
     // Fault injection for tests: a device allocation of the tile atlas larger than this many

@@ -276,6 +276,14 @@ struct NetworkOptions {
     uint32_t connectTimeoutMs = 10000;
     uint32_t requestTimeoutMs = 30000; // one request, from start to the last byte
     uint32_t maxConnections = 6;       // per server over HTTP/1.1 (HTTP/2 multiplexes over one)
+    // A folder where the frames fetched are kept, so that a series opened again (in this session
+    // or a later one) draws them without asking the server; empty: none are kept. Created when
+    // missing, readable by the user alone (frames are patient data); shared safely by several
+    // viewers. The series' metadata is still read from the server at each open, so a user it
+    // refuses cannot reach the kept frames. A folder that cannot be used is reported in the
+    // slide's properties ("dicomweb.FrameCacheError") and the slide opens without it.
+    std::string frameCacheDirectory;
+    uint64_t frameCacheBytes = uint64_t(2) << 30; // the most the folder holds (least recently used go first)
 };
 
 // --- overlays -------------------------------------------------------------------------

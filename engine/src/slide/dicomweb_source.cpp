@@ -112,6 +112,16 @@ Expected<std::unique_ptr<SlideSource>> DicomWebSource::open(const std::string& t
     src->client_ = std::move(*client);
     const bool credentials = !options.username.empty() || !options.bearerToken.empty();
 
+    std::string cacheError;
+    if (!options.frameCacheDirectory.empty()) {
+        // Frames are kept for later only: a folder that cannot be used costs that, not the slide.
+        auto disk = net::FrameDiskCache::open(options.frameCacheDirectory, options.frameCacheBytes);
+        if (disk.ok())
+            src->disk_ = std::move(*disk);
+        else
+            cacheError = disk.error().message();
+    }
+
     const std::string context = "Cannot open " + seriesName + ": ";
     const net::Response meta =
         src->client_->getNow(seriesUrl + "/metadata", "application/dicom+json", kMaxMetadataBytes);
@@ -148,6 +158,7 @@ Expected<std::unique_ptr<SlideSource>> DicomWebSource::open(const std::string& t
         }
         if (!why.empty()) metadata.properties["dicomweb.ICCProfileError"] = why;
     }
+    if (!cacheError.empty()) metadata.properties["dicomweb.FrameCacheError"] = cacheError;
     dicom::fillSlideInfo(src->instances_, src->layout_, metadata, &src->info_);
     src->info_.path = text;
     return std::unique_ptr<SlideSource>(std::move(src));
@@ -235,6 +246,19 @@ Result DicomWebSource::probeTransferSyntaxes() {
         for (const dicom::Level::Cell& c : L.cells)
             if (c.instance >= 0) used.insert(size_t(c.instance));
     for (const auto& a : layout_.associated) used.insert(a.second);
+    // An instance whose first frame is kept on disk needs no request: the file names the
+    // transfer syntax the server sent it in.
+    std::vector<std::pair<size_t, Payload>> kept;
+    if (disk_) {
+        for (auto it = used.begin(); it != used.end();) {
+            if (auto f = disk_->get(diskKey(*it, 0), {})) {
+                kept.emplace_back(*it, Payload{std::move(f->bytes), std::move(f->transferSyntax)});
+                it = used.erase(it);
+            } else {
+                ++it;
+            }
+        }
+    }
     std::mutex m;
     std::condition_variable done;
     size_t pending = used.size();
@@ -250,10 +274,18 @@ Result DicomWebSource::probeTransferSyntaxes() {
         std::unique_lock lock(m);
         done.wait(lock, [&] { return pending == 0; }); // every request is answered, at the latest by its timeout
     }
-    std::sort(answers.begin(), answers.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    std::vector<std::pair<size_t, Expected<Payload>>> payloads;
+    for (auto& [i, p] : kept) payloads.emplace_back(i, std::move(p));
     for (auto& [i, r] : answers) {
         auto parsed = parseFramesAnswer(Request{.instance = i, .frames = {0}}, r);
-        Expected<Payload> payload = parsed.ok() ? std::move(parsed->front()) : Expected<Payload>(parsed.error());
+        payloads.emplace_back(i, parsed.ok() ? std::move(parsed->front()) : Expected<Payload>(parsed.error()));
+        if (disk_ && payloads.back().second.ok()) {
+            const Payload& p = *payloads.back().second;
+            disk_->put(diskKey(i, 0), {p.transferSyntax, p.bytes});
+        }
+    }
+    std::sort(payloads.begin(), payloads.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    for (auto& [i, payload] : payloads) {
         if (!payload.ok()) {
             const Result& e = payload.error();
             return Result(e.status(), "Cannot open " + seriesName_ + ": " + frameContext(i, 0) + e.message());
@@ -266,6 +298,10 @@ Result DicomWebSource::probeTransferSyntaxes() {
         storeReady(key, f, std::move(payload->bytes));
     }
     return {};
+}
+
+bool DicomWebSource::onDiskOnly(FrameKey key) const {
+    return disk_ && !frames_.count(key) && disk_->contains(diskKey(size_t(key >> 32), uint32_t(key & 0xffffffffu)));
 }
 
 void DicomWebSource::storeReady(FrameKey key, Frame& f, std::vector<uint8_t> bytes) {
@@ -373,6 +409,7 @@ void DicomWebSource::onAnswer(const std::shared_ptr<Request>& q, net::Response&&
     auto answer = parseFramesAnswer(*q, r);
     const bool list = q->frames.size() > 1;
     bool landed = false;
+    std::vector<std::pair<std::string, net::FrameDiskCache::Frame>> keep; // on disk, after the lock
     {
         std::lock_guard lock(mutex_);
         if (abandoned_) return;
@@ -414,6 +451,9 @@ void DicomWebSource::onAnswer(const std::shared_ptr<Request>& q, net::Response&&
                 if (!fr) continue;
                 Expected<Payload>* part = answer.ok() ? &(*answer)[i] : nullptr;
                 if (part && part->ok()) {
+                    if (disk_)
+                        keep.emplace_back(diskKey(q->instance, q->frames[i]),
+                                          net::FrameDiskCache::Frame{(*part)->transferSyntax, (*part)->bytes});
                     storeReady((FrameKey(q->instance) << 32) | q->frames[i], *fr, std::move((*part)->bytes));
                 } else {
                     const Result& e = part ? part->error() : answer.error();
@@ -426,6 +466,7 @@ void DicomWebSource::onAnswer(const std::shared_ptr<Request>& q, net::Response&&
         }
         pump();
     }
+    for (auto& [key, frame] : keep) disk_->put(key, std::move(frame));
     if (!landed) return;
     std::lock_guard lock(callbackMutex_);
     if (arrived_) arrived_();
@@ -455,6 +496,7 @@ void DicomWebSource::prefetch(const std::vector<TileAddress>& tiles, std::functi
             const dicom::Level::Cell& c = layout_.levels[size_t(t.level)].cells[size_t(cell)];
             if (c.instance < 0 || hasDecodedFrame(size_t(t.level), cell)) continue;
             const FrameKey key = (FrameKey(c.instance) << 32) | c.frame;
+            if (onDiskOnly(key)) continue; // readFrame takes it from the disk
             auto [it, inserted] = frames_.try_emplace(key);
             Frame& f = it->second;
             if (!inserted && f.wantedBy == batch) continue; // a frame several tiles share
@@ -494,6 +536,7 @@ bool DicomWebSource::requestTile(int level, int64_t tx, int64_t ty) {
         const dicom::Level::Cell& c = layout_.levels[size_t(level)].cells[size_t(cell)];
         if (c.instance < 0 || hasDecodedFrame(size_t(level), cell)) continue;
         const FrameKey key = (FrameKey(c.instance) << 32) | c.frame;
+        if (onDiskOnly(key)) continue; // ready: readFrame takes it from the disk
         auto [it, inserted] = frames_.try_emplace(key);
         Frame& f = it->second;
         if (inserted) {
@@ -511,6 +554,7 @@ void DicomWebSource::willReadFrames(size_t instance, const std::vector<uint32_t>
     if (abandoned_) return;
     for (auto f = frames.rbegin(); f != frames.rend(); ++f) { // the first frame ends up first in line
         const FrameKey key = (FrameKey(instance) << 32) | *f;
+        if (onDiskOnly(key)) continue;
         auto [it, inserted] = frames_.try_emplace(key);
         it->second.urgent = true;
         if (inserted || it->second.state == Frame::State::Queued) queue_.push_front(key);
@@ -520,6 +564,20 @@ void DicomWebSource::willReadFrames(size_t instance, const std::vector<uint32_t>
 
 Result DicomWebSource::readFrame(size_t instance, uint32_t frame, uint8_t* dst, size_t pitch) {
     const FrameKey key = (FrameKey(instance) << 32) | frame;
+    if (disk_) {
+        // A frame not in memory is read from the disk when it is kept there (on this, the
+        // loader's, thread); a miss (evicted, damaged) is fetched below as any other.
+        bool fromDisk = false;
+        {
+            std::lock_guard lock(mutex_);
+            if (abandoned_) return Result(Status::Cancelled, "The slide was closed");
+            fromDisk = onDiskOnly(key);
+        }
+        if (fromDisk) {
+            if (auto f = disk_->get(diskKey(instance, frame), instances_[instance].transferSyntax))
+                return dicom::decodeFrame(instances_[instance], frame, f->bytes.data(), f->bytes.size(), dst, pitch);
+        }
+    }
     thread_local std::vector<uint8_t> bytes;
     {
         std::unique_lock lock(mutex_);

@@ -25,6 +25,13 @@
 //     what is still queued of the older one. A request that fails for a reason that may pass (no
 //     connection, a timeout, HTTP 408/429/5xx) is retried twice, 250 ms and 1 s later; after
 //     that its frames' failure is reported once and each is fetched again when next asked for.
+//   * With NetworkOptions::frameCacheDirectory, every frame that arrives is also kept on disk
+//     (net::FrameDiskCache, written by its own thread), keyed by its single-frame WADO-RS URL.
+//     A frame found there is neither asked for nor queued: prefetch and requestTile pass over
+//     it, readFrame reads it from the disk (on the loader's thread, as a local file is read),
+//     and open() takes each instance's first frame, and with it the transfer syntax, from there
+//     too, so that a series opened again costs the server its metadata and the frames not kept.
+//     A kept frame that cannot be read (evicted by another viewer, damaged) is fetched as usual.
 //   * readTile() of a frame that was never requested (iris-encode, readAssociatedImage, a direct
 //     caller) requests it first in line and waits for it, bounded by the request timeouts.
 //
@@ -45,6 +52,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "net/frame_disk_cache.h"
 #include "net/http_client.h"
 #include "slide/dicom_source.h"
 
@@ -102,6 +110,10 @@ private:
 
     // …/instances/<SOP>/frames/<a>,<b>,… (numbered from 1).
     std::string framesUrl(size_t instance, const std::vector<uint32_t>& frames) const;
+    // The frame cache's key of one frame: its single-frame WADO-RS URL.
+    std::string diskKey(size_t instance, uint32_t frame) const { return framesUrl(instance, {frame}); }
+    // With mutex_ held: `key` is not in frames_ and is kept on disk (no I/O: the cache's index).
+    bool onDiskOnly(FrameKey key) const;
     // "Cannot read frame <n> of <instance>: ", which starts every frame's error.
     std::string frameContext(size_t instance, uint32_t frame) const;
     size_t maxFrameBytes(size_t instance) const;
@@ -154,6 +166,7 @@ private:
     std::function<void()> arrived_;
 
     std::unique_ptr<net::HttpClient> client_;
+    std::shared_ptr<net::FrameDiskCache> disk_; // NetworkOptions::frameCacheDirectory; null without
 };
 
 // The format table's entry (slide_source.cpp).

@@ -143,6 +143,12 @@ public:
     void clearNetworkCredentials() { setNetworkCredentials(NetworkCredentials()); }
     // Whether credentials (Basic or Bearer) are set; the secret itself cannot be read back.
     bool hasNetworkCredentials() const;
+    // A folder where the frames of DICOMweb series are kept once fetched, so that a series opened
+    // again (now or in a later session) draws them without asking the server; at most maxBytes,
+    // the least recently used going first. Empty (the default) keeps none. Created readable by
+    // the user alone; for the series opened after this call. See iris::NetworkOptions.
+    void setFrameCacheDirectory(const QString &directory, qint64 maxBytes = qint64(2) << 30);
+    QString frameCacheDirectory() const;
 
     // --- view ----------------------------------------------------------------------
     double magnification() const;

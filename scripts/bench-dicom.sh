@@ -2,7 +2,8 @@
 # The DICOM / DICOMweb benchmark of docs/BENCHMARKS.md ("DICOM and DICOMweb", issue 15): the same
 # fields read from the sample TIFF, from a DICOM copy of it made by OrthancWSIDicomizer (JPEG
 # tiles copied, not re-encoded) and from that copy served by a real Orthanc on 127.0.0.1,
-# each beside OpenSlide's read of the TIFF (the baseline), three iris-bench runs back to back.
+# each beside OpenSlide's read of the TIFF (the baseline), three iris-bench runs back to back;
+# then two more of the DICOMweb series with a frame cache on disk: filling it, and read from it.
 #
 #   scripts/bench-dicom.sh [--bin DIR] [--work DIR] [--out DIR] [--tag NAME] [-- IRIS-BENCH OPTIONS]
 #
@@ -10,7 +11,8 @@
 #   --work  where the slide, its DICOM copy and Orthanc's storage go (default build/bench-dicom);
 #           the slide and its DICOM copy are kept there and reused by the next run
 #   --out   where the JSON goes (default docs/benchmarks)
-#   --tag   the JSON names: <out>/<tag>-{tiff,dicom,dicomweb}.json (default dicom-lavapipe)
+#   --tag   the JSON names: <out>/<tag>-{tiff,dicom,dicomweb,dicomweb-fill,dicomweb-kept}.json
+#           (default dicom-lavapipe)
 #   --max-load L  before the runs, wait (at most --max-wait seconds, default 600) until the
 #           1-minute load average is below L: on a machine shared with builds the three runs then
 #           start, back to back, in a quiet moment (each run's load is printed either way)
@@ -140,4 +142,14 @@ quiet "the local DICOM run"
 "$bin/iris-bench" "$dicom" --baseline "$slide" "${bench_opts[@]}" --json "$out/$tag-dicom.json"
 quiet "the DICOMweb run"
 "$bin/iris-bench" "$series_url" --baseline "$slide" "${bench_opts[@]}" --json "$out/$tag-dicomweb.json"
+# The frame cache on disk (NetworkOptions::frameCacheDirectory): a run that fills an empty one
+# (what keeping the frames costs a first visit), then the same walk again, every frame kept
+# (a series opened again: only its metadata comes from the server).
+rm -rf "$work/frame-cache"
+quiet "the DICOMweb run filling a frame cache"
+"$bin/iris-bench" "$series_url" --baseline "$slide" --frame-cache "$work/frame-cache" "${bench_opts[@]}" \
+    --json "$out/$tag-dicomweb-fill.json"
+quiet "the DICOMweb run from the frame cache"
+"$bin/iris-bench" "$series_url" --baseline "$slide" --frame-cache "$work/frame-cache" "${bench_opts[@]}" \
+    --json "$out/$tag-dicomweb-kept.json"
 echo "bench-dicom.sh: done at load $(cut -d' ' -f1-3 /proc/loadavg)" >&2

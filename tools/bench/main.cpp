@@ -4,7 +4,7 @@
 // of settled frames (the last field of each magnification redrawn with nothing to load).
 //
 //   iris-bench SLIDE [--size WxH] [--moves N] [--magnifications LIST] [--source auto|openslide|iris]
-//              [--baseline SLIDE] [--json FILE] [--plots DIR] [--seed N] [--validation]
+//              [--baseline SLIDE] [--frame-cache DIR] [--json FILE] [--plots DIR] [--seed N] [--validation]
 //              [--opens N] [--switch-to SLIDE]
 //   iris-bench SLIDE --views N [--size WxH] [--ticks N] [--json FILE]
 //
@@ -51,6 +51,7 @@ struct Options {
     std::vector<double> mags;
     std::string source = "auto";
     std::string baseline; // the slide the CPU baselines read (default: the benchmarked slide)
+    std::string frameCache; // a DICOMweb series' frames kept there (NetworkOptions::frameCacheDirectory)
     std::string json, plots;
     uint64_t seed = 1;
     bool validation = false;
@@ -131,6 +132,7 @@ iris::EngineConfig benchConfig(const Options& o, bool colorManaged) {
     cfg.validation = o.validation;
     cfg.tuning = o.tuning;
     cfg.perimeterTiles = 1;
+    cfg.network.frameCacheDirectory = o.frameCache;
     cfg.source = o.source == "openslide" ? iris::SourcePreference::OpenSlide
                  : o.source == "iris"    ? iris::SourcePreference::Iris
                                          : iris::SourcePreference::Auto;
@@ -406,6 +408,7 @@ Json resultJson(const Options& o, const SizeResult& r) {
     j["color_applied"] = r.colorApplied;
     j["source"] = o.source;
     j["baseline_slide"] = o.baseline.empty() ? o.slide : o.baseline;
+    j["frame_cache"] = o.frameCache;
     j["lr_tefov_ms"] = jsonQuartiles(quartiles(r.lrTefov));
     j["hr_tefov_ms"] = jsonQuartiles(hr);
     j["lr_tpt_us"] = jsonQuartiles(quartiles(r.lrTpt));
@@ -707,6 +710,11 @@ int main(int argc, char** argv) {
                    "the slide it was encoded from")
         ->option_text("SLIDE")
         ->default_str("SLIDE");
+    app.add_option("--frame-cache", o.frameCache,
+                   "For a DICOMweb series: keep its frames in DIR, and\n"
+                   "read those kept there by an earlier run (a series\n"
+                   "opened again) instead of asking the server")
+        ->option_text("DIR");
     app.add_option("--opens", o.opens,
                    "Opening trials per size: open() to the first complete\n"
                    "frame, into a fresh engine and as a switch from a\n"

@@ -171,7 +171,10 @@ DicomWebSource::~DicomWebSource() {
 
 std::string DicomWebSource::framesUrl(size_t instance, const std::vector<uint32_t>& frames) const {
     std::string url = seriesUrl_ + "/instances/" + instances_[instance].sopInstanceUid + "/frames/";
-    for (size_t i = 0; i < frames.size(); ++i) url += (i ? "," : "") + std::to_string(frames[i] + 1);
+    for (size_t i = 0; i < frames.size(); ++i) {
+        if (i) url += ',';
+        url += std::to_string(frames[i] + 1);
+    }
     return url;
 }
 

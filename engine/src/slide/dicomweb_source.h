@@ -8,7 +8,7 @@
 //     the slide uses is fetched, concurrently, to learn its transfer syntax (the metadata does
 //     not carry it), and the ICC profile's bulk data when the metadata only points to it.
 //   * Frames: WADO-RS …/instances/<SOP>/frames/<a>,<b>,…: the frames of one instance that are
-//     wanted at the same time, up to 32 a request, in one request (a server answers a list for
+//     wanted at the same time, up to 64 a request, in one request (a server answers a list for
 //     little more than one frame), with
 //     Accept: multipart/related; type="application/octet-stream"; transfer-syntax=*, so that the
 //     server sends each frame as stored (JPEG, JPEG 2000 or native samples) and names its

@@ -1,6 +1,7 @@
 #include "mainwindow.h"
 
 #include <QtCore/QDir>
+#include <QtCore/QDirIterator>
 #include <QtCore/QFileInfo>
 #include <QtCore/QLocale>
 #include <QtCore/QMimeData>
@@ -161,6 +162,10 @@ void MainWindow::createActions()
         QSettings().setValue(QStringLiteral("network/keepFrames"), on);
         m_view->setFrameCacheDirectory(frameCacheDirectory()); // for the series opened from now on
     });
+    m_clearFramesAction = new QAction(tr("C&lear Kept Server Frames"), this);
+    m_clearFramesAction->setObjectName(QStringLiteral("clearFramesAction"));
+    m_clearFramesAction->setStatusTip(tr("Remove the frames kept from DICOMweb servers from this computer"));
+    connect(m_clearFramesAction, &QAction::triggered, this, &MainWindow::clearKeptFrames);
 
     m_sampleAction = new QAction(tr("Open &Sample Slide"), this);
     connect(m_sampleAction, &QAction::triggered, this, [this] {
@@ -267,6 +272,7 @@ void MainWindow::createMenus()
     connect(m_recent, &RecentFiles::openRequested, this, [this](const QString &path) { openSlide(path, true); });
     file->addAction(m_serverAction);
     file->addAction(m_keepFramesAction);
+    file->addAction(m_clearFramesAction);
     file->addAction(m_sampleAction);
     file->addSeparator();
     file->addAction(m_closeAction);
@@ -382,7 +388,32 @@ QString MainWindow::frameCacheDirectory() const
 {
     if (!m_keepFramesAction->isChecked())
         return {};
+    return keptFramesFolder();
+}
+
+QString MainWindow::keptFramesFolder()
+{
     return QStandardPaths::writableLocation(QStandardPaths::CacheLocation) + QStringLiteral("/dicomweb-frames");
+}
+
+qint64 MainWindow::clearKeptFrames()
+{
+    // The folder goes whole. An engine that keeps frames there meanwhile is not disturbed: a
+    // kept frame whose file is gone is fetched again, and the next one written makes the
+    // folder again (the user's alone).
+    QDir folder(keptFramesFolder());
+    qint64 bytes = 0;
+    QDirIterator it(folder.path(), QDir::Files | QDir::Hidden, QDirIterator::Subdirectories);
+    while (it.hasNext()) {
+        it.next();
+        bytes += it.fileInfo().size();
+    }
+    const bool removed = !folder.exists() || folder.removeRecursively();
+    statusBar()->showMessage(removed
+            ? tr("Removed %1 MB of frames kept from servers").arg(double(bytes) / (1 << 20), 0, 'f', 1)
+            : tr("Could not remove everything in %1").arg(QDir::toNativeSeparators(folder.path())),
+        kMessageMs);
+    return removed ? bytes : -1;
 }
 
 ServerBrowser *MainWindow::showServerBrowser()

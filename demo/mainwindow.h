@@ -62,6 +62,10 @@ public Q_SLOTS:
     // Where DICOMweb frames are kept while File › Keep Server Frames on This Computer is on
     // (the default): <cache location>/dicomweb-frames; empty while it is off.
     QString frameCacheDirectory() const;
+    static QString keptFramesFolder();
+    // File › Clear Kept Server Frames: removes the folder; the bytes it held, or -1 when some
+    // could not be removed (said in the status bar either way).
+    qint64 clearKeptFrames();
     void exportAsIris();
     // View › Compare…: asks for up to three more slides and shows them beside the open one.
     void showCompareDialog();
@@ -156,6 +160,7 @@ private:
     QAction *m_sampleAction = nullptr;
     QAction *m_serverAction = nullptr;
     QAction *m_keepFramesAction = nullptr; // keep DICOMweb frames on this computer (QSettings network/keepFrames)
+    QAction *m_clearFramesAction = nullptr;
     ServerBrowser *m_serverBrowser = nullptr;
     // What the server browser last gave m_view (a view cannot give its secret back): handed on
     // to the Compare window's views. Memory only, for the session.

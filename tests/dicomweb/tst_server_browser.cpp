@@ -8,7 +8,8 @@
 //     frame is presented; the recent-files list holds the URL exactly, and nothing in the
 //     settings holds the password;
 //   * File › Keep Server Frames on This Computer (on by default) keeps the fetched frames in the
-//     user's cache folder (its own, mode 0700), for the Compare window's views too; turned off,
+//     user's cache folder (its own, mode 0700), for the Compare window's views too; File › Clear
+//     Kept Server Frames removes them (the next frames kept make the folder again); turned off,
 //     nothing is kept;
 //   * View › Compare shows the protected series too (the Compare window's views get the main
 //     view's credentials).
@@ -255,6 +256,20 @@ private Q_SLOTS:
             QTRY_VERIFY_WITH_TIMEOUT(compareFrames.count() > 0, kTimeoutMs);
             compare->close(); // deleted on close
         }
+
+        // File › Clear Kept Server Frames removes them all; the next frame kept makes the
+        // folder again (the series opened again fetches its frames and keeps them).
+        auto* clear = m_main->findChild<QAction*>(QStringLiteral("clearFramesAction"));
+        QVERIFY(clear);
+        QVERIFY(m_main->clearKeptFrames() > 0);
+        QVERIFY(!QFileInfo::exists(cacheDir));
+        QCOMPARE(keptFiles(), 0);
+        QSignalSpy reopened(view, &IrisSlideView::framePresented);
+        QVERIFY(view->openSlide(expected));
+        QTRY_VERIFY_WITH_TIMEOUT(reopened.count() > 0, kTimeoutMs);
+        QTRY_VERIFY_WITH_TIMEOUT(keptFiles() > 0, kTimeoutMs);
+        QCOMPARE(QFileInfo(cacheDir).permissions() & (QFile::ReadGroup | QFile::ReadOther | QFile::ExeOther),
+                 QFileDevice::Permissions());
 
         // Turned off: remembered, and the series opened from then on keep nothing.
         keep->trigger();

@@ -550,6 +550,19 @@ private slots:
         QCOMPARE(s.broken, uint64_t(0));
         QCOMPARE(s.files, uint64_t(1));
         QCOMPARE(s.bytes, uint64_t(kHeaderBytes + 6 + kSyntax.size() + 3000 + kCrcBytes));
+
+        // Many frames over many sub-folders, the folder cleared: the first miss unindexes them
+        // all (so that they are fetched in lists again, not each missed on its own first).
+        for (int i = 0; i < 64; ++i) putFrame(*cache, "many-" + std::to_string(i), 500);
+        cache->flush();
+        QCOMPARE(cache->stats().files, uint64_t(65));
+        QVERIFY(fs::remove_all(dir) > 0);
+        QVERIFY(!cache->get("many-7", kSyntax));
+        s = cache->stats();
+        QCOMPARE(s.files, uint64_t(0));
+        QCOMPARE(s.bytes, uint64_t(0));
+        for (int i = 0; i < 64; ++i) QVERIFY(!cache->contains("many-" + std::to_string(i)));
+        QVERIFY(!cache->contains("second"));
     }
 
     void rejectsAbsurdInput() {

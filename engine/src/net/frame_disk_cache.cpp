@@ -262,6 +262,10 @@ std::optional<FrameDiskCache::Frame> FrameDiskCache::get(const std::string& key,
     if (gone && !present && it != index_.end()) { // another process evicted it: unindexed
         total_ -= std::min(total_, it->second.bytes);
         index_.erase(it);
+        // Its sub-folder gone too: the folder was cleared under us (the viewer's Clear, a user's
+        // rm). Every entry of a sub-folder that is gone goes now, so that the frames it held are
+        // asked for in lists again rather than each missed on its own first.
+        if (::access(fs::path(path).parent_path().c_str(), F_OK) != 0) unindexGoneFolders();
     } else if (broken) {
         ++stats_.broken;
         if (sameFile) {
@@ -372,6 +376,24 @@ void FrameDiskCache::writer() {
     }
     doneSerial_ = queuedSerial_;
     written_.notify_all();
+}
+
+void FrameDiskCache::unindexGoneFolders() {
+    bool gone[256];
+    bool seen[256] = {};
+    for (auto it = index_.begin(); it != index_.end();) {
+        const unsigned sub = unsigned(it->first >> 56); // the name's first two hex digits
+        if (!seen[sub]) {
+            seen[sub] = true;
+            gone[sub] = ::access((dir_ + "/" + hex16(it->first).substr(0, 2)).c_str(), F_OK) != 0;
+        }
+        if (gone[sub]) {
+            total_ -= std::min(total_, it->second.bytes);
+            it = index_.erase(it);
+        } else {
+            ++it;
+        }
+    }
 }
 
 void FrameDiskCache::evictLocked() {

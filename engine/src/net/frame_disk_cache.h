@@ -101,6 +101,7 @@ private:
     void scan();
     void writer();
     bool write(const Pending& p, uint64_t* bytes);
+    void unindexGoneFolders(); // with mutex_ held: entries of sub-folders no longer there
     void evictLocked(); // with mutex_ held (it unlinks the files it evicts under the lock: they are few)
     std::string pathOf(uint64_t hash) const;
 

@@ -50,7 +50,9 @@ std::string reason(long status) {
 } // namespace
 
 Result httpError(long status, const std::string& context, const std::string& what, bool credentialsGiven) {
-    const std::string code = "HTTP " + std::to_string(status) + (reason(status).empty() ? "" : " " + reason(status));
+    std::string code = "HTTP ";
+    code.append(std::to_string(status));
+    if (const std::string r = reason(status); !r.empty()) code.append(1, ' ').append(r);
     if (status == 401) {
         return Result(Status::IoError,
                       context + (credentialsGiven

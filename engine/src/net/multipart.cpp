@@ -83,7 +83,9 @@ Expected<MediaType> parseMediaType(std::string_view text) {
     const size_t slash = type.find('/');
     if (type.empty() || slash == 0 || slash == std::string_view::npos || slash + 1 == type.size() ||
         type.find('/', slash + 1) != std::string_view::npos) {
-        return bad("'" + std::string(text.substr(0, 200)) + "' is not a media type (type/subtype)");
+        std::string what(1, '\'');
+        what.append(text.substr(0, 200)).append("' is not a media type (type/subtype)");
+        return bad(what);
     }
     m.type = lower(type);
     for (;;) {

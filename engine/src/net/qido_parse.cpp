@@ -101,7 +101,8 @@ Result appendParam(std::string& out, const char* name, const std::string& value)
     if (value.empty()) return {};
     auto v = encodeValue(name, value);
     if (!v.ok()) return v.error();
-    out += (out.empty() ? "?" : "&") + std::string(name) + "=" + *v;
+    out += out.empty() ? '?' : '&';
+    out.append(name).append(1, '=').append(*v);
     return {};
 }
 
@@ -163,7 +164,8 @@ Expected<std::string> studyQueryString(const dicomweb::StudyQuery& q) {
     }
     if (!q.studyDateFrom.empty() || !q.studyDateTo.empty()) {
         // A range "from-to"; an open end is left empty (PS3.4 C.2.2.2.5).
-        s += (s.empty() ? "?" : "&") + std::string("StudyDate=") + q.studyDateFrom + "-" + q.studyDateTo;
+        s += s.empty() ? '?' : '&';
+        s.append("StudyDate=").append(q.studyDateFrom).append(1, '-').append(q.studyDateTo);
     }
     // Fields a server need not return by default (PS3.18 Table 10.6.3-3 leaves them optional).
     s += (s.empty() ? "?" : "&") +

@@ -66,6 +66,9 @@ std::string legendNumber(double v) {
     return buf;
 }
 
-std::string legendMoreLabel(int count) { return "+" + std::to_string(count) + " more"; }
+std::string legendMoreLabel(int count) {
+    std::string label(1, '+');
+    return label.append(std::to_string(count)).append(" more");
+}
 
 } // namespace iris::overlay

@@ -153,11 +153,9 @@ void MainWindow::createActions()
     m_keepFramesAction = new QAction(tr("&Keep Server Frames on This Computer"), this);
     m_keepFramesAction->setObjectName(QStringLiteral("keepFramesAction"));
     m_keepFramesAction->setCheckable(true);
-    m_keepFramesAction->setStatusTip(
-        tr("Keep the frames fetched from a DICOMweb server in %1 (yours alone, at most "
-           "2 GiB), so that a slide opened again loads from this computer")
-            .arg(QDir::toNativeSeparators(
-                QStandardPaths::writableLocation(QStandardPaths::CacheLocation) + QStringLiteral("/dicomweb-frames"))));
+    m_keepFramesAction->setStatusTip(tr("Keep the frames fetched from a DICOMweb server in %1 (yours alone, at most "
+                                        "2 GiB), so that a slide opened again loads from this computer")
+                                         .arg(QDir::toNativeSeparators(keptFramesFolder())));
     connect(m_keepFramesAction, &QAction::toggled, this, [this](bool on) {
         QSettings().setValue(QStringLiteral("network/keepFrames"), on);
         m_view->setFrameCacheDirectory(frameCacheDirectory()); // for the series opened from now on

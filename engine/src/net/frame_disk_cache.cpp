@@ -98,8 +98,8 @@ std::map<std::string, std::weak_ptr<FrameDiskCache>>& registry() {
 
 } // namespace
 
-uint64_t frameCacheHash(const std::string& key) {
-    uint64_t h = 0xcbf29ce484222325ull;
+uint64_t frameCacheHash(std::string_view key, uint64_t seed) {
+    uint64_t h = seed;
     for (const unsigned char c : key) {
         h ^= c;
         h *= 0x100000001b3ull;
@@ -170,13 +170,12 @@ void FrameDiskCache::scan() {
             std::error_code fe;
             const std::string name = f->path().filename().string();
             uint64_t hash = 0;
-            if (!f->is_regular_file(fe) || f->is_symlink(fe)) continue;
+            struct stat st {};
+            if (::lstat(f->path().c_str(), &st) != 0 || !S_ISREG(st.st_mode)) continue; // no symbolic links
             if (!hexName(name, &hash)) {
                 if (name.rfind(".tmp-", 0) == 0 && f->last_write_time(fe) < staleBefore) fs::remove(f->path(), fe);
                 continue;
             }
-            struct stat st {};
-            if (::lstat(f->path().c_str(), &st) != 0) continue;
             Entry& entry = index_[hash];
             entry.bytes = uint64_t(st.st_size);
             entry.lastUse = int64_t(st.st_mtim.tv_sec) * 1000000000 + st.st_mtim.tv_nsec;
@@ -186,9 +185,9 @@ void FrameDiskCache::scan() {
     evictLocked(); // a bound smaller than last time's
 }
 
-bool FrameDiskCache::contains(const std::string& key) const {
+bool FrameDiskCache::contains(uint64_t keyHash) const {
     std::lock_guard lock(mutex_);
-    return index_.count(frameCacheHash(key)) != 0;
+    return index_.count(keyHash) != 0;
 }
 
 std::optional<FrameDiskCache::Frame> FrameDiskCache::get(const std::string& key, const std::string& transferSyntax) {
@@ -312,7 +311,9 @@ FrameDiskCache::Stats FrameDiskCache::stats() const {
 
 bool FrameDiskCache::write(const Pending& p, uint64_t* bytes) {
     const uint64_t hash = frameCacheHash(p.key);
-    const std::string path = pathOf(hash);
+    const std::string name = hex16(hash);
+    const std::string sub = dir_ + "/" + name.substr(0, 2);
+    const std::string path = sub + "/" + name;
     const std::string& ts = p.frame.transferSyntax;
     const std::vector<uint8_t>& b = p.frame.bytes;
     std::vector<uint8_t> head(kHeaderBytes + p.key.size() + ts.size());
@@ -328,14 +329,14 @@ bool FrameDiskCache::write(const Pending& p, uint64_t* bytes) {
     putLe(tail, crc, 4);
 
     static std::atomic<uint64_t> counter{0};
-    const std::string tmp = dir_ + "/" + hex16(hash).substr(0, 2) + "/.tmp-" + hex16(hash) + "-" +
-                            std::to_string(::getpid()) + "-" + std::to_string(counter.fetch_add(1));
+    const std::string tmp =
+        sub + "/.tmp-" + name + "-" + std::to_string(::getpid()) + "-" + std::to_string(counter.fetch_add(1));
     int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC | O_NOFOLLOW, 0600);
     if (fd < 0 && errno == ENOENT) { // the sub-folder (or the folder: removed under us) is made again
         std::error_code ec;
         if (fs::create_directories(dir_, ec))
             fs::permissions(dir_, fs::perms::owner_all, fs::perm_options::replace, ec);
-        fs::create_directories(fs::path(tmp).parent_path(), ec);
+        fs::create_directories(sub, ec);
         fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC | O_NOFOLLOW, 0600);
     }
     if (fd < 0) return false;

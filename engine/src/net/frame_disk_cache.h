@@ -40,6 +40,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <thread>
 #include <unordered_map>
 #include <vector>
@@ -47,6 +48,11 @@
 #include "iris/types.h"
 
 namespace iris::net {
+
+// The key's 64-bit FNV-1a hash (the file's name). FNV-1a continues: the hash of a + b is
+// frameCacheHash(b, frameCacheHash(a)).
+inline constexpr uint64_t kFrameCacheHashSeed = 0xcbf29ce484222325ull;
+uint64_t frameCacheHash(std::string_view key, uint64_t seed = kFrameCacheHashSeed);
 
 class FrameDiskCache {
 public:
@@ -68,7 +74,10 @@ public:
         std::vector<uint8_t> bytes;
     };
     // Whether a file for `key` is indexed (a look at the index, no I/O: get() may still miss).
-    bool contains(const std::string& key) const;
+    bool contains(const std::string& key) const { return contains(frameCacheHash(key)); }
+    // The same by the key's hash (frameCacheHash), for a caller that continues a prefix's hash
+    // rather than building each key.
+    bool contains(uint64_t keyHash) const;
     // The frame kept for `key` in `transferSyntax` (empty: in whichever it was kept), read and
     // checked; nullopt when there is none or its file does not hold exactly that frame (removed
     // when broken).
@@ -119,8 +128,5 @@ private:
     Stats stats_;
     std::thread thread_;
 };
-
-// The key's 64-bit FNV-1a hash (the file's name).
-uint64_t frameCacheHash(const std::string& key);
 
 } // namespace iris::net

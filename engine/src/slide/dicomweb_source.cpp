@@ -1,6 +1,7 @@
 #include "slide/dicomweb_source.h"
 
 #include <algorithm>
+#include <charconv>
 #include <set>
 
 #include "net/multipart.h"
@@ -140,6 +141,10 @@ Expected<std::unique_ptr<SlideSource>> DicomWebSource::open(const std::string& t
     if (!series.ok()) return series.error();
     src->instances_ = std::move(series->instances);
     src->layout_ = std::move(series->layout);
+    for (const dicom::InstanceDescription& in : src->instances_) {
+        src->framesPrefix_.push_back(seriesUrl + "/instances/" + in.sopInstanceUid + "/frames/");
+        src->framesPrefixHash_.push_back(net::frameCacheHash(src->framesPrefix_.back()));
+    }
     if (Result r = src->probeTransferSyntaxes(); !r.ok()) return r;
     dicom::SeriesMetadata& metadata = series->metadata;
     if (metadata.iccProfile.empty() && !metadata.iccBulkDataUri.empty()) {
@@ -173,7 +178,7 @@ DicomWebSource::~DicomWebSource() {
 }
 
 std::string DicomWebSource::framesUrl(size_t instance, const std::vector<uint32_t>& frames) const {
-    std::string url = seriesUrl_ + "/instances/" + instances_[instance].sopInstanceUid + "/frames/";
+    std::string url = framesPrefix_[instance];
     for (size_t i = 0; i < frames.size(); ++i) {
         if (i) url += ',';
         url += std::to_string(frames[i] + 1);
@@ -307,7 +312,12 @@ Result DicomWebSource::probeTransferSyntaxes() {
 }
 
 bool DicomWebSource::onDiskOnly(FrameKey key) const {
-    return disk_ && !frames_.count(key) && disk_->contains(diskKey(size_t(key >> 32), uint32_t(key & 0xffffffffu)));
+    if (!disk_ || frames_.count(key)) return false;
+    char number[16];
+    const auto end = std::to_chars(number, number + sizeof number, (key & 0xffffffffu) + 1).ptr; // from 1
+    const size_t instance = size_t(key >> 32);
+    return disk_->contains(
+        net::frameCacheHash(std::string_view(number, size_t(end - number)), framesPrefixHash_[instance]));
 }
 
 void DicomWebSource::storeReady(FrameKey key, Frame& f, std::vector<uint8_t> bytes) {
@@ -389,8 +399,7 @@ void DicomWebSource::pump() {
         if (lists_ != Lists::Refused && !first.alone) {
             // The frames of the same instance next in line join it, in queue order, at most
             // kMaxBatch in all.
-            const size_t want = kMaxBatch;
-            for (auto it = queue_.begin(); it != queue_.end() && q->frames.size() < want;) {
+            for (auto it = queue_.begin(); it != queue_.end() && q->frames.size() < kMaxBatch;) {
                 const auto f = frames_.find(*it);
                 if (size_t(*it >> 32) == q->instance && f != frames_.end() && f->second.state == Frame::State::Queued &&
                     !f->second.alone) {

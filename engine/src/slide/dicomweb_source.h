@@ -112,7 +112,8 @@ private:
     std::string framesUrl(size_t instance, const std::vector<uint32_t>& frames) const;
     // The frame cache's key of one frame: its single-frame WADO-RS URL.
     std::string diskKey(size_t instance, uint32_t frame) const { return framesUrl(instance, {frame}); }
-    // With mutex_ held: `key` is not in frames_ and is kept on disk (no I/O: the cache's index).
+    // With mutex_ held: `key` is not in frames_ and is kept on disk (no I/O, no string built:
+    // the cache's index, by the instance's frames-URL hash continued with the frame number).
     bool onDiskOnly(FrameKey key) const;
     // "Cannot read frame <n> of <instance>: ", which starts every frame's error.
     std::string frameContext(size_t instance, uint32_t frame) const;
@@ -167,6 +168,9 @@ private:
 
     std::unique_ptr<net::HttpClient> client_;
     std::shared_ptr<net::FrameDiskCache> disk_; // NetworkOptions::frameCacheDirectory; null without
+    // Per instance: …/instances/<SOP>/frames/, every frame URL's start, and its frameCacheHash.
+    std::vector<std::string> framesPrefix_;
+    std::vector<uint64_t> framesPrefixHash_;
 };
 
 // The format table's entry (slide_source.cpp).

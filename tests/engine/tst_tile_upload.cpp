@@ -45,6 +45,10 @@ private slots:
         // Host writes need the levels made on the host; both engines make them so, so that the
         // two differ only in how tiles reach the atlas (on a GPU too).
         h.tuning.mipSchedule = q.tuning.mipSchedule = iris::EngineTuning::MipSchedule::Host;
+        // And both draw quads: the resolve on the host (render/host_resolve.h), which only a
+        // host-written atlas allows, is compared with the quads by engine.host_resolve.
+        ::unsetenv("IRIS_TILE_RESOLVE");
+        h.tuning.tileResolve = q.tuning.tileResolve = iris::EngineTuning::TileResolve::Quads;
         h.vramBudgetBytes = q.vramBudgetBytes = 1; // the atlas's floor: 64 slots
         host_ = createTestEngine(h);
         QVERIFY2(host_, describe(host_.error).c_str());

@@ -110,6 +110,7 @@ struct SizeResult {
     std::string tileUpload; // as the engine resolved it
     std::vector<double> lrTefov, hrTefov, lrTpt, hrTpt, rate, frameMs;
     std::vector<double> settledGpuMs; // GPU time of frames redrawing a loaded field (nothing to upload)
+    std::vector<double> settledCpuMs; // the render thread's time on the same frames (FrameStats::cpuMs)
     std::vector<std::string> condition; // per field: magnification label
     std::vector<double> condHr, condTpt;
     std::vector<iris::FieldStats> timed; // every timed field, for its stage times
@@ -228,7 +229,10 @@ SizeResult runSize(const Options& o, uint32_t W, uint32_t H, bool colorManaged) 
             res.trace.push_back({std::chrono::duration<double, std::milli>(Clock::now() - start).count(), s.intervalMs,
                                  s.gpuMs, s.bufferRateGBps});
         } else if (settledSkip > 0) --settledSkip;
-        else if (settledSkip == 0 && s.complete && s.gpuMs >= 0) res.settledGpuMs.push_back(s.gpuMs);
+        else if (settledSkip == 0 && s.complete && s.gpuMs >= 0) {
+            res.settledGpuMs.push_back(s.gpuMs);
+            res.settledCpuMs.push_back(s.cpuMs);
+        }
     });
     // Magnification → downsample: from the objective power, else from mpp (10 µm/px ≈ 1×),
     // else the list is read as downsamples.
@@ -417,6 +421,7 @@ Json resultJson(const Options& o, const SizeResult& r) {
     j["frame_ms"] = jsonQuartiles(quartiles(r.frameMs));
     j["fps"] = jsonQuartiles(quartiles(fps));
     j["settled_frame_gpu_ms"] = jsonQuartiles(quartiles(r.settledGpuMs));
+    j["settled_frame_cpu_ms"] = jsonQuartiles(quartiles(r.settledCpuMs));
     // Opening (measureOpening): into a fresh engine, and switching from a settled slide.
     j["open_to_first_frame_ms"] = jsonQuartiles(quartiles(r.openFrameMs));
     j["open_call_ms"] = jsonQuartiles(quartiles(r.openCallMs));
@@ -497,6 +502,7 @@ void printTable(const SizeResult& r) {
     row("buffer rate", r.rate, "GB/s");
     row("frame interval", r.frameMs, "ms");
     row("settled frame GPU time", r.settledGpuMs, "ms");
+    row("  its render thread time", r.settledCpuMs, "ms");
     row("open() to first frame", r.openFrameMs, "ms");
     row("  the open() call", r.openCallMs, "ms");
     row("switch to first frame", r.switchFrameMs, "ms");

@@ -70,6 +70,7 @@ void RenderThread::releaseGpu() {
     }
     for (FrameSlot& f : frames_) f = FrameSlot{};
     resolvePass_.reset();
+    hostResolve_.reset();
     passes_.reset();
     timestamps_ = {};
 }
@@ -90,7 +91,9 @@ Result RenderThread::init() {
     copyExact_ = copiesExact(tuning_.exactCopy, device_.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU);
     log_.info(std::string("exact copy: ") + (copyExact_ ? "on" : "off"));
     if (Result r = initGpu(); !r.ok()) return r;
-    log_.info(resolvePass_ ? "tile resolve: compute (offscreen targets; a swapchain draws quads)" : "tile resolve: quads");
+    log_.info(resolvePass_   ? "tile resolve: compute (offscreen targets; a swapchain draws quads)"
+              : hostResolve_ ? "tile resolve: quads, and settled filtered views on the host"
+                             : "tile resolve: quads");
     return {};
 }
 
@@ -105,6 +108,11 @@ Result RenderThread::initGpu() {
         (tuning_.tileResolve == EngineTuning::TileResolve::Auto && !cpuDevice)) {
         resolvePass_ = std::make_unique<render::ResolvePass>(device_, atlas_, pipeline_);
         if (Result r = resolvePass_->init(kFramesInFlight); !r.ok()) return r;
+    } else if (tuning_.tileResolve == EngineTuning::TileResolve::Auto && cpuDevice && atlas_.hostWritten()) {
+        // The atlas's texels are in mapped memory: settled filtered views are resolved on the
+        // host (render/host_resolve.h), which llvmpipe's fragment path is slower at.
+        hostResolve_ = std::make_unique<render::HostResolvePass>(device_, atlas_, log_);
+        if (Result r = hostResolve_->init(kFramesInFlight); !r.ok()) return r;
     }
     if (Result r = vk::createTimestampPool(device_.physical(), dev, device_.queueFamily(), 2 * kFramesInFlight,
                                            *timestamps_.replace(dev), timestampPeriodNs_);
@@ -599,6 +607,14 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
                                       clearUnorm(snap.background[2]), 1.0f};
         if (Result r = resolvePass_->prepare(frame, passes_->tile.drawList(), bg, target.view); !r.ok()) return r;
     }
+    // A frame the host resolves: the tile pass drew its list for nothing but the metrics.
+    bool hostResolved = false;
+    if (hostResolve_ && !resolve) {
+        Expected<bool> h = hostResolve_->prepare(frame, passes_->tile.drawList(), target.transferDst);
+        if (!h) log_.warn("tile resolve on the host: " + h.error().message() + "; drawing quads"); // (no buffer)
+        hostResolved = h && *h;
+        if (hostResolved) passes_->tile.setDrawLevels(false);
+    }
     if (passes_->tile.progress().lrComplete) lrWholeViewSerial_ = snap.viewSerial;
     if (const uint32_t n = passes_->tile.progress().newlyShown) shared_.tileStages.stamp(TileStage::Shown, n);
     metrics_.frameDrawn(snap, passes_->tile.progress());
@@ -626,6 +642,8 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
                           VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
                           VK_ACCESS_2_SHADER_SAMPLED_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
         resolvePass_->record(cmd, frame, target.image);
+    } else if (hostResolved) {
+        hostResolve_->record(cmd, frame, target.image);
     } else {
         // Previous contents are discarded (UNDEFINED); the wait on the previous frame's copy
         // (offscreen) or on the acquire semaphore (swapchain) is covered by the source stages.
@@ -643,7 +661,7 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
         .resolveMode = VK_RESOLVE_MODE_NONE,
         .resolveImageView = VK_NULL_HANDLE,
         .resolveImageLayout = VK_IMAGE_LAYOUT_UNDEFINED,
-        .loadOp = resolve ? VK_ATTACHMENT_LOAD_OP_LOAD : VK_ATTACHMENT_LOAD_OP_CLEAR,
+        .loadOp = resolve || hostResolved ? VK_ATTACHMENT_LOAD_OP_LOAD : VK_ATTACHMENT_LOAD_OP_CLEAR,
         .storeOp = VK_ATTACHMENT_STORE_OP_STORE,
         .clearValue = {.color = {{clearUnorm(snap.background[0]), clearUnorm(snap.background[1]),
                                   clearUnorm(snap.background[2]), 1.0f}}},

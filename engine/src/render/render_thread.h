@@ -30,6 +30,7 @@
 #include "render/frame_pass.h"
 #include "render/hud_pass.h"
 #include "render/layer_pass.h"
+#include "render/host_resolve.h"
 #include "render/resolve_pass.h"
 #include "render/tile_pass.h"
 
@@ -192,6 +193,7 @@ private:
     // EngineTuning::TileResolve::Compute: offscreen frames resolve the tiles per pixel in a
     // compute pass instead of the tile pass's quads (null otherwise).
     std::unique_ptr<render::ResolvePass> resolvePass_;
+    std::unique_ptr<render::HostResolvePass> hostResolve_; // CPU devices with a host-written atlas
     // Frame pacing (CPU devices, where drawing takes the cores the loaders decode on): a frame
     // that only adds tiles to the view already drawn waits until kPaceFactor × the last
     // frame's GPU time has passed since the previous one was submitted, unless it shows a

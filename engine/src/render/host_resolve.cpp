@@ -1,0 +1,366 @@
+#include "render/host_resolve.h"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "core/thread_name.h"
+#include "gpu/vk_util.h"
+
+namespace iris::render {
+
+namespace {
+
+constexpr int64_t kTile = 256;
+
+// The weight of a filter's second tap for fraction f in [0, 1): f in 1/256ths, rounded.
+inline uint32_t weightOf(float f) { return std::min(uint32_t(f * 256.0f + 0.5f), 256u); }
+
+// A level position along one axis, as tile_resolve.comp filters it in mip m: the filter's two
+// taps in mip-m texels and the second's weight. Shrunk (LOD > 0), the position is first clamped
+// into the level's valid texels and the taps into its tiles' mips (the edge tiles' padding
+// included, as their own mips hold it); at LOD 0 the taps are clamped into the level.
+struct Taps {
+    int64_t t0, t1;
+    uint32_t weight;
+};
+inline Taps tapsOf(float q, const HostFrame& f, uint32_t m, int32_t extent, int64_t tiles) {
+    int64_t last = extent - 1;
+    if (f.shrunk) {
+        q = std::clamp(q, 0.5f, float(extent) - 0.5f) / float(1u << m);
+        last = tiles * (kTile >> m) - 1;
+    }
+    q -= 0.5f;
+    const float i = std::floor(q);
+    return {std::clamp<int64_t>(int64_t(i), 0, last), std::clamp<int64_t>(int64_t(i) + 1, 0, last), weightOf(q - i)};
+}
+
+// The slot of tile (tx, ty) of the frame's grid, or -1 (absent, outside the grid or the level).
+inline int32_t slotAt(const HostFrame& f, int64_t tx, int64_t ty) {
+    if (tx < f.grid.x0 || ty < f.grid.y0 || tx > f.grid.x1 || ty > f.grid.y1) return -1;
+    return f.slots[size_t((ty - f.grid.y0) * (f.grid.x1 - f.grid.x0 + 1) + (tx - f.grid.x0))];
+}
+
+inline const uint8_t* texel(const gpu::TileAtlas& atlas, int32_t slot, uint32_t m, int64_t x, int64_t y) {
+    return atlas.hostLevel(slot, m) + size_t(y) * atlas.hostRowPitch(m) + size_t(x) * 4;
+}
+
+// Bilinear from four texels, 8-bit weights: texel × 256.
+inline void bilinear16(const uint8_t* a, const uint8_t* b, const uint8_t* c, const uint8_t* d, uint32_t wx, uint32_t wy,
+                       uint32_t out[4]) {
+    for (int ch = 0; ch < 4; ++ch) {
+        const uint32_t top = a[ch] * (256 - wx) + b[ch] * wx, bottom = c[ch] * (256 - wx) + d[ch] * wx;
+        out[ch] = (top * (256 - wy) + bottom * wy + 128) >> 8;
+    }
+}
+
+// Target pixel (x, y) where a tap's tile is absent (a tile of the ring not yet resident):
+// tile_resolve.comp's fallback, the pixel's own tile sampled as its quad samples it — the
+// position clamped into the tile's valid texels, clamp-to-edge within the tile, trilinear
+// between its own mips when shrunk.
+void fallbackPixel(const HostFrame& f, uint32_t x, uint32_t y, uint8_t* out) {
+    const gpu::TileAtlas& atlas = *f.atlas;
+    const float qx = f.x0 + (float(x) + 0.5f) * f.scale, qy = f.y0 + (float(y) + 0.5f) * f.scale;
+    const int64_t tx = int64_t(qx) / kTile, ty = int64_t(qy) / kTile;
+    const int32_t slot = slotAt(f, tx, ty); // visible: resident
+    const float validW = float(std::min<int64_t>(kTile, f.levelWidth - tx * kTile));
+    const float validH = float(std::min<int64_t>(kTile, f.levelHeight - ty * kTile));
+    const float u = std::clamp(qx - float(tx * kTile), 0.5f, validW - 0.5f);
+    const float v = std::clamp(qy - float(ty * kTile), 0.5f, validH - 0.5f);
+    uint32_t c[2][4] = {};
+    for (int k = 0; k < f.mipCount; ++k) {
+        const uint32_t m = f.mips[k].level;
+        const int64_t size = kTile >> m;
+        const float cu = u / float(kTile) * float(size) - 0.5f, cv = v / float(kTile) * float(size) - 0.5f;
+        const float iu = std::floor(cu), iv = std::floor(cv);
+        const int64_t u0 = std::clamp<int64_t>(int64_t(iu), 0, size - 1),
+                      u1 = std::clamp<int64_t>(int64_t(iu) + 1, 0, size - 1);
+        const int64_t v0 = std::clamp<int64_t>(int64_t(iv), 0, size - 1),
+                      v1 = std::clamp<int64_t>(int64_t(iv) + 1, 0, size - 1);
+        bilinear16(texel(atlas, slot, m, u0, v0), texel(atlas, slot, m, u1, v0), texel(atlas, slot, m, u0, v1),
+                   texel(atlas, slot, m, u1, v1), weightOf(cu - iu), weightOf(cv - iv), c[k]);
+    }
+    const uint32_t wb = f.mipCount > 1 ? f.mipWeight : 0, wa = 256 - wb;
+    for (int ch = 0; ch < 4; ++ch) out[ch] = uint8_t((c[0][ch] * wa + c[1][ch] * wb + 32768) >> 16);
+}
+
+// The pixels of target row y whose filter reads an absent tile of the ring, redone by
+// fallbackPixel (tile_resolve.comp: any tap's tile absent, in any mip read, and the whole sample
+// comes from the pixel's own tile).
+void fixRingGaps(const HostFrame& f, uint32_t y, uint8_t* out) {
+    const float qy = f.y0 + (float(y) + 0.5f) * f.scale;
+    int64_t rows[2][2];
+    for (int k = 0; k < f.mipCount; ++k) {
+        const int64_t size = kTile >> f.mips[k].level;
+        const Taps t = tapsOf(qy, f, f.mips[k].level, f.levelHeight, f.tilesY);
+        rows[k][0] = t.t0 / size;
+        rows[k][1] = t.t1 / size;
+    }
+    for (uint32_t x = 0; x < f.width; ++x) {
+        bool whole = true;
+        for (int k = 0; k < f.mipCount && whole; ++k) {
+            const HostFrame::Column& col = f.mips[k].columns[x];
+            for (const int64_t ty : rows[k])
+                for (const int32_t c : {col.tile0, col.tile1})
+                    if (slotAt(f, f.grid.x0 + c, ty) < 0) whole = false;
+        }
+        if (!whole) fallbackPixel(f, x, y, out + size_t(x) * 4);
+    }
+}
+
+} // namespace
+
+bool planHostFrame(const FrameContext& frame, const DrawList& list, const gpu::TileAtlas& atlas, HostFrame& f) {
+    if (!atlas.hostWritten() || !frame.snap.slide || frame.snap.colorLut || list.placeholders > 0 || !list.hrComplete)
+        return false;
+    const Viewport& vp = frame.viewport;
+    if (!ViewTransform::of(vp.view, vp.width, vp.height).identity()) return false;
+    const LevelDraw& d = list.levels[2];
+    if (d.level < 0 || d.exact || !d.linked || d.instances.empty() || d.range.empty()) return false;
+    const LevelInfo& level = frame.snap.slide->info.levels[size_t(d.level)];
+    // The target's geometry in the level, in float as the shaders compute it.
+    f.x0 = float((vp.view.centerX - vp.width * 0.5 * vp.view.downsample) / level.downsample);
+    f.y0 = float((vp.view.centerY - vp.height * 0.5 * vp.view.downsample) / level.downsample);
+    f.scale = float(vp.view.downsample / level.downsample);
+    f.width = frame.extent.width;
+    f.height = frame.extent.height;
+    f.levelWidth = int32_t(level.width);
+    f.levelHeight = int32_t(level.height);
+    f.tilesX = level.tilesX;
+    f.tilesY = level.tilesY;
+    if (!(f.scale > 0.0f) || f.width == 0 || f.height == 0) return false;
+    // Every pixel centre inside the level: nothing of the background, nor of coarser levels.
+    const auto inside = [&](float origin, uint32_t pixels, int32_t extent) {
+        return origin + 0.5f * f.scale >= 0.0f && origin + (float(pixels) - 0.5f) * f.scale < float(extent);
+    };
+    if (!inside(f.x0, f.width, f.levelWidth) || !inside(f.y0, f.height, f.levelHeight)) return false;
+    // The frame is complete (every visible tile drawn; shrunk, with its mips). The tiles the
+    // filter may read — the range and the ring around it, which linkNeighbours looked up and
+    // pinned — opaque where resident (no "over" to compute); where one is absent, the pixels
+    // whose filter reaches it are redone from their own tile (fixRingGaps).
+    const int64_t w = d.range.x1 - d.range.x0 + 1, h = d.range.y1 - d.range.y0 + 1;
+    if (d.around.size() != size_t((w + 2) * (h + 2))) return false;
+    f.grid = TileRange{d.range.x0 - 1, d.range.y0 - 1, d.range.x1 + 1, d.range.y1 + 1};
+    f.slots.assign(d.around.size(), -1);
+    f.ringGaps = false;
+    for (int64_t ty = f.grid.y0; ty <= f.grid.y1; ++ty) {
+        for (int64_t tx = f.grid.x0; tx <= f.grid.x1; ++tx) {
+            if (tx < 0 || ty < 0 || tx >= level.tilesX || ty >= level.tilesY) continue; // never read
+            const size_t i = size_t((ty - f.grid.y0) * (w + 2) + (tx - f.grid.x0));
+            // The range's own tiles from the draw list; `around` holds those of its ring (and
+            // of range tiles that are a drawn tile's neighbour; -2 where never looked up).
+            const int32_t slot = d.range.contains(tx, ty) ? d.layers[size_t((ty - d.range.y0) * w + (tx - d.range.x0))]
+                                                          : std::max(d.around[i], -1);
+            if (slot >= 0 && !frame.tiles.opaque(slot)) return false;
+            if (slot < 0) f.ringGaps = true;
+            f.slots[i] = slot;
+        }
+    }
+    // Every pixel's own tile (the one its centre lies in) resident: the visible ones are.
+    const auto tileOf = [&](float origin, float pixel) { return int64_t(origin + pixel * f.scale) / kTile; };
+    for (int64_t ty = tileOf(f.y0, 0.5f); ty <= tileOf(f.y0, float(f.height) - 0.5f); ++ty)
+        for (int64_t tx = tileOf(f.x0, 0.5f); tx <= tileOf(f.x0, float(f.width) - 0.5f); ++tx)
+            if (slotAt(f, tx, ty) < 0) return false;
+    f.atlas = &atlas;
+    const bool targetBgra = frame.format == VK_FORMAT_B8G8R8A8_UNORM || frame.format == VK_FORMAT_B8G8R8A8_SRGB;
+    f.swap = atlas.swapped() != targetBgra;
+    // The mips: the draw list's LOD (tile_resolve.comp: trilinear between floor(lod) and the next).
+    const float lod = std::min(d.instances.front().texel[3], float(gpu::kTileMipLevels - 1));
+    f.shrunk = lod > 0.0f;
+    f.mips[0].level = uint32_t(lod);
+    f.mipWeight = f.shrunk ? weightOf(lod - float(f.mips[0].level)) : 0;
+    f.mipCount = f.mipWeight > 0 ? 2 : 1;
+    f.mips[1].level = f.mips[0].level + 1;
+    // The columns of each mip: each tap from the tile that holds it.
+    for (int k = 0; k < f.mipCount; ++k) {
+        HostFrame::Mip& mip = f.mips[k];
+        const int64_t size = kTile >> mip.level;
+        mip.columns.resize(f.width);
+        for (uint32_t x = 0; x < f.width; ++x) {
+            const Taps t = tapsOf(f.x0 + (float(x) + 0.5f) * f.scale, f, mip.level, f.levelWidth, f.tilesX);
+            mip.columns[x] = HostFrame::Column{int32_t(t.t0 / size - f.grid.x0), int32_t(t.t1 / size - f.grid.x0),
+                                               uint32_t(t.t0 % size) * 4, uint32_t(t.t1 % size) * 4, t.weight};
+        }
+    }
+    return true;
+}
+
+void resolveRows(const HostFrame& f, uint32_t row0, uint32_t row1, uint8_t* dst, size_t stride) {
+    const gpu::TileAtlas& atlas = *f.atlas;
+    const size_t width = f.width, channels = width * 4;
+    const int64_t gridW = f.grid.x1 - f.grid.x0 + 1;
+    // Per mip, two of its rows filtered horizontally (4 channels × 16 bits a pixel: texel ×
+    // 256), and the vertical blend of the mip's two rows, for the blend of two mips.
+    struct MipRows {
+        std::vector<uint16_t> held[2];
+        int64_t heldRow[2] = {-1, -1};
+        std::vector<uint16_t> blended;
+    };
+    MipRows rows[2];
+    for (int k = 0; k < f.mipCount; ++k) {
+        rows[k].held[0].resize(channels);
+        rows[k].held[1].resize(channels);
+        if (f.mipCount > 1) rows[k].blended.resize(channels);
+    }
+    std::vector<const uint8_t*> rowOf(size_t(gridW), nullptr);
+    const auto horizontal = [&](const HostFrame::Mip& mip, int64_t r, uint16_t* out) {
+        const int64_t size = kTile >> mip.level;
+        const int64_t ty = r / size;
+        const size_t offset = size_t(r - ty * size) * atlas.hostRowPitch(mip.level);
+        for (int64_t c = 0; c < gridW; ++c) {
+            const int32_t slot = f.slots[size_t((ty - f.grid.y0) * gridW + c)];
+            rowOf[size_t(c)] = slot >= 0 ? atlas.hostLevel(slot, mip.level) + offset : nullptr;
+        }
+        for (size_t x = 0; x < width; ++x, out += 4) {
+            const HostFrame::Column& col = mip.columns[x];
+            const uint8_t* a = rowOf[size_t(col.tile0)];
+            const uint8_t* b = rowOf[size_t(col.tile1)];
+            if (!a || !b) { // an absent ring tile: the pixel is redone below (fallbackPixel)
+                out[0] = out[1] = out[2] = out[3] = 0;
+                continue;
+            }
+            a += col.offset0;
+            b += col.offset1;
+            const uint32_t wb = col.weight, wa = 256 - wb;
+            for (int ch = 0; ch < 4; ++ch) out[ch] = uint16_t(a[ch] * wa + b[ch] * wb);
+        }
+    };
+    // Mip k's row r, filtered into the slot not holding `keep` when it is not held.
+    const auto rowFor = [&](int k, int64_t r, int64_t keep) -> const uint16_t* {
+        MipRows& m = rows[k];
+        for (int i = 0; i < 2; ++i)
+            if (m.heldRow[i] == r) return m.held[i].data();
+        const int i = m.heldRow[0] == keep ? 1 : 0;
+        horizontal(f.mips[k], r, m.held[i].data());
+        m.heldRow[i] = r;
+        return m.held[i].data();
+    };
+    for (uint32_t y = row0; y < row1; ++y) {
+        const float qy = f.y0 + (float(y) + 0.5f) * f.scale;
+        uint8_t* out = dst + size_t(y - row0) * stride;
+        for (int k = 0; k < f.mipCount; ++k) {
+            const Taps t = tapsOf(qy, f, f.mips[k].level, f.levelHeight, f.tilesY);
+            const uint32_t wb = t.weight, wa = 256 - wb;
+            const uint16_t* top = rowFor(k, t.t0, t.t1);
+            const uint16_t* bottom = rowFor(k, t.t1, t.t0);
+            if (f.mipCount == 1) {
+                for (size_t i = 0; i < channels; ++i)
+                    out[i] = uint8_t((uint32_t(top[i]) * wa + uint32_t(bottom[i]) * wb + 32768) >> 16);
+            } else {
+                uint16_t* v = rows[k].blended.data(); // texel × 256, rounded
+                for (size_t i = 0; i < channels; ++i)
+                    v[i] = uint16_t((uint32_t(top[i]) * wa + uint32_t(bottom[i]) * wb + 128) >> 8);
+            }
+        }
+        if (f.mipCount > 1) {
+            const uint16_t* a = rows[0].blended.data();
+            const uint16_t* b = rows[1].blended.data();
+            const uint32_t wb = f.mipWeight, wa = 256 - wb;
+            for (size_t i = 0; i < channels; ++i)
+                out[i] = uint8_t((uint32_t(a[i]) * wa + uint32_t(b[i]) * wb + 32768) >> 16);
+        }
+        if (f.ringGaps) fixRingGaps(f, y, out);
+        if (f.swap)
+            for (size_t x = 0; x < width; ++x) std::swap(out[4 * x], out[4 * x + 2]);
+    }
+}
+
+HostResolvePass::~HostResolvePass() {
+    if (helper_.joinable()) {
+        {
+            std::lock_guard lock(mutex_);
+            stopping_ = true;
+        }
+        cv_.notify_all();
+        helper_.join();
+    }
+}
+
+Result HostResolvePass::init(uint32_t frameSlots) {
+    slots_.clear();
+    slots_.resize(frameSlots);
+    if (!helper_.joinable()) helper_ = std::thread([this] { helperLoop(); });
+    return {};
+}
+
+void HostResolvePass::helperLoop() {
+    nameThisThread("iris-resolve");
+    uint64_t seen = 0;
+    std::unique_lock lock(mutex_);
+    for (;;) {
+        cv_.wait(lock, [&] { return stopping_ || posted_ != seen; });
+        if (stopping_) return;
+        seen = posted_;
+        uint8_t* dst = jobDst_;
+        const size_t stride = jobStride_;
+        const uint32_t r0 = jobRow0_, r1 = jobRow1_;
+        lock.unlock();
+        resolveRows(frame_, r0, r1, dst, stride);
+        lock.lock();
+        done_ = seen;
+        cv_.notify_all();
+    }
+}
+
+Expected<bool> HostResolvePass::prepare(const FrameContext& frame, const DrawList& list, bool targetTakesCopies) {
+    const bool serves = targetTakesCopies && planHostFrame(frame, list, atlas_, frame_);
+    if (serves != serving_) {
+        serving_ = serves;
+        log_.debug("tile resolve: frame " + std::to_string(frame.serial) + (serves ? " on the host" : " as quads"));
+    }
+    if (!serves) return false;
+    vk::MappedBuffer& buf = slots_[frame.slot];
+    const VkDeviceSize bytes = VkDeviceSize(frame_.width) * frame_.height * 4;
+    if (buf.size < bytes) {
+        if (Result r = vk::createMappedBuffer(device_.physical(), device_.device(), bytes,
+                                              VK_BUFFER_USAGE_TRANSFER_SRC_BIT, false, buf);
+            !r.ok())
+            return r;
+    }
+    auto* dst = static_cast<uint8_t*>(buf.mapped);
+    const size_t stride = size_t(frame_.width) * 4;
+    const uint32_t half = frame_.height / 2;
+    {
+        std::lock_guard lock(mutex_);
+        jobDst_ = dst + size_t(half) * stride;
+        jobStride_ = stride;
+        jobRow0_ = half;
+        jobRow1_ = frame_.height;
+        ++posted_;
+    }
+    cv_.notify_all();
+    resolveRows(frame_, 0, half, dst, stride);
+    {
+        std::unique_lock lock(mutex_);
+        cv_.wait(lock, [&] { return done_ == posted_; });
+    }
+    if (Result r = vk::flush(device_.device(), buf); !r.ok()) return r;
+    return true;
+}
+
+void HostResolvePass::record(VkCommandBuffer cmd, const FrameContext& frame, VkImage target) const {
+    // Previous contents are discarded; the wait on the previous frame's use of the target (its
+    // read-back copy, or the acquire semaphore) is covered by the source stages.
+    const VkImageMemoryBarrier2 toCopy =
+        vk::imageBarrier(target, VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT | VK_PIPELINE_STAGE_2_COPY_BIT,
+                         VK_ACCESS_2_NONE, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                         VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, vk::colorRange(0, 1, 0, 1));
+    vk::pipelineBarrier(cmd, &toCopy, 1);
+    const VkBufferImageCopy region{
+        .bufferOffset = 0,
+        .bufferRowLength = 0,
+        .bufferImageHeight = 0,
+        .imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1},
+        .imageOffset = {0, 0, 0},
+        .imageExtent = {frame.extent.width, frame.extent.height, 1},
+    };
+    vkCmdCopyBufferToImage(cmd, slots_[frame.slot].buffer, target, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &region);
+    const VkImageMemoryBarrier2 toColor = vk::imageBarrier(
+        target, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+        VK_PIPELINE_STAGE_2_COLOR_ATTACHMENT_OUTPUT_BIT,
+        VK_ACCESS_2_COLOR_ATTACHMENT_READ_BIT | VK_ACCESS_2_COLOR_ATTACHMENT_WRITE_BIT,
+        VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, vk::colorRange(0, 1, 0, 1));
+    vk::pipelineBarrier(cmd, &toColor, 1);
+}
+
+} // namespace iris::render

@@ -1,0 +1,119 @@
+// Settled filtered frames resolved on the host, for CPU devices (docs/ARCHITECTURE.md, "The
+// resolve on the host"). On a CPU device every filtered pixel of the tile pass goes through
+// llvmpipe's general fragment path: four gathers a pixel, 11-15 ms for a 1080p frame on two
+// cores, measured (BENCHMARKS.md), whatever the shader does around them. Where the atlas is
+// written from the host (gpu/tile_atlas.h, hostWritten) its texels are in mapped memory, and a
+// view of one level is a separable resampling: at LOD 0 (enlarged, or 1:1 off the pixel grid)
+// each level row the frame reads is filtered horizontally once into a row of 16-bit channels,
+// and each target row is the vertical blend of two such rows; shrunk, the same in each of the
+// two mips the LOD falls between, blended (trilinear). This pass does that on the render thread
+// and one helper, into a host-visible buffer that the frame copies into its target before the
+// other passes (annotations, layers, HUD) draw over it.
+//
+// It serves a frame only when that is all the frame is: the HR level covers every target pixel,
+// every tile of its visible range is resident (with its mips, shrunk) and opaque, and so is
+// every tile of the ring around it that is resident (the filter's neighbours; one that is not
+// is handled as the quads handle it), nothing fails, the view is unturned and unmirrored, and
+// there is no colour step: a complete frame, whether or not the ring has arrived, so that the
+// frames of a view do not switch between the two ways as the ring arrives. The frames of a field
+// still loading, turned views and colour-managed slides keep the tile pass. Filtering is the compute resolve's
+// (shaders/tile_resolve.comp: each tap from the tile that holds it, clamped into the level, or
+// into the edge tiles' mips) with 8-bit weights, lavapipe's sub-texel precision: the quads'
+// picture, no channel more than two codes off (engine.host_resolve).
+//
+// Render thread only (its helper works inside prepare()).
+#pragma once
+
+#include <condition_variable>
+#include <cstdint>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+#include "core/log.h"
+#include "gpu/tile_atlas.h"
+#include "render/draw_list.h"
+#include "render/frame_pass.h"
+
+namespace iris::render {
+
+// One frame of the host resolve: the HR level's tiles and where the target lies in the level.
+struct HostFrame {
+    const gpu::TileAtlas* atlas = nullptr;
+    TileRange grid;             // the level's tiles the filter may read: the visible range grown by one
+    std::vector<int32_t> slots; // atlas slot of each tile of `grid`, row by row; -1: outside the level, or absent
+    bool ringGaps = false;      // a tile of the ring inside the level is absent
+    float x0 = 0, y0 = 0;       // level position of the target's (0, 0) corner
+    float scale = 1;            // level pixels per target pixel
+    int32_t levelWidth = 0, levelHeight = 0;
+    int64_t tilesX = 0, tilesY = 0; // the level's
+    uint32_t width = 0, height = 0; // the target's
+    bool swap = false;              // the target's red and blue are the atlas's blue and red
+
+    // Per target column: the filter's two taps, as a column of `grid` and a byte offset within
+    // a tile row, and the weight of the second (0..256).
+    struct Column {
+        int32_t tile0, tile1;
+        uint32_t offset0, offset1;
+        uint32_t weight;
+    };
+    // The mips read: mip 0 alone at LOD 0; else floor(LOD) and the next, blended by
+    // `mipWeight` (0..256; 0: the first alone).
+    struct Mip {
+        uint32_t level = 0;
+        std::vector<Column> columns;
+    };
+    Mip mips[2];
+    int mipCount = 1;
+    uint32_t mipWeight = 0;
+    bool shrunk = false; // LOD > 0: positions clamped into the level, taps into its tiles' mips
+};
+
+// Fills `f` for the frame when the host can resolve it (see above) and returns true; false
+// leaves the frame to the tile pass. `list`: the tile pass's draw list for this frame.
+bool planHostFrame(const FrameContext& frame, const DrawList& list, const gpu::TileAtlas& atlas, HostFrame& f);
+
+// Writes target rows [row0, row1) of a planned frame into dst (4 bytes a pixel, `stride` bytes
+// a row, the target's channel order). Reads only `f` and the atlas's mapped texels.
+void resolveRows(const HostFrame& f, uint32_t row0, uint32_t row1, uint8_t* dst, size_t stride);
+
+class HostResolvePass {
+public:
+    HostResolvePass(gpu::Device& device, const gpu::TileAtlas& atlas, const Log& log)
+        : device_(device), atlas_(atlas), log_(log) {}
+    ~HostResolvePass();
+    HostResolvePass(const HostResolvePass&) = delete;
+    HostResolvePass& operator=(const HostResolvePass&) = delete;
+
+    Result init(uint32_t frameSlots);
+    // After the tile pass's prepare: resolves the frame into the slot's buffer and returns
+    // true, or returns false (nothing done) when the frame is not one it serves. Each change
+    // between the two is logged (Debug: "tile resolve: frame N on the host" / "... as quads").
+    Expected<bool> prepare(const FrameContext& frame, const DrawList& list, bool targetTakesCopies);
+    // Outside a render pass: the buffer into the target, which becomes a colour attachment
+    // (loaded by the render pass that follows, for the other passes).
+    void record(VkCommandBuffer cmd, const FrameContext& frame, VkImage target) const;
+
+private:
+    void helperLoop();
+
+    gpu::Device& device_;
+    const gpu::TileAtlas& atlas_;
+    const Log& log_;
+    bool serving_ = false;                // the last frame was resolved here
+    std::vector<vk::MappedBuffer> slots_; // one per frame slot, grown to the target's size
+    HostFrame frame_;                     // reused (its vectors keep their capacity)
+
+    // The helper resolves the lower half of each frame's rows while the render thread does the
+    // upper half.
+    std::thread helper_;
+    std::mutex mutex_;
+    std::condition_variable cv_;
+    uint8_t* jobDst_ = nullptr;
+    size_t jobStride_ = 0;
+    uint32_t jobRow0_ = 0, jobRow1_ = 0;
+    uint64_t posted_ = 0, done_ = 0;
+    bool stopping_ = false;
+};
+
+} // namespace iris::render

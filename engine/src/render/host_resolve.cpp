@@ -181,6 +181,15 @@ bool planHostFrame(const FrameContext& frame, const DrawList& list, const gpu::T
             mip.columns[x] = HostFrame::Column{int32_t(t.t0 / size - f.grid.x0), int32_t(t.t1 / size - f.grid.x0),
                                                uint32_t(t.t0 % size) * 4, uint32_t(t.t1 % size) * 4, t.weight};
         }
+        mip.runs.resize(f.width);
+        for (uint32_t x = f.width; x-- > 0;) {
+            const HostFrame::Column& c = mip.columns[x];
+            const bool oneTile = c.tile0 == c.tile1 && c.offset1 == c.offset0 + 4;
+            const HostFrame::Column* n = x + 1 < f.width ? &mip.columns[x + 1] : nullptr;
+            const bool next = n && oneTile && n->tile0 == c.tile0 && n->tile1 == c.tile0 &&
+                              n->offset0 == c.offset0 + 4 && n->offset1 == n->offset0 + 4 && n->weight == c.weight;
+            mip.runs[x] = next ? mip.runs[x + 1] + 1 : 1;
+        }
     }
     return true;
 }
@@ -211,18 +220,28 @@ void resolveRows(const HostFrame& f, uint32_t row0, uint32_t row1, uint8_t* dst,
             const int32_t slot = f.slots[size_t((ty - f.grid.y0) * gridW + c)];
             rowOf[size_t(c)] = slot >= 0 ? atlas.hostLevel(slot, mip.level) + offset : nullptr;
         }
-        for (size_t x = 0; x < width; ++x, out += 4) {
+        for (size_t x = 0; x < width;) {
             const HostFrame::Column& col = mip.columns[x];
             const uint8_t* a = rowOf[size_t(col.tile0)];
             const uint8_t* b = rowOf[size_t(col.tile1)];
-            if (!a || !b) { // an absent ring tile: the pixel is redone below (fallbackPixel)
-                out[0] = out[1] = out[2] = out[3] = 0;
+            const uint32_t wb = col.weight, wa = 256 - wb;
+            if (const size_t run = mip.runs[x]; run >= 8 && a) {
+                // One tile's consecutive texels: tap b is the texel after tap a.
+                const uint8_t* src = a + col.offset0;
+                for (size_t i = 0; i < run * 4; ++i) out[i] = uint16_t(src[i] * wa + src[i + 4] * wb);
+                out += run * 4;
+                x += run;
                 continue;
             }
-            a += col.offset0;
-            b += col.offset1;
-            const uint32_t wb = col.weight, wa = 256 - wb;
-            for (int ch = 0; ch < 4; ++ch) out[ch] = uint16_t(a[ch] * wa + b[ch] * wb);
+            if (!a || !b) { // an absent ring tile: the pixel is redone below (fallbackPixel)
+                out[0] = out[1] = out[2] = out[3] = 0;
+            } else {
+                a += col.offset0;
+                b += col.offset1;
+                for (int ch = 0; ch < 4; ++ch) out[ch] = uint16_t(a[ch] * wa + b[ch] * wb);
+            }
+            out += 4;
+            ++x;
         }
     };
     // Mip k's row r, filtered into the slot not holding `keep` when it is not held.

@@ -62,6 +62,10 @@ struct HostFrame {
     struct Mip {
         uint32_t level = 0;
         std::vector<Column> columns;
+        // From each column, how many columns in a row read one tile's consecutive texels with
+        // the same weight (the view at the mip's own scale, a pixel a texel): filtered as one
+        // run of bytes, which the compiler vectorises.
+        std::vector<uint32_t> runs;
     };
     Mip mips[2];
     int mipCount = 1;

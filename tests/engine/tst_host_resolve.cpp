@@ -10,7 +10,8 @@
 //     scales (enlarged, off the grid, shrunk through one mip and between two), near the
 //     slide's edge, and at a coarser level's scale;
 //   * the host resolved exactly the frames it should (its Debug log names each change): those
-//     above, and not a view crossing the slide's edge, a turned or mirrored view, or an exact one;
+//     above, views across the slide's edges (where a coarser level, then the background, shows),
+//     and not a turned or mirrored view, or an exact one;
 //   * with no perimeter buffered, the tiles around a view are absent: the pixels whose filter
 //     reaches them come from their own tile, as the quads draw them (the host's fallback).
 //
@@ -138,7 +139,11 @@ private slots:
             {"level 1 at its own scale, half a pixel off",
              {std::round(w / 2 / ds1) * ds1 + ds1 / 2, std::round(h / 3 / ds1) * ds1, ds1},
              true},
-            {"across the slide's edge: quads", viewWithOrigin(-40.5, -20.25, 0.8, kW, kH), false},
+            {"across the slide's top-left edge: the background", viewWithOrigin(-40.5, -20.25, 0.8, kW, kH), true},
+            // Past the right edge of level 0 the base level, whose tiles reach further, shows a
+            // strip (the sample's 6000 pixels are 187.5 of its base's; it holds 188).
+            {"past the bottom-right edge: the base level, then the background",
+             viewWithOrigin(w - kW * 0.5 * 0.5 + 10.3, h - kH * 0.5 * 0.5 + 5.7, 0.5, kW, kH), true},
             {"turned 30: quads", turnedViewAt(900.3, 600.7, 0.8, 30, false, false, kW, kH), false},
             {"mirrored: quads", turnedViewAt(900.3, 600.7, 0.8, 0, true, false, kW, kH), false},
             {"shrunk 1.37 (between mips 0 and 1)", {w * 0.43 + 0.37, h * 0.51 + 0.61, 1.37}, true},

@@ -48,6 +48,7 @@ struct Options {
     std::string slide;
     std::vector<std::pair<uint32_t, uint32_t>> sizes;
     int moves = 30;
+    int idleMoves = -1; // ≥ 0: each move waits for the field to settle, then this many ms
     std::vector<double> mags;
     std::string source = "auto";
     std::string baseline; // the slide the CPU baselines read (default: the benchmarked slide)
@@ -272,6 +273,10 @@ SizeResult runSize(const Options& o, uint32_t W, uint32_t H, bool colorManaged) 
         e.setView(walk[0]);
         (void)e.waitForFrame(std::chrono::seconds(60));
         for (size_t k = 1; k < walk.size(); ++k) {
+            if (o.idleMoves >= 0) { // a move from a settled, idle view, as a reader's moves come
+                (void)e.waitForSettled(std::chrono::seconds(30));
+                std::this_thread::sleep_for(std::chrono::milliseconds(o.idleMoves));
+            }
             const size_t before = e.metrics().fields.size();
             e.setView(walk[k]);
             const auto t0 = Clock::now();
@@ -435,6 +440,7 @@ Json resultJson(const Options& o, const SizeResult& r) {
     j["ratios"] = {{"hr_tefov_vs_openslide", jsonNumber(hr.median / osr.median)},
                    {"hr_tefov_vs_decode_floor", jsonNumber(hr.median / flo.median)}};
     j["moves"] = r.movesDone;
+    j["idle_moves_ms"] = o.idleMoves; // -1: each move as soon as the field was complete
     j["mip_schedule"] = r.mipSchedule;
     j["tile_upload"] = r.tileUpload;
     // What IRIS_* asked for (an A/B run's JSON says which side it is).
@@ -697,6 +703,12 @@ int main(int argc, char** argv) {
     app.add_option("--moves", o.moves, "Moves to a new field at each magnification")
         ->option_text("N")
         ->check(iris::tools::wholeNumber(1, std::numeric_limits<int>::max()));
+    app.add_option("--idle-moves", o.idleMoves,
+                   "Each move MS ms after the field before settled, as a reader's\n"
+                   "moves come (default: as soon as it is complete)")
+        ->option_text("MS")
+        ->default_str("")
+        ->check(iris::tools::wholeNumber(0, 60000));
     app.add_option("--magnifications", mags,
                    "Comma-separated magnifications (from the objective\n"
                    "power, else from mpp; without either, read as\n"

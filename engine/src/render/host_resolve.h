@@ -24,6 +24,7 @@
 // Render thread only (its helper works inside prepare()).
 #pragma once
 
+#include <array>
 #include <condition_variable>
 #include <cstdint>
 #include <mutex>
@@ -37,18 +38,15 @@
 
 namespace iris::render {
 
-// One frame of the host resolve: the HR level's tiles and where the target lies in the level.
-struct HostFrame {
-    const gpu::TileAtlas* atlas = nullptr;
-    TileRange grid;             // the level's tiles the filter may read: the visible range grown by one
-    std::vector<int32_t> slots; // atlas slot of each tile of `grid`, row by row; -1: outside the level, or absent
-    bool ringGaps = false;      // a tile of the ring inside the level is absent
+// One level of a frame of the host resolve: its tiles and where the target lies in it.
+struct HostLayer {
+    TileRange grid;             // the level's tiles the filter may read: the drawn range grown by one
+    std::vector<int32_t> slots; // atlas slot of each tile of `grid`, row by row; -1: absent or outside the level
+    bool gaps = false;          // a tile of `grid` inside the level is absent
     float x0 = 0, y0 = 0;       // level position of the target's (0, 0) corner
     float scale = 1;            // level pixels per target pixel
     int32_t levelWidth = 0, levelHeight = 0;
     int64_t tilesX = 0, tilesY = 0; // the level's
-    uint32_t width = 0, height = 0; // the target's
-    bool swap = false;              // the target's red and blue are the atlas's blue and red
 
     // Per target column: the filter's two taps, as a column of `grid` and a byte offset within
     // a tile row, and the weight of the second (0..256).
@@ -66,16 +64,35 @@ struct HostFrame {
         // the same weight (the view at the mip's own scale, a pixel a texel): filtered as one
         // run of bytes, which the compiler vectorises.
         std::vector<uint32_t> runs;
+        // Per column: a tap lies outside the pixel's own tile (which the filter may then find
+        // absent: see gaps).
+        std::vector<uint8_t> crosses;
     };
     Mip mips[2];
     int mipCount = 1;
     uint32_t mipWeight = 0;
     bool shrunk = false; // LOD > 0: positions clamped into the level, taps into its tiles' mips
+    // Per target column: the column of `grid` holding the pixel's own tile (its centre's), or
+    // -1 where the centre lies outside the level.
+    std::vector<int32_t> own;
+};
+
+// One frame of the host resolve: its layers finest first (HR, LR, base); each pixel shows the
+// finest whose own tile there is resident, else the background.
+struct HostFrame {
+    const gpu::TileAtlas* atlas = nullptr;
+    HostLayer layers[3];
+    int layerCount = 0;
+    uint32_t width = 0, height = 0; // the target's
+    uint8_t background[4] = {};     // opaque, in the target's channel order
+    bool swap = false;              // the target's red and blue are the atlas's blue and red
 };
 
 // Fills `f` for the frame when the host can resolve it (see above) and returns true; false
 // leaves the frame to the tile pass. `list`: the tile pass's draw list for this frame.
-bool planHostFrame(const FrameContext& frame, const DrawList& list, const gpu::TileAtlas& atlas, HostFrame& f);
+// `background`: the clear colour (unorm, RGBA).
+bool planHostFrame(const FrameContext& frame, const DrawList& list, const gpu::TileAtlas& atlas,
+                   const std::array<float, 4>& background, HostFrame& f);
 
 // Writes target rows [row0, row1) of a planned frame into dst (4 bytes a pixel, `stride` bytes
 // a row, the target's channel order). Reads only `f` and the atlas's mapped texels.
@@ -93,7 +110,8 @@ public:
     // After the tile pass's prepare: resolves the frame into the slot's buffer and returns
     // true, or returns false (nothing done) when the frame is not one it serves. Each change
     // between the two is logged (Debug: "tile resolve: frame N on the host" / "... as quads").
-    Expected<bool> prepare(const FrameContext& frame, const DrawList& list, bool targetTakesCopies);
+    Expected<bool> prepare(const FrameContext& frame, const DrawList& list, const std::array<float, 4>& background,
+                           bool targetTakesCopies);
     // Outside a render pass: the buffer into the target, which becomes a colour attachment
     // (loaded by the render pass that follows, for the other passes).
     void record(VkCommandBuffer cmd, const FrameContext& frame, VkImage target) const;

@@ -607,17 +607,21 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
                                       clearUnorm(snap.background[2]), 1.0f};
         if (Result r = resolvePass_->prepare(frame, passes_->tile.drawList(), bg, target.view); !r.ok()) return r;
     }
-    // A frame the host resolves: the tile pass drew its list for nothing but the metrics.
+    if (passes_->tile.progress().lrComplete) lrWholeViewSerial_ = snap.viewSerial;
+    if (const uint32_t n = passes_->tile.progress().newlyShown) shared_.tileStages.stamp(TileStage::Shown, n);
+    metrics_.frameDrawn(snap, passes_->tile.progress());
+    // A frame the host resolves (render/host_resolve.h): the tile pass's draw list, which the
+    // metrics above read (tiles drawable as this frame saw them, as for the quads, whose
+    // drawing follows on the GPU), resolved on the host instead of drawn.
     bool hostResolved = false;
     if (hostResolve_ && !resolve) {
-        Expected<bool> h = hostResolve_->prepare(frame, passes_->tile.drawList(), target.transferDst);
+        const std::array<float, 4> bg{clearUnorm(snap.background[0]), clearUnorm(snap.background[1]),
+                                      clearUnorm(snap.background[2]), 1.0f};
+        Expected<bool> h = hostResolve_->prepare(frame, passes_->tile.drawList(), bg, target.transferDst);
         if (!h) log_.warn("tile resolve on the host: " + h.error().message() + "; drawing quads"); // (no buffer)
         hostResolved = h && *h;
         if (hostResolved) passes_->tile.setDrawLevels(false);
     }
-    if (passes_->tile.progress().lrComplete) lrWholeViewSerial_ = snap.viewSerial;
-    if (const uint32_t n = passes_->tile.progress().newlyShown) shared_.tileStages.stamp(TileStage::Shown, n);
-    metrics_.frameDrawn(snap, passes_->tile.progress());
 
     // Recording: uploads, then one render pass with every pass's draws in order.
     VkCommandBuffer cmd = f.cmd;

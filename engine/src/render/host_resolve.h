@@ -1,6 +1,6 @@
 // Settled filtered frames resolved on the host, for CPU devices (docs/ARCHITECTURE.md, "The
 // resolve on the host"). On a CPU device every filtered pixel of the tile pass goes through
-// llvmpipe's general fragment path: four gathers a pixel, 11-15 ms for a 1080p frame on two
+// llvmpipe's general fragment path: four gathers a pixel, 12-16 ms for a 1080p frame on two
 // cores, measured (BENCHMARKS.md), whatever the shader does around them. Where the atlas is
 // written from the host (gpu/tile_atlas.h, hostWritten) its texels are in mapped memory, and a
 // view of one level is a separable resampling: at LOD 0 (enlarged, or 1:1 off the pixel grid)
@@ -10,16 +10,17 @@
 // and one helper, into a host-visible buffer that the frame copies into its target before the
 // other passes (annotations, layers, HUD) draw over it.
 //
-// It serves a frame only when that is all the frame is: the HR level covers every target pixel,
-// every tile of its visible range is resident (with its mips, shrunk) and opaque, and so is
-// every tile of the ring around it that is resident (the filter's neighbours; one that is not
-// is handled as the quads handle it), nothing fails, the view is unturned and unmirrored, and
-// there is no colour step: a complete frame, whether or not the ring has arrived, so that the
-// frames of a view do not switch between the two ways as the ring arrives. The frames of a field
-// still loading, turned views and colour-managed slides keep the tile pass. Filtering is the compute resolve's
-// (shaders/tile_resolve.comp: each tap from the tile that holds it, clamped into the level, or
-// into the edge tiles' mips) with 8-bit weights, lavapipe's sub-texel precision: the quads'
-// picture, no channel more than two codes off (engine.host_resolve).
+// It serves complete frames (every visible HR tile drawn; while a field loads, the cores are the
+// loaders'), whatever levels they show: per pixel the finest of HR, LR and base whose tile is
+// resident there (a coarser level past the HR level's edge, then the background), every
+// resident tile it reads opaque, nothing failing, the view unturned and unmirrored, no colour
+// step, the HR level not drawn exactly (the exact copy's). Where a tap's tile is absent (the
+// ring around the field still loading) the pixel comes from its own tile, as the quads draw it,
+// so a view's complete frames do not switch between the two ways as the ring arrives.
+// Filtering is the compute resolve's (shaders/tile_resolve.comp: each tap from the tile that
+// holds it, clamped into the level, or into the edge tiles' mips) with 8-bit weights,
+// lavapipe's sub-texel precision: the quads' picture, no channel more than two codes off
+// (engine.host_resolve).
 //
 // Render thread only (its helper works inside prepare()).
 #pragma once

@@ -82,14 +82,7 @@ void ColorLutTexture::recordUpload(VkCommandBuffer cmd, uint32_t slot) {
                          VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
                          VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, vk::colorRange(0, 1, 0, 1));
     vk::pipelineBarrier(cmd, &toCopy, 1);
-    const VkBufferImageCopy region{
-        .bufferOffset = 0,
-        .bufferRowLength = 0,
-        .bufferImageHeight = 0,
-        .imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1},
-        .imageOffset = {0, 0, 0},
-        .imageExtent = {kSize, kSize, kSize},
-    };
+    const VkBufferImageCopy region = vk::wholeImageCopy({kSize, kSize, kSize});
     vkCmdCopyBufferToImage(cmd, staging_[slot].buffer, image_.get(), VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &region);
     const VkImageMemoryBarrier2 toRead =
         vk::imageBarrier(image_.get(), VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,

@@ -32,6 +32,16 @@ inline VkImageSubresourceRange colorRange(uint32_t baseMip = 0, uint32_t mipCoun
     return {VK_IMAGE_ASPECT_COLOR_BIT, baseMip, mipCount, baseLayer, layerCount};
 }
 
+// A copy between a buffer of tightly packed texels and the whole of mip 0, layer 0 of an image.
+inline VkBufferImageCopy wholeImageCopy(VkExtent3D extent) {
+    return {.bufferOffset = 0,
+            .bufferRowLength = 0,
+            .bufferImageHeight = 0,
+            .imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1},
+            .imageOffset = {0, 0, 0},
+            .imageExtent = extent};
+}
+
 inline VkImageMemoryBarrier2 imageBarrier(VkImage image, VkPipelineStageFlags2 srcStage, VkAccessFlags2 srcAccess,
                                           VkPipelineStageFlags2 dstStage, VkAccessFlags2 dstAccess,
                                           VkImageLayout oldLayout, VkImageLayout newLayout,

@@ -7,12 +7,13 @@
 
 #include "core/thread_name.h"
 #include "gpu/vk_util.h"
+#include "slide/slide_source.h"
 
 namespace iris::render {
 
 namespace {
 
-constexpr int64_t kTile = 256;
+constexpr int64_t kTile = kTileSize; // the engine's tile grid (slide/slide_source.h)
 
 // The weight of a filter's second tap for fraction f in [0, 1): f in 1/256ths, rounded.
 inline uint32_t weightOf(float f) { return std::min(uint32_t(f * 256.0f + 0.5f), 256u); }
@@ -431,14 +432,7 @@ void HostResolvePass::record(VkCommandBuffer cmd, const FrameContext& frame, VkI
                          VK_ACCESS_2_NONE, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
                          VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, vk::colorRange(0, 1, 0, 1));
     vk::pipelineBarrier(cmd, &toCopy, 1);
-    const VkBufferImageCopy region{
-        .bufferOffset = 0,
-        .bufferRowLength = 0,
-        .bufferImageHeight = 0,
-        .imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1},
-        .imageOffset = {0, 0, 0},
-        .imageExtent = {frame.extent.width, frame.extent.height, 1},
-    };
+    const VkBufferImageCopy region = vk::wholeImageCopy({frame.extent.width, frame.extent.height, 1});
     vkCmdCopyBufferToImage(cmd, slots_[frame.slot].buffer, target, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &region);
     const VkImageMemoryBarrier2 toColor = vk::imageBarrier(
         target, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,

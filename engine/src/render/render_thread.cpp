@@ -599,12 +599,13 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
         shared_.setError(r);
         log_.error(std::string(pass.name()) + ": " + r.message());
     };
+    // The clear colour: the resolves' background and the render pass's clear value.
+    const std::array<float, 4> bg{clearUnorm(snap.background[0]), clearUnorm(snap.background[1]),
+                                  clearUnorm(snap.background[2]), 1.0f};
     passes_->tile.setDrawLevels(!resolve);
     for (render::FramePass* pass : passes_->list)
         if (Result r = pass->prepare(frame); !r.ok()) passFailed(*pass, r); // the frame goes on without it
     if (resolve) {
-        const std::array<float, 4> bg{clearUnorm(snap.background[0]), clearUnorm(snap.background[1]),
-                                      clearUnorm(snap.background[2]), 1.0f};
         if (Result r = resolvePass_->prepare(frame, passes_->tile.drawList(), bg, target.view); !r.ok()) return r;
     }
     if (passes_->tile.progress().lrComplete) lrWholeViewSerial_ = snap.viewSerial;
@@ -615,8 +616,6 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
     // drawing follows on the GPU), resolved on the host instead of drawn.
     bool hostResolved = false;
     if (hostResolve_ && !resolve) {
-        const std::array<float, 4> bg{clearUnorm(snap.background[0]), clearUnorm(snap.background[1]),
-                                      clearUnorm(snap.background[2]), 1.0f};
         Expected<bool> h = hostResolve_->prepare(frame, passes_->tile.drawList(), bg, target.transferDst);
         if (!h) log_.warn("tile resolve on the host: " + h.error().message() + "; drawing quads"); // (no buffer)
         hostResolved = h && *h;
@@ -667,8 +666,7 @@ Result RenderThread::renderFrame(const Snapshot& snap) {
         .resolveImageLayout = VK_IMAGE_LAYOUT_UNDEFINED,
         .loadOp = resolve || hostResolved ? VK_ATTACHMENT_LOAD_OP_LOAD : VK_ATTACHMENT_LOAD_OP_CLEAR,
         .storeOp = VK_ATTACHMENT_STORE_OP_STORE,
-        .clearValue = {.color = {{clearUnorm(snap.background[0]), clearUnorm(snap.background[1]),
-                                  clearUnorm(snap.background[2]), 1.0f}}},
+        .clearValue = {.color = {{bg[0], bg[1], bg[2], bg[3]}}},
     };
     const VkRenderingInfo ri{
         .sType = VK_STRUCTURE_TYPE_RENDERING_INFO,
@@ -740,14 +738,7 @@ void RenderThread::recordTargetFinish(VkCommandBuffer cmd, const TargetImage& ta
             VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_READ_BIT, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
             VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, vk::colorRange(0, 1, 0, 1));
         vk::pipelineBarrier(cmd, &toCopy, 1);
-        const VkBufferImageCopy region{
-            .bufferOffset = 0,
-            .bufferRowLength = 0,
-            .bufferImageHeight = 0,
-            .imageSubresource = {VK_IMAGE_ASPECT_COLOR_BIT, 0, 0, 1},
-            .imageOffset = {0, 0, 0},
-            .imageExtent = {target.extent.width, target.extent.height, 1},
-        };
+        const VkBufferImageCopy region = vk::wholeImageCopy({target.extent.width, target.extent.height, 1});
         vkCmdCopyImageToBuffer(cmd, target.image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, offscreen_->readback().buffer, 1,
                                &region);
         const VkBufferMemoryBarrier2 toHost{

@@ -13,10 +13,58 @@
 #include <vulkan/vulkan.h>
 
 #include <dlfcn.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <thread>
 
 #include <iris/environment.h>
 
 namespace iristest {
+
+// ---- the hang watchdog ----------------------------------------------------------------
+
+namespace {
+
+// CTest kills a suite that runs past its TIMEOUT and says nothing of where it stood. Armed by
+// IRIS_TEST_WATCHDOG_S (the suites' CMake sets it below their TIMEOUT), this prints every
+// thread's stack (through gdb, where it is installed: a debugging aid, not a dependency) and
+// ends the process, so that a hang fails with its cause in the log.
+[[noreturn]] void hangReport(int seconds) {
+    std::fprintf(stderr, "\nwatchdog: still running after %d s (IRIS_TEST_WATCHDOG_S); every thread's stack:\n",
+                 seconds);
+    std::fflush(stderr);
+    const std::string pid = std::to_string(::getpid());
+    const char* argv[] = {"gdb", "-nx", "-batch", "-p", pid.c_str(), "-ex", "thread apply all bt", nullptr};
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_adddup2(&actions, STDERR_FILENO, STDOUT_FILENO); // one stream in the log
+    pid_t child = -1;
+    if (posix_spawnp(&child, "gdb", &actions, nullptr, const_cast<char* const*>(argv), environ) == 0) {
+        int status = 0;
+        ::waitpid(child, &status, 0);
+    } else {
+        std::fprintf(stderr, "watchdog: gdb is not installed; no stacks\n");
+    }
+    posix_spawn_file_actions_destroy(&actions);
+    std::fprintf(stderr, "watchdog: ending the suite as hung\n");
+    std::fflush(stderr);
+    std::_Exit(124);
+}
+
+const bool watchdogArmed = [] {
+    const char* v = std::getenv("IRIS_TEST_WATCHDOG_S");
+    const int seconds = v ? std::atoi(v) : 0;
+    if (seconds <= 0) return false;
+    std::thread([seconds] {
+        std::this_thread::sleep_for(std::chrono::seconds(seconds));
+        hangReport(seconds);
+    }).detach();
+    return true;
+}();
+
+} // namespace
 
 // ---- locations ------------------------------------------------------------------------
 

@@ -4,6 +4,11 @@
 #include <cmath>
 #include <cstring>
 #include <string>
+#include <type_traits>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "core/thread_name.h"
 #include "gpu/vk_util.h"
@@ -135,14 +140,39 @@ bool planLayer(const FrameContext& frame, const LevelDraw& d, uint32_t width, Ho
             mip.columns[x] = HostLayer::Column{int32_t(t.t0 / size - l.grid.x0), int32_t(t.t1 / size - l.grid.x0),
                                                uint32_t(t.t0 % size) * 4, uint32_t(t.t1 % size) * 4, t.weight};
         }
-        mip.runs.resize(width);
-        for (uint32_t x = width; x-- > 0;) {
+        // The line: the texels the columns read, each column's taps and weights in it.
+        mip.lo = INT64_MAX;
+        mip.hi = INT64_MIN;
+        for (uint32_t x = 0; x < width; ++x) {
             const HostLayer::Column& c = mip.columns[x];
-            const bool oneTile = c.tile0 == c.tile1 && c.offset1 == c.offset0 + 4;
-            const HostLayer::Column* n = x + 1 < width ? &mip.columns[x + 1] : nullptr;
-            const bool next = n && oneTile && n->tile0 == c.tile0 && n->tile1 == c.tile0 &&
-                              n->offset0 == c.offset0 + 4 && n->offset1 == n->offset0 + 4 && n->weight == c.weight;
-            mip.runs[x] = next ? mip.runs[x + 1] + 1 : 1;
+            mip.lo = std::min(mip.lo, (l.grid.x0 + c.tile0) * size + c.offset0 / 4);
+            mip.hi = std::max(mip.hi, (l.grid.x0 + c.tile1) * size + c.offset1 / 4);
+        }
+        mip.at.resize(width);
+        mip.weights.resize(width);
+        for (uint32_t x = 0; x < width; ++x) {
+            const HostLayer::Column& c = mip.columns[x];
+            const int64_t t0 = (l.grid.x0 + c.tile0) * size + c.offset0 / 4;
+            const int64_t t1 = (l.grid.x0 + c.tile1) * size + c.offset1 / 4;
+            mip.at[x] = uint32_t(t0 - mip.lo) * 4;
+            const uint16_t wb = t1 == t0 ? 0 : uint16_t(c.weight), wa = uint16_t(256 - wb);
+            mip.weights[x] = {wa, wa, wa, wa, wb, wb, wb, wb};
+        }
+        // Runs of at least 8 columns a texel apart with one weight; the rest a pixel at a time.
+        std::vector<uint32_t> runs(width);
+        for (uint32_t x = width; x-- > 0;) {
+            const bool next = x + 1 < width && mip.at[x + 1] == mip.at[x] + 4 && mip.weights[x + 1] == mip.weights[x];
+            runs[x] = next ? runs[x + 1] + 1 : 1;
+        }
+        mip.spans.clear();
+        for (uint32_t x = 0; x < width;) {
+            if (runs[x] >= 8) {
+                mip.spans.push_back({x, x + runs[x], true});
+                x += runs[x];
+            } else {
+                if (mip.spans.empty() || mip.spans.back().run) mip.spans.push_back({x, x, false});
+                mip.spans.back().x1 = ++x;
+            }
         }
     }
     // Each column's own tile: where the pixel's centre lies, inside the level.
@@ -151,6 +181,7 @@ bool planLayer(const FrameContext& frame, const LevelDraw& d, uint32_t width, Ho
         const float q = l.x0 + (float(x) + 0.5f) * l.scale;
         l.own[x] = q >= 0.0f && q < float(l.levelWidth) ? int32_t(int64_t(q) / kTile - l.grid.x0) : -1;
     }
+    l.ownAll = std::all_of(l.own.begin(), l.own.end(), [](int32_t c) { return c >= 0; });
     for (int k = 0; k < l.mipCount; ++k) {
         HostLayer::Mip& mip = l.mips[k];
         mip.crosses.resize(width);
@@ -195,57 +226,105 @@ bool planHostFrame(const FrameContext& frame, const DrawList& list, const gpu::T
     return true;
 }
 
+namespace {
+
+// (a × b) >> 16: the high half of a 16-bit product, which the compiler vectorises (pmulhuw).
+inline uint16_t mulHigh(uint16_t a, uint16_t b) { return uint16_t((uint32_t(a) * b) >> 16); }
+
+// Horizontal filter of `n` columns a pixel at a time: out = texel(at) × wa + texel(at + 1) × wb
+// per channel (texel × 256). `line` holds a texel past the last one any column reads.
+void filterColumns(const uint8_t* line, const uint32_t* at, const std::array<uint16_t, 8>* w, size_t n,
+                   uint16_t* out) {
+    size_t i = 0;
+#if defined(__SSE2__)
+    // Two columns a step: each one's two taps are 8 consecutive bytes of the line, widened to
+    // 16 bits and multiplied by its weights (no product exceeds 255 × 256), then the two taps'
+    // halves added.
+    const __m128i zero = _mm_setzero_si128();
+    for (; i + 2 <= n; i += 2) {
+        __m128i a = _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(line + at[i])), zero);
+        __m128i b = _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(line + at[i + 1])), zero);
+        a = _mm_mullo_epi16(a, _mm_loadu_si128(reinterpret_cast<const __m128i*>(w[i].data())));
+        b = _mm_mullo_epi16(b, _mm_loadu_si128(reinterpret_cast<const __m128i*>(w[i + 1].data())));
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(out + 4 * i),
+                         _mm_add_epi16(_mm_unpacklo_epi64(a, b), _mm_unpackhi_epi64(a, b)));
+    }
+#endif
+    for (; i < n; ++i) {
+        const uint8_t* t = line + at[i];
+        for (int ch = 0; ch < 4; ++ch) out[4 * i + ch] = uint16_t(t[ch] * w[i][0] + t[ch + 4] * w[i][4]);
+    }
+}
+
+// Two rows of texel × 256 values blended, weight wb (0..256) on the second, into `out` as
+// texel × 256 (16 bits) or as bytes, rounded. Each weight is the same along a row: the ends
+// (one row alone, every view on a level's pixel grid along y) are taken exactly.
+template <typename Out>
+void blendRows(const uint16_t* first, const uint16_t* second, uint32_t wb, size_t n, Out* out) {
+    constexpr bool bytes = std::is_same_v<Out, uint8_t>;
+    const auto put = [](uint32_t v) { return bytes ? Out((v + 128) >> 8) : Out(v); };
+    if (wb == 0) {
+        for (size_t i = 0; i < n; ++i) out[i] = put(first[i]);
+    } else if (wb >= 256) {
+        for (size_t i = 0; i < n; ++i) out[i] = put(second[i]);
+    } else {
+        const uint16_t a = uint16_t((256 - wb) << 8), b = uint16_t(wb << 8);
+        for (size_t i = 0; i < n; ++i) out[i] = put(uint16_t(mulHigh(first[i], a) + mulHigh(second[i], b)));
+    }
+}
+
+} // namespace
+
 void resolveRows(const HostFrame& f, uint32_t row0, uint32_t row1, uint8_t* dst, size_t stride) {
     const gpu::TileAtlas& atlas = *f.atlas;
     const size_t width = f.width, channels = width * 4;
     // Per layer and mip, two of its rows filtered horizontally (4 channels × 16 bits a pixel:
-    // texel × 256), and the vertical blend of a mip's two rows, for the blend of two mips.
+    // texel × 256).
     struct MipRows {
         std::vector<uint16_t> held[2];
         int64_t heldRow[2] = {-1, -1};
-        std::vector<uint16_t> blended;
     };
     MipRows rows[3][2];
+    size_t lineBytes = 0;
     for (int li = 0; li < f.layerCount; ++li)
         for (int k = 0; k < f.layers[li].mipCount; ++k) {
             rows[li][k].held[0].resize(channels);
             rows[li][k].held[1].resize(channels);
-            if (f.layers[li].mipCount > 1) rows[li][k].blended.resize(channels);
+            const HostLayer::Mip& mip = f.layers[li].mips[k];
+            lineBytes = std::max(lineBytes, size_t(mip.hi - mip.lo + 2) * 4);
         }
-    std::vector<const uint8_t*> rowOf;
-    std::vector<int8_t> chosen(width); // per pixel of the row: the layer shown, -1: the background
+    std::vector<uint8_t> line(lineBytes + 16); // a level row's texels [lo, hi + 1]
+    std::vector<uint8_t> blended(channels);    // a layer's row where it shows in part
+    std::vector<uint16_t> mipRow[2];           // shrunk between two mips: each one's blend
+    for (std::vector<uint16_t>& r : mipRow) r.resize(channels);
+    std::vector<int8_t> chosen(width);         // per pixel of the row: the layer shown, -1: the background
+    // Level row r of a layer's mip, filtered horizontally into `out`.
     const auto horizontal = [&](const HostLayer& l, const HostLayer::Mip& mip, int64_t r, uint16_t* out) {
-        const int64_t gridW = l.grid.x1 - l.grid.x0 + 1;
         const int64_t size = kTile >> mip.level;
         const int64_t ty = r / size;
         const size_t offset = size_t(r - ty * size) * atlas.hostRowPitch(mip.level);
-        rowOf.assign(size_t(gridW), nullptr);
-        for (int64_t c = 0; c < gridW; ++c) {
-            const int32_t slot = slotAt(l, l.grid.x0 + c, ty);
-            if (slot >= 0) rowOf[size_t(c)] = atlas.hostLevel(slot, mip.level) + offset;
+        // The row's texels [lo, hi] gathered from their tiles; zero where a tile is absent
+        // (the pixels whose filter reaches it are redone by fallbackPixel where they show
+        // this layer), and past hi (read with weight 0).
+        for (int64_t tx = mip.lo / size; tx <= mip.hi / size; ++tx) {
+            const int64_t a = std::max(mip.lo, tx * size), b = std::min(mip.hi, tx * size + size - 1);
+            uint8_t* to = line.data() + size_t(a - mip.lo) * 4;
+            if (const int32_t slot = slotAt(l, tx, ty); slot >= 0)
+                std::memcpy(to, atlas.hostLevel(slot, mip.level) + offset + size_t(a - tx * size) * 4,
+                            size_t(b - a + 1) * 4);
+            else
+                std::memset(to, 0, size_t(b - a + 1) * 4);
         }
-        for (size_t x = 0; x < width;) {
-            const HostLayer::Column& col = mip.columns[x];
-            const uint8_t* a = rowOf[size_t(col.tile0)];
-            const uint8_t* b = rowOf[size_t(col.tile1)];
-            const uint32_t wb = col.weight, wa = 256 - wb;
-            if (const size_t run = mip.runs[x]; run >= 8 && a) {
-                // One tile's consecutive texels: tap b is the texel after tap a.
-                const uint8_t* src = a + col.offset0;
-                for (size_t i = 0; i < run * 4; ++i) out[i] = uint16_t(src[i] * wa + src[i + 4] * wb);
-                out += run * 4;
-                x += run;
-                continue;
-            }
-            if (!a || !b) { // an absent tile: the pixel is redone by fallbackPixel if it shows this layer
-                out[0] = out[1] = out[2] = out[3] = 0;
+        std::memset(line.data() + size_t(mip.hi - mip.lo + 1) * 4, 0, 4);
+        for (const HostLayer::Mip::Span& s : mip.spans) {
+            uint16_t* o = out + size_t(s.x0) * 4;
+            if (s.run) { // one weight, consecutive texels: tap b is the texel after tap a
+                const uint8_t* src = line.data() + mip.at[s.x0];
+                const uint32_t wa = mip.weights[s.x0][0], wb = mip.weights[s.x0][4];
+                for (size_t i = 0; i < size_t(s.x1 - s.x0) * 4; ++i) o[i] = uint16_t(src[i] * wa + src[i + 4] * wb);
             } else {
-                a += col.offset0;
-                b += col.offset1;
-                for (int ch = 0; ch < 4; ++ch) out[ch] = uint16_t(a[ch] * wa + b[ch] * wb);
+                filterColumns(line.data(), mip.at.data() + s.x0, mip.weights.data() + s.x0, s.x1 - s.x0, o);
             }
-            out += 4;
-            ++x;
         }
     };
     // Layer li's mip k row r, filtered into the slot not holding `keep` when it is not held.
@@ -258,30 +337,49 @@ void resolveRows(const HostFrame& f, uint32_t row0, uint32_t row1, uint8_t* dst,
         m.heldRow[i] = r;
         return m.held[i].data();
     };
+    // The row of the layer's tiles holding target row y's centre, or -1 (outside the level or the grid).
+    const auto tileRowOf = [](const HostLayer& l, uint32_t y) -> int64_t {
+        const float qy = l.y0 + (float(y) + 0.5f) * l.scale;
+        if (!(qy >= 0.0f && qy < float(l.levelHeight))) return -1;
+        const int64_t ty = int64_t(qy) / kTile;
+        return ty < l.grid.y0 || ty > l.grid.y1 ? -1 : ty;
+    };
     for (uint32_t y = row0; y < row1; ++y) {
         uint8_t* out = dst + size_t(y - row0) * stride;
         // Which layer each pixel shows: the finest whose own tile there is resident.
-        std::fill(chosen.begin(), chosen.end(), int8_t(-1));
         bool any[3] = {};
         size_t shown[3] = {};
-        for (int li = f.layerCount - 1; li >= 0; --li) {
-            const HostLayer& l = f.layers[li];
-            const float qy = l.y0 + (float(y) + 0.5f) * l.scale;
-            if (!(qy >= 0.0f && qy < float(l.levelHeight))) continue;
-            const int64_t ty = int64_t(qy) / kTile;
-            if (ty < l.grid.y0 || ty > l.grid.y1) continue;
-            const int32_t* slots = l.slots.data() + size_t((ty - l.grid.y0) * (l.grid.x1 - l.grid.x0 + 1));
-            for (size_t x = 0; x < width; ++x)
-                if (const int32_t c = l.own[x]; c >= 0 && slots[c] >= 0) {
-                    chosen[x] = int8_t(li); // finer layers, later in this loop, take over
-                    any[li] = true;
-                }
+        // Most rows of a settled view: the finest layer's tiles along the row all resident.
+        bool rowWhole = false;
+        if (const HostLayer& l = f.layers[0]; f.layerCount > 0 && l.ownAll) {
+            if (const int64_t ty = tileRowOf(l, y); ty >= 0) {
+                const int32_t* slots = l.slots.data() + size_t((ty - l.grid.y0) * (l.grid.x1 - l.grid.x0 + 1));
+                rowWhole = std::all_of(slots + l.own.front(), slots + l.own.back() + 1, [](int32_t s) { return s >= 0; });
+            }
         }
-        for (size_t x = 0; x < width; ++x) {
-            if (chosen[x] < 0)
-                std::memcpy(out + 4 * x, f.background, 4);
-            else
-                ++shown[size_t(chosen[x])];
+        if (rowWhole) {
+            std::fill(chosen.begin(), chosen.end(), int8_t(0));
+            any[0] = true;
+            shown[0] = width;
+        } else {
+            std::fill(chosen.begin(), chosen.end(), int8_t(-1));
+            for (int li = f.layerCount - 1; li >= 0; --li) {
+                const HostLayer& l = f.layers[li];
+                const int64_t ty = tileRowOf(l, y);
+                if (ty < 0) continue;
+                const int32_t* slots = l.slots.data() + size_t((ty - l.grid.y0) * (l.grid.x1 - l.grid.x0 + 1));
+                for (size_t x = 0; x < width; ++x)
+                    if (const int32_t c = l.own[x]; c >= 0 && slots[c] >= 0) {
+                        chosen[x] = int8_t(li); // finer layers, later in this loop, take over
+                        any[li] = true;
+                    }
+            }
+            for (size_t x = 0; x < width; ++x) {
+                if (chosen[x] < 0)
+                    std::memcpy(out + 4 * x, f.background, 4);
+                else
+                    ++shown[size_t(chosen[x])];
+            }
         }
         for (int li = f.layerCount - 1; li >= 0; --li) {
             if (!any[li]) continue;
@@ -289,39 +387,29 @@ void resolveRows(const HostFrame& f, uint32_t row0, uint32_t row1, uint8_t* dst,
             const float qy = l.y0 + (float(y) + 0.5f) * l.scale;
             const bool only = shown[li] == width; // every pixel of the row is this layer's
             int64_t tapRows[2][2];
+            const uint16_t* top[2];
+            const uint16_t* bottom[2];
+            uint32_t wb[2];
             for (int k = 0; k < l.mipCount; ++k) {
                 const Taps t = tapsOf(qy, l, l.mips[k].level, l.levelHeight, l.tilesY);
                 const int64_t size = kTile >> l.mips[k].level;
                 tapRows[k][0] = t.t0 / size;
                 tapRows[k][1] = t.t1 / size;
-                const uint32_t wb = t.weight, wa = 256 - wb;
-                const uint16_t* top = rowFor(li, k, t.t0, t.t1);
-                const uint16_t* bottom = rowFor(li, k, t.t1, t.t0);
-                if (l.mipCount == 1) {
-                    if (only) {
-                        for (size_t i = 0; i < channels; ++i)
-                            out[i] = uint8_t((uint32_t(top[i]) * wa + uint32_t(bottom[i]) * wb + 32768) >> 16);
-                    } else {
-                        for (size_t x = 0; x < width; ++x)
-                            if (chosen[x] == li)
-                                for (size_t i = 4 * x; i < 4 * x + 4; ++i)
-                                    out[i] = uint8_t((uint32_t(top[i]) * wa + uint32_t(bottom[i]) * wb + 32768) >> 16);
-                    }
-                } else {
-                    uint16_t* v = rows[li][k].blended.data(); // texel × 256, rounded
-                    for (size_t i = 0; i < channels; ++i)
-                        v[i] = uint16_t((uint32_t(top[i]) * wa + uint32_t(bottom[i]) * wb + 128) >> 8);
-                }
+                wb[k] = t.weight;
+                top[k] = rowFor(li, k, t.t0, t.t1);
+                bottom[k] = rowFor(li, k, t.t1, t.t0);
             }
-            if (l.mipCount > 1) {
-                const uint16_t* a = rows[li][0].blended.data();
-                const uint16_t* b = rows[li][1].blended.data();
-                const uint32_t wb = l.mipWeight, wa = 256 - wb;
+            uint8_t* to = only ? out : blended.data();
+            if (l.mipCount == 1) {
+                blendRows(top[0], bottom[0], wb[0], channels, to);
+            } else {
+                blendRows(top[0], bottom[0], wb[0], channels, mipRow[0].data());
+                blendRows(top[1], bottom[1], wb[1], channels, mipRow[1].data());
+                blendRows(mipRow[0].data(), mipRow[1].data(), l.mipWeight, channels, to);
+            }
+            if (!only)
                 for (size_t x = 0; x < width; ++x)
-                    if (only || chosen[x] == li)
-                        for (size_t i = 4 * x; i < 4 * x + 4; ++i)
-                            out[i] = uint8_t((uint32_t(a[i]) * wa + uint32_t(b[i]) * wb + 32768) >> 16);
-            }
+                    if (chosen[x] == li) std::memcpy(out + 4 * x, to + 4 * x, 4);
             // The pixels whose filter reads an absent tile, in any mip read: tile_resolve.comp
             // takes the whole sample from the pixel's own tile then.
             if (l.gaps) {

@@ -61,10 +61,21 @@ struct HostLayer {
     struct Mip {
         uint32_t level = 0;
         std::vector<Column> columns;
-        // From each column, how many columns in a row read one tile's consecutive texels with
-        // the same weight (the view at the mip's own scale, a pixel a texel): filtered as one
-        // run of bytes, which the compiler vectorises.
-        std::vector<uint32_t> runs;
+        // The mip texels [lo, hi] of a level row that the columns read. Each row read is first
+        // gathered into one line of them (each tile's part), then filtered from it:
+        int64_t lo = 0, hi = 0;
+        std::vector<uint32_t> at; // per column: its first tap's byte offset in the line
+        // Per column, the filter's weights as the kernel multiplies them: (256 − w) four
+        // times, then w four times; w = 0 where both taps are one texel (clamped).
+        std::vector<std::array<uint16_t, 8>> weights;
+        // The columns in order, as spans filtered one way: a run of columns reading
+        // consecutive texels with one weight (the view at the mip's own scale) as one loop
+        // over bytes, which the compiler vectorises; other columns a pixel at a time.
+        struct Span {
+            uint32_t x0, x1; // [x0, x1)
+            bool run;
+        };
+        std::vector<Span> spans;
         // Per column: a tap lies outside the pixel's own tile (which the filter may then find
         // absent: see gaps).
         std::vector<uint8_t> crosses;
@@ -76,6 +87,7 @@ struct HostLayer {
     // Per target column: the column of `grid` holding the pixel's own tile (its centre's), or
     // -1 where the centre lies outside the level.
     std::vector<int32_t> own;
+    bool ownAll = false; // every column's centre lies inside the level: own[0] .. own[width − 1]
 };
 
 // One frame of the host resolve: its layers finest first (HR, LR, base); each pixel shows the

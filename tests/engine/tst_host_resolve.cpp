@@ -13,13 +13,24 @@
 //     above, views across the slide's edges (where a coarser level, then the background, shows),
 //     and not a turned or mirrored view, or an exact one;
 //   * with no perimeter buffered, the tiles around a view are absent: the pixels whose filter
-//     reaches them come from their own tile, as the quads draw them (the host's fallback).
+//     reaches them come from their own tile, as the quads draw them (the host's fallback);
+//   * the frames of a new field while it loads (HR, LR and base in part, each pixel the finest
+//     whose tile is there) are resolved on the host too, and each of their pixels is one of the
+//     pictures the quads draw of that view: the HR level's, the LR level's or the base level's
+//     (each the settled frame of a slide written at test time from the sample's levels from that
+//     one down, the view scaled to it), or the background. Pixels by a tile edge, where a level
+//     next to an absent tile samples its own tile alone, are left out.
 //
 // The host resolve serves CPU devices only: on a GPU this suite skips.
 #include <QtTest>
 
 #include <cmath>
+#include <condition_variable>
 #include <cstdlib>
+#include <cstring>
+
+#include <openslide.h>
+#include <tiffio.h>
 
 #include <iris/environment.h>
 
@@ -37,7 +48,78 @@ struct ResolveLog {
     std::mutex mutex;
     std::string last;       // the latest change of the host resolve
     bool available = false; // the engine said at startup that it resolves on the host
+    // Every change: from frame `first` on, the host resolves (true) or the quads draw.
+    std::vector<std::pair<uint64_t, bool>> changes;
+
+    bool hostResolved(uint64_t serial) {
+        std::lock_guard lock(mutex);
+        bool host = false;
+        for (const auto& [first, h] : changes)
+            if (first <= serial) host = h;
+        return host;
+    }
 };
+
+// Writes the sample's levels from `from` down as a tiled TIFF (uncompressed RGB, 256-px tiles):
+// a slide whose level 0 is the sample's level `from`, read through OpenSlide.
+bool writeLevelsFrom(const fs::path& sample, int from, const fs::path& out, std::string* why) {
+    openslide_t* osr = openslide_open(sample.c_str());
+    if (!osr || openslide_get_error(osr)) {
+        if (osr) openslide_close(osr);
+        return *why = "OpenSlide cannot open " + sample.string(), false;
+    }
+    TIFF* tif = TIFFOpen(out.c_str(), "w");
+    if (!tif) {
+        openslide_close(osr);
+        return *why = "TIFFOpen failed for " + out.string(), false;
+    }
+    bool ok = true;
+    constexpr uint32_t kT = 256;
+    std::vector<uint32_t> argb;
+    std::vector<uint8_t> rgba, tile(size_t(kT) * kT * 3);
+    for (int32_t l = from; ok && l < openslide_get_level_count(osr); ++l) {
+        int64_t w = 0, h = 0;
+        openslide_get_level_dimensions(osr, l, &w, &h);
+        argb.resize(size_t(w * h));
+        openslide_read_region(osr, argb.data(), 0, 0, l, w, h);
+        if (openslide_get_error(osr)) {
+            ok = false;
+            *why = std::string("OpenSlide: ") + openslide_get_error(osr);
+            break;
+        }
+        rgba.resize(argb.size() * 4);
+        argbPremultipliedToRgba(argb.data(), rgba.data(), argb.size());
+        TIFFSetField(tif, TIFFTAG_SUBFILETYPE, l == from ? 0 : FILETYPE_REDUCEDIMAGE);
+        TIFFSetField(tif, TIFFTAG_IMAGEWIDTH, uint32_t(w));
+        TIFFSetField(tif, TIFFTAG_IMAGELENGTH, uint32_t(h));
+        TIFFSetField(tif, TIFFTAG_TILEWIDTH, kT);
+        TIFFSetField(tif, TIFFTAG_TILELENGTH, kT);
+        TIFFSetField(tif, TIFFTAG_BITSPERSAMPLE, 8);
+        TIFFSetField(tif, TIFFTAG_SAMPLESPERPIXEL, 3);
+        TIFFSetField(tif, TIFFTAG_PHOTOMETRIC, PHOTOMETRIC_RGB);
+        TIFFSetField(tif, TIFFTAG_PLANARCONFIG, PLANARCONFIG_CONTIG);
+        TIFFSetField(tif, TIFFTAG_COMPRESSION, COMPRESSION_NONE);
+        for (int64_t ty = 0; ok && ty < h; ty += kT)
+            for (int64_t tx = 0; ok && tx < w; tx += kT) {
+                std::fill(tile.begin(), tile.end(), 0);
+                for (int64_t y = ty; y < std::min<int64_t>(h, ty + kT); ++y)
+                    for (int64_t x = tx; x < std::min<int64_t>(w, tx + kT); ++x)
+                        std::memcpy(&tile[size_t((y - ty) * kT + (x - tx)) * 3], &rgba[size_t(y * w + x) * 4], 3);
+                if (TIFFWriteEncodedTile(tif, TIFFComputeTile(tif, uint32_t(tx), uint32_t(ty), 0, 0), tile.data(),
+                                         tmsize_t(tile.size())) < 0) {
+                    ok = false;
+                    *why = "TIFFWriteEncodedTile failed";
+                }
+            }
+        if (ok && !TIFFWriteDirectory(tif)) {
+            ok = false;
+            *why = "TIFFWriteDirectory failed";
+        }
+    }
+    TIFFClose(tif);
+    openslide_close(osr);
+    return ok;
+}
 
 } // namespace
 
@@ -62,7 +144,11 @@ class TstHostResolve : public QObject {
             sink->add(level, line);
             std::lock_guard lock(rl->mutex);
             if (line.find("settled filtered views on the host") != std::string_view::npos) rl->available = true;
-            if (line.starts_with("tile resolve: frame ")) rl->last = std::string(line);
+            if (line.starts_with("tile resolve: frame ")) {
+                rl->last = std::string(line);
+                rl->changes.emplace_back(std::strtoull(rl->last.c_str() + 20, nullptr, 10),
+                                         line.find("on the host") != std::string_view::npos);
+            }
         };
         auto created = iris::Engine::create(cfg);
         if (created)
@@ -229,6 +315,146 @@ private slots:
             QVERIFY2(d.maxAbs <= 2 && d.meanAbs <= 0.3, c.what);
             QVERIFY2(resolved, c.what);
         }
+        for (TestEngine* e : {&host, &quads}) {
+            const std::string finished = e->finish();
+            QVERIFY2(finished.empty(), finished.c_str());
+        }
+    }
+
+    void loadingFramesShowTheLevels() {
+        const auto path = sampleSlidePath();
+        if (!path) QSKIP("the sample slide is not built");
+        // A field of more tiles than the other cases' (20 HR tiles and more): it loads over
+        // several frames.
+        constexpr uint32_t kLW = 1280, kLH = 960;
+        auto rl = std::make_shared<ResolveLog>();
+        iris::EngineConfig one;
+        one.loaderThreads = 1; // the field's tiles arrive one at a time
+        TestEngine host = hostEngine(rl, one);
+        QVERIFY2(host, describe(host.error).c_str());
+        iris::EngineConfig q;
+        q.tuning.tileResolve = iris::EngineTuning::TileResolve::Quads;
+        TestEngine quads = createTestEngine(q);
+        QVERIFY2(quads, describe(quads.error).c_str());
+        for (TestEngine* e : {&host, &quads}) QVERIFY((*e)->bindOffscreen(kLW, kLH).ok());
+        QVERIFY(quads->open(path->string()).ok());
+        const iris::SlideInfo info = *quads->slideInfo();
+        const size_t n = info.levels.size();
+        QVERIFY2(n >= 3, "the sample slide has an HR, an LR and a base level");
+        const double w = double(info.width), h = double(info.height);
+        // Enlarged 1.43: HR level 0, LR level 1, base the coarsest; fields spread over the slide
+        // (golden-ratio steps), as many as it takes to catch frames with the HR level in part
+        // (at least three; most fields give one or two).
+        iris::View views[8];
+        for (int i = 0; i < 8; ++i) {
+            const double fx = std::fmod(0.5 + i * 0.381966, 1.0), fy = std::fmod(0.3 + i * 0.618034, 1.0);
+            views[i] = {w * (0.12 + 0.76 * fx) + 0.37, h * (0.15 + 0.7 * fy) + 0.61, 0.7};
+        }
+        constexpr size_t kViews = std::size(views);
+        // The pictures each level gives of each view: the settled frames of the quads.
+        const size_t levelsShown[3] = {0, 1, n - 1};
+        std::vector<iris::Image> picture[3];
+        for (int k = 0; k < 3; ++k) {
+            const size_t level = levelsShown[k];
+            const double ds = info.levels[level].downsample;
+            std::string why;
+            fs::path slide = *path;
+            if (level > 0) {
+                slide = testOutDir() / ("host_resolve.levels-from-" + std::to_string(level) + ".tiff");
+                QVERIFY2(writeLevelsFrom(*path, int(level), slide, &why), why.c_str());
+            }
+            QVERIFY(quads->open(slide.string()).ok());
+            for (const iris::View& v : views) {
+                const iris::View scaled{v.centerX / ds, v.centerY / ds, v.downsample / ds};
+                auto f = renderSettled(*quads.engine, scaled, kLW, kLH, 60s, &why);
+                QVERIFY2(f, ("level " + std::to_string(level) + ": " + why).c_str());
+                picture[k].push_back(std::move(f->image));
+            }
+        }
+        const std::array<uint8_t, 3> bg = backgroundBytes();
+        // Frames of each view while its field loads, from the settled whole slide.
+        std::mutex m;
+        std::condition_variable cv;
+        uint64_t drawn = 0;
+        host->setFrameCallback([&](const iris::FrameStats&) {
+            {
+                std::lock_guard lock(m);
+                ++drawn;
+            }
+            cv.notify_all();
+        });
+        QVERIFY(host->open(path->string()).ok());
+        int mixed = 0, checked = 0;
+        for (size_t vi = 0; vi < kViews; ++vi) {
+            const iris::View& v = views[vi];
+            std::string why;
+            QVERIFY2(renderSettled(*host.engine, host->fitView(), kLW, kLH, 60s, &why), why.c_str());
+            // Left out: the target's pixels within 2 of a tile edge of a level shown.
+            const double left = v.centerX - kLW * 0.5 * v.downsample, top = v.centerY - kLH * 0.5 * v.downsample;
+            std::vector<uint8_t> nearX(kLW), nearY(kLH);
+            for (const size_t level : levelsShown) {
+                const double step = 256 * info.levels[level].downsample / v.downsample; // target px a tile
+                for (uint32_t x = 0; x < kLW; ++x) {
+                    const double t = (left + (x + 0.5) * v.downsample) / (256 * info.levels[level].downsample);
+                    nearX[x] |= std::abs(t - std::round(t)) * step <= 2.0;
+                }
+                for (uint32_t y = 0; y < kLH; ++y) {
+                    const double t = (top + (y + 0.5) * v.downsample) / (256 * info.levels[level].downsample);
+                    nearY[y] |= std::abs(t - std::round(t)) * step <= 2.0;
+                }
+            }
+            uint64_t seen = 0;
+            host->setView(v);
+            const auto until = std::chrono::steady_clock::now() + 60s;
+            for (;;) {
+                {
+                    std::unique_lock lock(m);
+                    QVERIFY2(cv.wait_until(lock, until, [&] { return drawn > seen; }), "no frame of the view in 60 s");
+                    seen = drawn;
+                }
+                auto f = host->readFrame();
+                QVERIFY(f.ok());
+                if (f->view.centerX != v.centerX || f->view.centerY != v.centerY) continue;
+                if (f->complete) break;
+                if (!rl->hostResolved(f->serial)) continue;
+                ++checked;
+                uint64_t hrOnly = 0, coarserOnly = 0, none = 0;
+                int badX = -1, badY = -1;
+                for (uint32_t y = 0; y < kLH; ++y) {
+                    if (nearY[y]) continue;
+                    for (uint32_t x = 0; x < kLW; ++x) {
+                        if (nearX[x]) continue;
+                        const uint8_t* p = pixel(f->image, x, y);
+                        const auto near = [&](const uint8_t* r) {
+                            for (int c = 0; c < 3; ++c)
+                                if (std::abs(int(p[c]) - int(r[c])) > 2) return false;
+                            return true;
+                        };
+                        const bool hr = near(pixel(picture[0][vi], x, y));
+                        const bool coarser = near(pixel(picture[1][vi], x, y)) || near(pixel(picture[2][vi], x, y));
+                        if (hr && !coarser) ++hrOnly;
+                        if (coarser && !hr) ++coarserOnly;
+                        if (!hr && !coarser && !near(bg.data())) {
+                            if (none++ == 0) badX = int(x), badY = int(y);
+                        }
+                    }
+                }
+                qInfo("view %zu, frame %llu (loading, on the host): %llu px the HR level's alone, %llu a coarser "
+                      "level's alone, %llu none of them",
+                      vi, (unsigned long long)f->serial, (unsigned long long)hrOnly, (unsigned long long)coarserOnly,
+                      (unsigned long long)none);
+                if (none > 0) {
+                    qWarning("%s", saveFailureArtefacts("host_resolve.loading", f->image, picture[0][vi], nullptr).c_str());
+                    QFAIL(("a pixel of a loading frame is no level's picture, first at (" + std::to_string(badX) + ", " +
+                           std::to_string(badY) + ")")
+                              .c_str());
+                }
+                if (hrOnly >= 200 && coarserOnly >= 200) ++mixed;
+            }
+        }
+        host->setFrameCallback({});
+        qInfo("%d loading frames resolved on the host checked, %d with the HR level in part", checked, mixed);
+        QVERIFY2(mixed > 0, "no frame resolved on the host showed a field in part (HR and a coarser level)");
         for (TestEngine* e : {&host, &quads}) {
             const std::string finished = e->finish();
             QVERIFY2(finished.empty(), finished.c_str());

@@ -195,11 +195,10 @@ bool planLayer(const FrameContext& frame, const LevelDraw& d, uint32_t width, Ho
 
 bool planHostFrame(const FrameContext& frame, const DrawList& list, const gpu::TileAtlas& atlas,
                    const std::array<float, 4>& background, HostFrame& f) {
-    // Complete frames only: while a field loads, the cores are the loaders', and a frame of
-    // three layers (HR in part, LR, base) resolved beside them costs more there than llvmpipe's
-    // quads (BENCHMARKS.md, "Settled filtered frames on the host").
-    if (!atlas.hostWritten() || !frame.snap.slide || frame.snap.colorLut || list.placeholders > 0 || !list.hrComplete)
-        return false;
+    // Frames of a field still loading too (HR in part over LR and base): resolved here they
+    // cost the loaders' cores less than llvmpipe's quads of three layers (BENCHMARKS.md,
+    // "Settled filtered frames on the host").
+    if (!atlas.hostWritten() || !frame.snap.slide || frame.snap.colorLut || list.placeholders > 0) return false;
     const Viewport& vp = frame.viewport;
     if (!ViewTransform::of(vp.view, vp.width, vp.height).identity()) return false;
     // An HR level drawn exactly is the tile pass's (its copy, or its texel fetches), even where

@@ -134,6 +134,7 @@ class TstHostResolve : public QObject {
         TestEngine t;
         t.log = std::make_shared<LogSink>();
         iris::EngineConfig cfg = testEngineConfig(t.log, base);
+        if (base.loaderThreads) cfg.loaderThreads = base.loaderThreads; // (testEngineConfig sets 2)
         auto tuning = iris::tuningFromEnvironment(cfg.tuning);
         if (!tuning) {
             t.error = tuning.error();

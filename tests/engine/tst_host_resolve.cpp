@@ -1,5 +1,5 @@
 // The resolve on the host (render/host_resolve.h): on a CPU device whose atlas is written from
-// the host, a settled view of the HR level that is not drawn exactly (enlarged, 1:1 off the
+// the host, a view of the HR level that is not drawn exactly (enlarged, 1:1 off the
 // pixel grid, or shrunk between levels) is resampled on the CPU and copied into the target,
 // instead of drawn as quads. It must change nothing but the cost:
 //
@@ -144,7 +144,7 @@ class TstHostResolve : public QObject {
         cfg.log = [sink = t.log, rl](iris::LogLevel level, std::string_view line) {
             sink->add(level, line);
             std::lock_guard lock(rl->mutex);
-            if (line.find("settled filtered views on the host") != std::string_view::npos) rl->available = true;
+            if (line.find("filtered views on the host") != std::string_view::npos) rl->available = true;
             if (line.starts_with("tile resolve: frame ")) {
                 rl->last = std::string(line);
                 rl->changes.emplace_back(std::strtoull(rl->last.c_str() + 20, nullptr, 10),

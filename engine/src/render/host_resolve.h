@@ -1,23 +1,23 @@
-// Settled filtered frames resolved on the host, for CPU devices (docs/ARCHITECTURE.md, "The
+// Filtered frames resolved on the host, for CPU devices (docs/ARCHITECTURE.md, "The
 // resolve on the host"). On a CPU device every filtered pixel of the tile pass goes through
 // llvmpipe's general fragment path: four gathers a pixel, 12-16 ms for a 1080p frame on two
 // cores, measured (BENCHMARKS.md), whatever the shader does around them. Where the atlas is
 // written from the host (gpu/tile_atlas.h, hostWritten) its texels are in mapped memory, and a
 // view of one level is a separable resampling: at LOD 0 (enlarged, or 1:1 off the pixel grid)
-// each level row the frame reads is filtered horizontally once into a row of 16-bit channels,
-// and each target row is the vertical blend of two such rows; shrunk, the same in each of the
-// two mips the LOD falls between, blended (trilinear). This pass does that on the render thread
-// and one helper, into a host-visible buffer that the frame copies into its target before the
-// other passes (annotations, layers, HUD) draw over it.
+// each level row the frame reads is gathered from its tiles into one line and filtered
+// horizontally once (SSE2, two columns a step) into a row of 16-bit channels, and each target
+// row is the vertical blend of two such rows; shrunk, the same in each of the two mips the LOD
+// falls between, blended (trilinear). This pass does that on the render thread and one
+// helper, into a host-visible buffer that the frame copies into its target before the other
+// passes (annotations, layers, HUD) draw over it.
 //
-// It serves complete frames (every visible HR tile drawn; while a field loads, the cores are the
-// loaders'), whatever levels they show: per pixel the finest of HR, LR and base whose tile is
-// resident there (a coarser level past the HR level's edge, then the background), every
-// resident tile it reads opaque, nothing failing, the view unturned and unmirrored, no colour
-// step, the HR level not drawn exactly (the exact copy's). Where a tap's tile is absent (the
-// ring around the field still loading) the pixel comes from its own tile, as the quads draw it,
-// so a view's complete frames do not switch between the two ways as the ring arrives.
-// Filtering is the compute resolve's (shaders/tile_resolve.comp: each tap from the tile that
+// It serves settled frames and those of a field still loading, whatever levels they show: per
+// pixel the finest of HR, LR and base whose tile is resident there (a coarser level past the
+// HR level's edge or where its tiles are not in yet, then the background), every resident tile
+// it reads opaque, nothing failing, the view unturned and unmirrored, no colour step, the HR
+// level not drawn exactly (the exact copy's). Where a tap's tile is absent (the ring around the
+// field, or a loading field's) the pixel comes from its own tile, as the quads draw it, so a
+// view's frames do not switch between the two ways as tiles arrive. Filtering is the compute resolve's (shaders/tile_resolve.comp: each tap from the tile that
 // holds it, clamped into the level, or into the edge tiles' mips) with 8-bit weights,
 // lavapipe's sub-texel precision: the quads' picture, no channel more than two codes off
 // (engine.host_resolve).

@@ -92,7 +92,7 @@ Result RenderThread::init() {
     log_.info(std::string("exact copy: ") + (copyExact_ ? "on" : "off"));
     if (Result r = initGpu(); !r.ok()) return r;
     log_.info(resolvePass_   ? "tile resolve: compute (offscreen targets; a swapchain draws quads)"
-              : hostResolve_ ? "tile resolve: quads, and settled filtered views on the host"
+              : hostResolve_ ? "tile resolve: quads, and filtered views on the host"
                              : "tile resolve: quads");
     return {};
 }

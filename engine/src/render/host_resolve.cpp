@@ -134,28 +134,21 @@ bool planLayer(const FrameContext& frame, const LevelDraw& d, uint32_t width, Ho
     for (int k = 0; k < l.mipCount; ++k) {
         HostLayer::Mip& mip = l.mips[k];
         const int64_t size = kTile >> mip.level;
+        const auto taps = [&](uint32_t x) {
+            return tapsOf(l.x0 + (float(x) + 0.5f) * l.scale, l, mip.level, l.levelWidth, l.tilesX);
+        };
+        // The line: the texels the columns read. Positions grow with x (the view is unturned),
+        // and so do both taps.
+        mip.lo = taps(0).t0;
+        mip.hi = taps(width - 1).t1;
         mip.columns.resize(width);
-        for (uint32_t x = 0; x < width; ++x) {
-            const Taps t = tapsOf(l.x0 + (float(x) + 0.5f) * l.scale, l, mip.level, l.levelWidth, l.tilesX);
-            mip.columns[x] = HostLayer::Column{int32_t(t.t0 / size - l.grid.x0), int32_t(t.t1 / size - l.grid.x0),
-                                               uint32_t(t.t0 % size) * 4, uint32_t(t.t1 % size) * 4, t.weight};
-        }
-        // The line: the texels the columns read, each column's taps and weights in it.
-        mip.lo = INT64_MAX;
-        mip.hi = INT64_MIN;
-        for (uint32_t x = 0; x < width; ++x) {
-            const HostLayer::Column& c = mip.columns[x];
-            mip.lo = std::min(mip.lo, (l.grid.x0 + c.tile0) * size + c.offset0 / 4);
-            mip.hi = std::max(mip.hi, (l.grid.x0 + c.tile1) * size + c.offset1 / 4);
-        }
         mip.at.resize(width);
         mip.weights.resize(width);
         for (uint32_t x = 0; x < width; ++x) {
-            const HostLayer::Column& c = mip.columns[x];
-            const int64_t t0 = (l.grid.x0 + c.tile0) * size + c.offset0 / 4;
-            const int64_t t1 = (l.grid.x0 + c.tile1) * size + c.offset1 / 4;
-            mip.at[x] = uint32_t(t0 - mip.lo) * 4;
-            const uint16_t wb = t1 == t0 ? 0 : uint16_t(c.weight), wa = uint16_t(256 - wb);
+            const Taps t = taps(x);
+            mip.columns[x] = HostLayer::Column{int32_t(t.t0 / size - l.grid.x0), int32_t(t.t1 / size - l.grid.x0)};
+            mip.at[x] = uint32_t(t.t0 - mip.lo) * 4;
+            const uint16_t wb = t.t1 == t.t0 ? 0 : uint16_t(t.weight), wa = uint16_t(256 - wb);
             mip.weights[x] = {wa, wa, wa, wa, wb, wb, wb, wb};
         }
         // Runs of at least 8 columns a texel apart with one weight; the rest a pixel at a time.

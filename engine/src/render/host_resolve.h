@@ -49,12 +49,9 @@ struct HostLayer {
     int32_t levelWidth = 0, levelHeight = 0;
     int64_t tilesX = 0, tilesY = 0; // the level's
 
-    // Per target column: the filter's two taps, as a column of `grid` and a byte offset within
-    // a tile row, and the weight of the second (0..256).
+    // Per target column: the columns of `grid` holding the filter's two taps.
     struct Column {
         int32_t tile0, tile1;
-        uint32_t offset0, offset1;
-        uint32_t weight;
     };
     // The mips read: mip 0 alone at LOD 0; else floor(LOD) and the next, blended by
     // `mipWeight` (0..256; 0: the first alone).

@@ -109,8 +109,8 @@ Result RenderThread::initGpu() {
         resolvePass_ = std::make_unique<render::ResolvePass>(device_, atlas_, pipeline_);
         if (Result r = resolvePass_->init(kFramesInFlight); !r.ok()) return r;
     } else if (tuning_.tileResolve == EngineTuning::TileResolve::Auto && cpuDevice && atlas_.hostWritten()) {
-        // The atlas's texels are in mapped memory: settled filtered views are resolved on the
-        // host (render/host_resolve.h), which llvmpipe's fragment path is slower at.
+        // The atlas's texels are in mapped memory: filtered views, settled or loading, are
+        // resolved on the host (render/host_resolve.h), which llvmpipe's fragment path is slower at.
         hostResolve_ = std::make_unique<render::HostResolvePass>(device_, atlas_, log_);
         if (Result r = hostResolve_->init(kFramesInFlight); !r.ok()) return r;
     }

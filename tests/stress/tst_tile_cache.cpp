@@ -6,6 +6,7 @@
 // one tile's pattern whole (run under ASan and TSan too).
 #include <QtTest>
 
+#include <algorithm>
 #include <atomic>
 #include <cstring>
 #include <thread>
@@ -61,6 +62,47 @@ private slots:
         QVERIFY(cache.bytesUsed() <= cache.budgetBytes() + 64ull * iris::kTileBytes);
         cache.dropOtherGenerations(2);
         QVERIFY(!cache.isReady(keyOf(1, 115)));
+    }
+
+    // Idle loaders make buffers ahead of need (TileCache::replenish): never more free ones than
+    // the reserve, never more in all than the budget holds, zeroed, and taken before any new one.
+    void reserveStaysWithinTheBudget() {
+        iris::TileCache cache(uint64_t(iris::kTileBytes) * 64);
+        const size_t target = cache.reserveTarget();
+        QCOMPARE(target, size_t(8)); // 1/8 of the budget
+        QVERIFY(cache.replenish(3));
+        QCOMPARE(cache.bytesUsed(), 3ull * iris::kTileBytes);
+        {
+            // Loaders replenishing at once stop at the reserve together.
+            std::vector<std::thread> loaders;
+            for (int i = 0; i < 4; ++i)
+                loaders.emplace_back([&] {
+                    while (cache.replenish(2)) {
+                    }
+                });
+            for (auto& t : loaders) t.join();
+        }
+        QCOMPARE(cache.bytesUsed(), uint64_t(target) * iris::kTileBytes);
+        QVERIFY(!cache.replenish(8));
+        // Taken from the reserve: zeroed, and nothing new allocated meanwhile.
+        std::vector<std::unique_ptr<uint8_t[]>> taken;
+        for (size_t i = 0; i < target; ++i) {
+            taken.push_back(cache.acquireBuffer());
+            const uint8_t* b = taken.back().get();
+            QVERIFY(std::all_of(b, b + iris::kTileBytes, [](uint8_t v) { return v == 0; }));
+        }
+        QCOMPARE(cache.bytesUsed(), uint64_t(0));
+        // Near the budget the reserve is what the budget leaves: 60 tiles ready, 4 more buffers.
+        for (uint32_t n = 0; n < 60; ++n) {
+            QVERIFY(cache.tryClaim(keyOf(1, n)));
+            auto b = n < taken.size() ? std::move(taken[n]) : cache.acquireBuffer();
+            fill(b.get(), keyOf(1, n));
+            cache.publish(keyOf(1, n), std::move(b), false);
+        }
+        while (cache.replenish(3)) {
+        }
+        QCOMPARE(cache.bytesUsed(), 64ull * iris::kTileBytes);
+        for (uint32_t n = 0; n < 60; ++n) QVERIFY(cache.isReady(keyOf(1, n)));
     }
 
     void copiesRaceEvictionAndDrops() {

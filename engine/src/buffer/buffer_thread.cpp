@@ -6,6 +6,7 @@
 #include <unordered_set>
 
 #include "core/pixels.h"
+#include "core/prefault.h"
 #include "gpu/mip_kernel.h"
 #include "core/thread_name.h"
 
@@ -160,6 +161,7 @@ void BufferThread::releaseGpu() {
     nextValue_ = submittedValue_ = 0;
     handover_.uploadTimeline = VK_NULL_HANDLE;
     pendingMips_.clear();
+    prefaulted_ = 0;
     regionSlide_ = nullptr; // the region is planned again against the new atlas
     regionSerial_ = 0;
     atlasFull_ = false;
@@ -246,6 +248,7 @@ void BufferThread::run() {
             shared_.bump(); // the render thread draws the settled frame
             continue;
         }
+        if (prefaultAtlas()) continue;
         shared_.waitChange(seen);
     }
     // An ended thread counts as parked: a recovery that asks now must not wait for it.
@@ -453,6 +456,22 @@ bool BufferThread::submitNew(const Snapshot& snap) {
     }
     submittedValue_ = tx.signalValue;
     shared_.tileStages.stamp(TileStage::Submitted, uint32_t(tx.slots.size()));
+    return true;
+}
+
+bool BufferThread::prefaultAtlas() {
+    if (!hostWrites_) return false;
+    const TileMap& map = atlas_.map();
+    const uint32_t want = uint32_t(std::min<uint64_t>(map.slotCount(), uint64_t(map.nextFreeHint()) + kPrefaultAhead));
+    if (prefaulted_ >= want) return false;
+    const uint32_t end = std::min(want, prefaulted_ + kPrefaultBatch);
+    // Each level of the slots [prefaulted_, end): one range of the mapped memory. Pages shared
+    // with slots in use keep their contents (the call only makes pages resident).
+    for (uint32_t m = 0; m < gpu::kTileMipLevels; ++m) {
+        uint8_t* first = atlas_.hostLevel(int(prefaulted_), m);
+        prefaultForWrite(first, size_t(atlas_.hostLevel(int(end), m) - first));
+    }
+    prefaulted_ = end;
     return true;
 }
 

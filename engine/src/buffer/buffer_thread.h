@@ -80,6 +80,10 @@ private:
     bool levelsWaitFor(const Snapshot& snap, int level) const;
     bool completeMips(const Snapshot& snap, bool neededOnly, size_t maxTiles);
     bool submitNew(const Snapshot& snap);
+    // Host-written atlas, with nothing else to do: the next free slots' memory made resident
+    // (core/prefault.h), a batch at a time, up to kPrefaultAhead slots past the next free one.
+    bool prefaultAtlas();
+    static constexpr uint32_t kPrefaultAhead = 256, kPrefaultBatch = 16;
     Result record(Transaction& t);
     // The host mip schedule: levels 1..8 of the staged tile at `tile`, packed after it.
     void makeHostMips(uint8_t* tile, bool enhance);
@@ -125,6 +129,7 @@ private:
     };
     std::vector<PendingMips> pendingMips_;
     std::vector<uint8_t> mipScratch_;
+    uint32_t prefaulted_ = 0; // host-written atlas: slots [0, prefaulted_) made resident
     // Look at each staged tile's alpha, so that the render thread may copy opaque tiles instead
     // of drawing them (EngineTuning::exactCopy; TileMap::opaqueOf). About 5 µs a tile.
     const bool trackOpacity_;

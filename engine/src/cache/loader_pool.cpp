@@ -30,7 +30,9 @@ void LoaderPool::stop() {
 void LoaderPool::run() {
     while (!shared_.stopping.load(std::memory_order_acquire)) {
         const uint64_t seen = shared_.wakeValue();
-        if (!loadOne()) shared_.waitChange(seen);
+        // With nothing to decode, buffers for the next field's tiles first (TileCache::replenish:
+        // a few at a time, so that a new view waits at most ~1 ms for this loader).
+        if (!loadOne() && !cache_.replenish(8)) shared_.waitChange(seen);
     }
 }
 

@@ -3,12 +3,27 @@
 #include <algorithm>
 #include <cstring>
 
+#include "core/prefault.h"
 #include "slide/slide_source.h"
 #include "view/view_model.h"
 
 namespace iris {
 
-TileCache::TileCache(uint64_t budgetBytes) : budget_(budgetBytes < uint64_t(kTileBytes) * 16 ? uint64_t(kTileBytes) * 16 : budgetBytes) {}
+namespace {
+
+// A new buffer, resident in one call rather than a trap a page (core/prefault.h), and zeroed.
+std::unique_ptr<uint8_t[]> newBuffer() {
+    auto b = std::make_unique_for_overwrite<uint8_t[]>(kTileBytes);
+    prefaultForWrite(b.get(), kTileBytes);
+    std::memset(b.get(), 0, kTileBytes);
+    return b;
+}
+
+} // namespace
+
+TileCache::TileCache(uint64_t budgetBytes)
+    : budget_(budgetBytes < uint64_t(kTileBytes) * 16 ? uint64_t(kTileBytes) * 16 : budgetBytes),
+      reserveTarget_(size_t(std::min<uint64_t>(256, budget_ / kTileBytes / 8))) {}
 
 bool TileCache::tryClaim(uint64_t key) {
     std::lock_guard lock(mutex_);
@@ -26,7 +41,27 @@ std::unique_ptr<uint8_t[]> TileCache::acquireBuffer() {
             return b;
         }
     }
-    return std::make_unique<uint8_t[]>(kTileBytes);
+    return newBuffer();
+}
+
+bool TileCache::replenish(size_t batch) {
+    size_t n = 0;
+    {
+        std::lock_guard lock(mutex_);
+        const uint64_t held = readyCount_ + freeBuffers_.size() + reserving_;
+        const uint64_t maxReady = budget_ / kTileBytes;
+        const size_t free = freeBuffers_.size() + reserving_;
+        if (free >= reserveTarget_ || held >= maxReady) return false;
+        n = size_t(std::min<uint64_t>({batch, reserveTarget_ - free, maxReady - held}));
+        reserving_ += n;
+    }
+    std::vector<std::unique_ptr<uint8_t[]>> made;
+    made.reserve(n);
+    for (size_t i = 0; i < n; ++i) made.push_back(newBuffer());
+    std::lock_guard lock(mutex_);
+    for (auto& b : made) freeBuffers_.push_back(std::move(b));
+    reserving_ -= n;
+    return true;
 }
 
 void TileCache::recycleLocked(std::unique_ptr<uint8_t[]> buf) {
@@ -35,7 +70,7 @@ void TileCache::recycleLocked(std::unique_ptr<uint8_t[]> buf) {
         orphans_.push_back(std::move(buf)); // a copy still reads it
         return;
     }
-    if (freeBuffers_.size() < 64) freeBuffers_.push_back(std::move(buf));
+    if (freeBuffers_.size() < std::max<size_t>(64, reserveTarget_)) freeBuffers_.push_back(std::move(buf));
 }
 
 void TileCache::publish(uint64_t key, std::unique_ptr<uint8_t[]> pixels, bool failed) {

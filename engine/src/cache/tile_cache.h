@@ -20,8 +20,15 @@ public:
 
     // Claims `key` for decoding: true when it was neither cached nor being decoded.
     bool tryClaim(uint64_t key);
-    // Returns a buffer (kTileBytes) to decode into; recycled, allocated only while the pool grows.
+    // Returns a buffer (kTileBytes) to decode into; recycled, or from the reserve, allocated
+    // only while the pool grows.
     std::unique_ptr<uint8_t[]> acquireBuffer();
+    // For a loader with nothing to decode: while the cache is filling, makes up to `batch` new
+    // buffers resident ahead of need (core/prefault.h), keeping at most reserveTarget() of them
+    // free, and never more buffers in all than the budget holds. False when none was made
+    // (the reserve is full, or the budget spoken for): the loader may sleep.
+    bool replenish(size_t batch);
+    size_t reserveTarget() const { return reserveTarget_; }
     // Publishes a decoded (or failed, with placeholder pixels) tile and drops the claim.
     void publish(uint64_t key, std::unique_ptr<uint8_t[]> pixels, bool failed);
     // Drops a claim without a result (the tile left the buffer region before it was decoded).
@@ -54,6 +61,9 @@ private:
     void recycleLocked(std::unique_ptr<uint8_t[]> buf);
 
     const uint64_t budget_;
+    // Free buffers kept ready while the cache fills: a new field's first decodes then write
+    // memory already resident. 1/8 of the budget, at most 64 MiB.
+    const size_t reserveTarget_;
     mutable std::mutex mutex_;
     std::unordered_map<uint64_t, Entry> entries_;
     std::list<uint64_t> lru_; // ready entries, most recent at the front
@@ -64,6 +74,7 @@ private:
     std::vector<const uint8_t*> copying_;
     std::vector<std::unique_ptr<uint8_t[]>> orphans_;
     uint64_t readyCount_ = 0;
+    size_t reserving_ = 0; // buffers replenish() is making, outside the lock
     std::atomic<uint64_t> releaseEpoch_{0}; // written under mutex_, read without it
 };
 

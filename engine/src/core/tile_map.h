@@ -89,6 +89,9 @@ public:
     void activatePinned(int slot, uint64_t frame, uint64_t uploadSeq = 0, bool opaque = false);
     // Gives up a FILLING slot (its upload was abandoned): it becomes FREE and unindexed.
     void abandon(int slot);
+    // Where the search for a FREE slot starts next: FREE slots are taken in index order from
+    // here, so while the atlas fills, the slots from here on are the next to be written.
+    uint32_t nextFreeHint() const { return freeHint_; }
 
 private:
     struct alignas(kCacheLine) Slot {

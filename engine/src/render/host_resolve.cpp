@@ -175,13 +175,38 @@ bool planLayer(const FrameContext& frame, const LevelDraw& d, uint32_t width, Ho
         l.own[x] = q >= 0.0f && q < float(l.levelWidth) ? int32_t(int64_t(q) / kTile - l.grid.x0) : -1;
     }
     l.ownAll = std::all_of(l.own.begin(), l.own.end(), [](int32_t c) { return c >= 0; });
-    for (int k = 0; k < l.mipCount; ++k) {
-        HostLayer::Mip& mip = l.mips[k];
-        mip.crosses.resize(width);
+    l.crosses.assign(width, 0);
+    for (int k = 0; k < l.mipCount; ++k)
         for (uint32_t x = 0; x < width; ++x)
-            mip.crosses[x] = mip.columns[x].tile0 != l.own[x] || mip.columns[x].tile1 != l.own[x];
-    }
+            l.crosses[x] |= l.mips[k].columns[x].tile0 != l.own[x] || l.mips[k].columns[x].tile1 != l.own[x];
     return true;
+}
+
+// The frame's segments (HostSegment): cut where any layer's own column changes.
+void planSegments(HostFrame& f) {
+    f.segments.clear();
+    const uint32_t width = f.width;
+    for (uint32_t x0 = 0, x = 1; x <= width; ++x) {
+        bool cut = x == width;
+        for (int li = 0; li < f.layerCount && !cut; ++li) cut = f.layers[li].own[x] != f.layers[li].own[x - 1];
+        if (!cut) continue;
+        HostSegment seg{x0, x, {-1, -1, -1}, {x0, x0, x0}, {x0, x0, x0}};
+        for (int li = 0; li < f.layerCount; ++li) {
+            const HostLayer& l = f.layers[li];
+            seg.own[li] = l.own[x0];
+            // Taps grow with x, so those leaving the own tile are a run at each end; the inner
+            // range is kept only where every column of it stays inside (else all are looked at).
+            uint32_t a = x0, b = x;
+            while (a < b && l.crosses[a]) ++a;
+            while (b > a && l.crosses[b - 1]) --b;
+            if (std::none_of(l.crosses.begin() + a, l.crosses.begin() + b, [](uint8_t c) { return c != 0; })) {
+                seg.inner0[li] = a;
+                seg.inner1[li] = b;
+            }
+        }
+        f.segments.push_back(seg);
+        x0 = x;
+    }
 }
 
 } // namespace
@@ -208,6 +233,7 @@ bool planHostFrame(const FrameContext& frame, const DrawList& list, const gpu::T
         if (d.exact || !planLayer(frame, d, f.width, f.layers[f.layerCount])) return false;
         ++f.layerCount;
     }
+    planSegments(f);
     const bool targetBgra = frame.format == VK_FORMAT_B8G8R8A8_UNORM || frame.format == VK_FORMAT_B8G8R8A8_SRGB;
     f.swap = atlas.swapped() != targetBgra;
     const auto byte = [](float v) { return uint8_t(std::clamp(v, 0.0f, 1.0f) * 255.0f + 0.5f); };
@@ -271,10 +297,11 @@ void resolveRows(const HostFrame& f, uint32_t row0, uint32_t row1, uint8_t* dst,
     const gpu::TileAtlas& atlas = *f.atlas;
     const size_t width = f.width, channels = width * 4;
     // Per layer and mip, two of its rows filtered horizontally (4 channels × 16 bits a pixel:
-    // texel × 256).
+    // texel × 256), each over the columns [x0, x1) that rows asked for.
     struct MipRows {
         std::vector<uint16_t> held[2];
         int64_t heldRow[2] = {-1, -1};
+        uint32_t x0[2] = {}, x1[2] = {};
     };
     MipRows rows[3][2];
     size_t lineBytes = 0;
@@ -286,20 +313,29 @@ void resolveRows(const HostFrame& f, uint32_t row0, uint32_t row1, uint8_t* dst,
             lineBytes = std::max(lineBytes, size_t(mip.hi - mip.lo + 2) * 4);
         }
     std::vector<uint8_t> line(lineBytes + 16); // a level row's texels [lo, hi + 1]
-    std::vector<uint8_t> blended(channels);    // a layer's row where it shows in part
     std::vector<uint16_t> mipRow[2];           // shrunk between two mips: each one's blend
     for (std::vector<uint16_t>& r : mipRow) r.resize(channels);
-    std::vector<int8_t> chosen(width);         // per pixel of the row: the layer shown, -1: the background
-    // Level row r of a layer's mip, filtered horizontally into `out`.
-    const auto horizontal = [&](const HostLayer& l, const HostLayer::Mip& mip, int64_t r, uint16_t* out) {
+    // Per segment of the row (HostFrame::segments): the layer shown, -1: the background. And
+    // the row as runs of segments showing one layer.
+    std::vector<int8_t> chosen(f.segments.size());
+    struct Run {
+        uint32_t x0, x1;
+        int li;
+    };
+    std::vector<Run> runs;
+    runs.reserve(f.segments.size());
+    // Level row r of a layer's mip, filtered horizontally into `out`, columns [x0, x1).
+    const auto horizontal = [&](const HostLayer::Mip& mip, const HostLayer& l, int64_t r, uint32_t x0, uint32_t x1,
+                                uint16_t* out) {
         const int64_t size = kTile >> mip.level;
         const int64_t ty = r / size;
         const size_t offset = size_t(r - ty * size) * atlas.hostRowPitch(mip.level);
-        // The row's texels [lo, hi] gathered from their tiles; zero where a tile is absent
-        // (the pixels whose filter reaches it are redone by fallbackPixel where they show
-        // this layer), and past hi (read with weight 0).
-        for (int64_t tx = mip.lo / size; tx <= mip.hi / size; ++tx) {
-            const int64_t a = std::max(mip.lo, tx * size), b = std::min(mip.hi, tx * size + size - 1);
+        // The texels those columns read, [lo, hi] of the line, gathered from their tiles; zero
+        // where a tile is absent (the pixels whose filter reaches it are redone by
+        // fallbackPixel where they show this layer), and past hi (read with weight 0).
+        const int64_t lo = mip.lo + mip.at[x0] / 4, hi = std::min(mip.hi, mip.lo + mip.at[x1 - 1] / 4 + 1);
+        for (int64_t tx = lo / size; tx <= hi / size; ++tx) {
+            const int64_t a = std::max(lo, tx * size), b = std::min(hi, tx * size + size - 1);
             uint8_t* to = line.data() + size_t(a - mip.lo) * 4;
             if (const int32_t slot = slotAt(l, tx, ty); slot >= 0)
                 std::memcpy(to, atlas.hostLevel(slot, mip.level) + offset + size_t(a - tx * size) * 4,
@@ -308,25 +344,40 @@ void resolveRows(const HostFrame& f, uint32_t row0, uint32_t row1, uint8_t* dst,
                 std::memset(to, 0, size_t(b - a + 1) * 4);
         }
         std::memset(line.data() + size_t(mip.hi - mip.lo + 1) * 4, 0, 4);
-        for (const HostLayer::Mip::Span& s : mip.spans) {
-            uint16_t* o = out + size_t(s.x0) * 4;
-            if (s.run) { // one weight, consecutive texels: tap b is the texel after tap a
-                const uint8_t* src = line.data() + mip.at[s.x0];
-                const uint32_t wa = mip.weights[s.x0][0], wb = mip.weights[s.x0][4];
-                for (size_t i = 0; i < size_t(s.x1 - s.x0) * 4; ++i) o[i] = uint16_t(src[i] * wa + src[i + 4] * wb);
+        for (const HostLayer::Mip::Span& span : mip.spans) {
+            const uint32_t s0 = std::max(span.x0, x0), s1 = std::min(span.x1, x1);
+            if (s0 >= s1) continue;
+            uint16_t* o = out + size_t(s0) * 4;
+            if (span.run) { // one weight, consecutive texels: tap b is the texel after tap a
+                const uint8_t* src = line.data() + mip.at[s0];
+                const uint32_t wa = mip.weights[s0][0], wb = mip.weights[s0][4];
+                for (size_t i = 0; i < size_t(s1 - s0) * 4; ++i) o[i] = uint16_t(src[i] * wa + src[i + 4] * wb);
             } else {
-                filterColumns(line.data(), mip.at.data() + s.x0, mip.weights.data() + s.x0, s.x1 - s.x0, o);
+                filterColumns(line.data(), mip.at.data() + s0, mip.weights.data() + s0, s1 - s0, o);
             }
         }
     };
-    // Layer li's mip k row r, filtered into the slot not holding `keep` when it is not held.
-    const auto rowFor = [&](int li, int k, int64_t r, int64_t keep) -> const uint16_t* {
+    // Layer li's mip k row r over columns [x0, x1), filtered into the slot not holding `keep`
+    // when it is not held (or held over fewer columns: then over both's).
+    const auto rowFor = [&](int li, int k, int64_t r, int64_t keep, uint32_t x0, uint32_t x1) -> const uint16_t* {
         MipRows& m = rows[li][k];
-        for (int i = 0; i < 2; ++i)
-            if (m.heldRow[i] == r) return m.held[i].data();
+        const HostLayer& l = f.layers[li];
+        for (int i = 0; i < 2; ++i) {
+            if (m.heldRow[i] != r) continue;
+            if (m.x0[i] > x0 || m.x1[i] < x1) {
+                // Only the columns not filtered yet.
+                if (x0 < m.x0[i]) horizontal(l.mips[k], l, r, x0, m.x0[i], m.held[i].data());
+                if (x1 > m.x1[i]) horizontal(l.mips[k], l, r, m.x1[i], x1, m.held[i].data());
+                m.x0[i] = std::min(m.x0[i], x0);
+                m.x1[i] = std::max(m.x1[i], x1);
+            }
+            return m.held[i].data();
+        }
         const int i = m.heldRow[0] == keep ? 1 : 0;
-        horizontal(f.layers[li], f.layers[li].mips[k], r, m.held[i].data());
+        horizontal(l.mips[k], l, r, x0, x1, m.held[i].data());
         m.heldRow[i] = r;
+        m.x0[i] = x0;
+        m.x1[i] = x1;
         return m.held[i].data();
     };
     // The row of the layer's tiles holding target row y's centre, or -1 (outside the level or the grid).
@@ -338,11 +389,9 @@ void resolveRows(const HostFrame& f, uint32_t row0, uint32_t row1, uint8_t* dst,
     };
     for (uint32_t y = row0; y < row1; ++y) {
         uint8_t* out = dst + size_t(y - row0) * stride;
-        // Which layer each pixel shows: the finest whose own tile there is resident.
-        bool any[3] = {};
-        size_t shown[3] = {};
-        // Most rows of a settled view: the finest layer's tiles along the row all resident.
-        bool rowWhole = false;
+        // Which layer each segment shows: the finest whose own tile there is resident.
+        runs.clear();
+        bool rowWhole = false; // most rows of a settled view: the finest layer's tiles along the row all resident
         if (const HostLayer& l = f.layers[0]; f.layerCount > 0 && l.ownAll) {
             if (const int64_t ty = tileRowOf(l, y); ty >= 0) {
                 const int32_t* slots = l.slots.data() + size_t((ty - l.grid.y0) * (l.grid.x1 - l.grid.x0 + 1));
@@ -351,8 +400,7 @@ void resolveRows(const HostFrame& f, uint32_t row0, uint32_t row1, uint8_t* dst,
         }
         if (rowWhole) {
             std::fill(chosen.begin(), chosen.end(), int8_t(0));
-            any[0] = true;
-            shown[0] = width;
+            runs.push_back({0, uint32_t(width), 0});
         } else {
             std::fill(chosen.begin(), chosen.end(), int8_t(-1));
             for (int li = f.layerCount - 1; li >= 0; --li) {
@@ -360,24 +408,33 @@ void resolveRows(const HostFrame& f, uint32_t row0, uint32_t row1, uint8_t* dst,
                 const int64_t ty = tileRowOf(l, y);
                 if (ty < 0) continue;
                 const int32_t* slots = l.slots.data() + size_t((ty - l.grid.y0) * (l.grid.x1 - l.grid.x0 + 1));
-                for (size_t x = 0; x < width; ++x)
-                    if (const int32_t c = l.own[x]; c >= 0 && slots[c] >= 0) {
-                        chosen[x] = int8_t(li); // finer layers, later in this loop, take over
-                        any[li] = true;
-                    }
+                for (size_t s = 0; s < f.segments.size(); ++s)
+                    if (const int32_t c = f.segments[s].own[li]; c >= 0 && slots[c] >= 0)
+                        chosen[s] = int8_t(li); // finer layers, later in this loop, take over
             }
-            for (size_t x = 0; x < width; ++x) {
-                if (chosen[x] < 0)
-                    std::memcpy(out + 4 * x, f.background, 4);
+            for (size_t s = 0; s < f.segments.size(); ++s) {
+                const HostSegment& seg = f.segments[s];
+                if (!runs.empty() && runs.back().li == chosen[s])
+                    runs.back().x1 = seg.x1;
                 else
-                    ++shown[size_t(chosen[x])];
+                    runs.push_back({seg.x0, seg.x1, chosen[s]});
             }
         }
+        for (const Run& run : runs) {
+            if (run.li >= 0) continue;
+            for (uint32_t x = run.x0; x < run.x1; ++x) std::memcpy(out + 4 * x, f.background, 4);
+        }
         for (int li = f.layerCount - 1; li >= 0; --li) {
-            if (!any[li]) continue;
+            // The columns this layer shows along the row: its runs, within [x0, x1).
+            uint32_t x0 = uint32_t(width), x1 = 0;
+            for (const Run& run : runs)
+                if (run.li == li) {
+                    x0 = std::min(x0, run.x0);
+                    x1 = std::max(x1, run.x1);
+                }
+            if (x0 >= x1) continue;
             const HostLayer& l = f.layers[li];
             const float qy = l.y0 + (float(y) + 0.5f) * l.scale;
-            const bool only = shown[li] == width; // every pixel of the row is this layer's
             int64_t tapRows[2][2];
             const uint16_t* top[2];
             const uint16_t* bottom[2];
@@ -388,45 +445,54 @@ void resolveRows(const HostFrame& f, uint32_t row0, uint32_t row1, uint8_t* dst,
                 tapRows[k][0] = t.t0 / size;
                 tapRows[k][1] = t.t1 / size;
                 wb[k] = t.weight;
-                top[k] = rowFor(li, k, t.t0, t.t1);
-                bottom[k] = rowFor(li, k, t.t1, t.t0);
+                top[k] = rowFor(li, k, t.t0, t.t1, x0, x1);
+                bottom[k] = rowFor(li, k, t.t1, t.t0, x0, x1);
             }
-            uint8_t* to = only ? out : blended.data();
-            if (l.mipCount == 1) {
-                blendRows(top[0], bottom[0], wb[0], channels, to);
-            } else {
-                blendRows(top[0], bottom[0], wb[0], channels, mipRow[0].data());
-                blendRows(top[1], bottom[1], wb[1], channels, mipRow[1].data());
-                blendRows(mipRow[0].data(), mipRow[1].data(), l.mipWeight, channels, to);
+            for (const Run& run : runs) {
+                if (run.li != li) continue;
+                const size_t at = size_t(run.x0) * 4, n = size_t(run.x1 - run.x0) * 4;
+                if (l.mipCount == 1) {
+                    blendRows(top[0] + at, bottom[0] + at, wb[0], n, out + at);
+                } else {
+                    blendRows(top[0] + at, bottom[0] + at, wb[0], n, mipRow[0].data() + at);
+                    blendRows(top[1] + at, bottom[1] + at, wb[1], n, mipRow[1].data() + at);
+                    blendRows(mipRow[0].data() + at, mipRow[1].data() + at, l.mipWeight, n, out + at);
+                }
             }
-            if (!only)
-                for (size_t x = 0; x < width; ++x)
-                    if (chosen[x] == li) std::memcpy(out + 4 * x, to + 4 * x, 4);
             // The pixels whose filter reads an absent tile, in any mip read: tile_resolve.comp
             // takes the whole sample from the pixel's own tile then.
-            if (l.gaps) {
-                // Only a tap outside the pixel's own tile (resident) can find its tile absent.
-                const int64_t ownRow = int64_t(qy) / kTile;
-                bool rowCrosses = false;
-                for (int k = 0; k < l.mipCount; ++k)
-                    rowCrosses = rowCrosses || tapRows[k][0] != ownRow || tapRows[k][1] != ownRow;
-                for (size_t x = 0; x < width; ++x) {
-                    if (chosen[x] != li) continue;
-                    if (!rowCrosses && !l.mips[0].crosses[x] && (l.mipCount < 2 || !l.mips[1].crosses[x])) continue;
-                    bool whole = true;
-                    for (int k = 0; k < l.mipCount && whole; ++k) {
-                        const HostLayer::Column& col = l.mips[k].columns[x];
-                        for (const int64_t ty : tapRows[k])
-                            for (const int32_t c : {col.tile0, col.tile1})
-                                if (slotAt(l, l.grid.x0 + c, ty) < 0) whole = false;
-                    }
-                    if (!whole) fallbackPixel(atlas, l, uint32_t(x), y, out + 4 * x);
+            if (!l.gaps) continue;
+            // Only a tap outside the pixel's own tile (resident) can find its tile absent: along
+            // x, at a segment's ends; along y, in rows near a tile row's edge.
+            const int64_t ownRow = int64_t(qy) / kTile;
+            bool rowCrosses = false;
+            for (int k = 0; k < l.mipCount; ++k)
+                rowCrosses = rowCrosses || tapRows[k][0] != ownRow || tapRows[k][1] != ownRow;
+            const auto check = [&](uint32_t x) {
+                bool whole = true;
+                for (int k = 0; k < l.mipCount && whole; ++k) {
+                    const HostLayer::Column& col = l.mips[k].columns[x];
+                    for (const int64_t ty : tapRows[k])
+                        for (const int32_t c : {col.tile0, col.tile1})
+                            if (slotAt(l, l.grid.x0 + c, ty) < 0) whole = false;
+                }
+                if (!whole) fallbackPixel(atlas, l, x, y, out + 4 * size_t(x));
+            };
+            for (size_t s = 0; s < f.segments.size(); ++s) {
+                if (chosen[s] != li) continue;
+                const HostSegment& seg = f.segments[s];
+                if (rowCrosses) {
+                    for (uint32_t x = seg.x0; x < seg.x1; ++x) check(x);
+                } else {
+                    for (uint32_t x = seg.x0; x < seg.inner0[li]; ++x) check(x);
+                    for (uint32_t x = std::max(seg.inner1[li], seg.inner0[li]); x < seg.x1; ++x) check(x);
                 }
             }
         }
         if (f.swap)
-            for (size_t x = 0; x < width; ++x)
-                if (chosen[x] >= 0) std::swap(out[4 * x], out[4 * x + 2]);
+            for (const Run& run : runs)
+                if (run.li >= 0)
+                    for (uint32_t x = run.x0; x < run.x1; ++x) std::swap(out[4 * x], out[4 * x + 2]);
     }
 }
 

@@ -73,9 +73,6 @@ struct HostLayer {
             bool run;
         };
         std::vector<Span> spans;
-        // Per column: a tap lies outside the pixel's own tile (which the filter may then find
-        // absent: see gaps).
-        std::vector<uint8_t> crosses;
     };
     Mip mips[2];
     int mipCount = 1;
@@ -85,6 +82,19 @@ struct HostLayer {
     // -1 where the centre lies outside the level.
     std::vector<int32_t> own;
     bool ownAll = false; // every column's centre lies inside the level: own[0] .. own[width − 1]
+    // Per target column: a tap, in a mip read, lies outside the pixel's own tile (which the
+    // filter may then find absent: see gaps).
+    std::vector<uint8_t> crosses;
+};
+
+// The target's columns cut wherever a layer's own tile column changes: along a target row,
+// which layer shows (the finest whose own tile is resident) is one choice a segment, not one a
+// pixel. Each layer's taps leave the own tile only at a segment's ends: [inner0, inner1) are
+// the columns whose taps all stay inside it (in every mip read).
+struct HostSegment {
+    uint32_t x0, x1; // [x0, x1)
+    int32_t own[3];  // per layer: HostLayer::own of its columns
+    uint32_t inner0[3], inner1[3];
 };
 
 // One frame of the host resolve: its layers finest first (HR, LR, base); each pixel shows the
@@ -93,6 +103,7 @@ struct HostFrame {
     const gpu::TileAtlas* atlas = nullptr;
     HostLayer layers[3];
     int layerCount = 0;
+    std::vector<HostSegment> segments; // in order, covering [0, width)
     uint32_t width = 0, height = 0; // the target's
     uint8_t background[4] = {};     // opaque, in the target's channel order
     bool swap = false;              // the target's red and blue are the atlas's blue and red

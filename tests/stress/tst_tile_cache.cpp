@@ -73,7 +73,8 @@ private slots:
         QVERIFY(cache.replenish(3));
         QCOMPARE(cache.bytesUsed(), 3ull * iris::kTileBytes);
         {
-            // Loaders replenishing at once stop at the reserve together.
+            // Loaders replenishing at once (one makes buffers, the others find it busy) stop at
+            // the reserve.
             std::vector<std::thread> loaders;
             for (int i = 0; i < 4; ++i)
                 loaders.emplace_back([&] {

@@ -31,8 +31,8 @@ void LoaderPool::run() {
     while (!shared_.stopping.load(std::memory_order_acquire)) {
         const uint64_t seen = shared_.wakeValue();
         // With nothing to decode, buffers for the next field's tiles first (TileCache::replenish:
-        // a few at a time, so that a new view waits at most ~1 ms for this loader).
-        if (!loadOne() && !cache_.replenish(8)) shared_.waitChange(seen);
+        // a few at a time, so that a new view waits at most ~0.3 ms for this loader).
+        if (!loadOne() && !cache_.replenish(4)) shared_.waitChange(seen);
     }
 }
 

@@ -100,7 +100,11 @@ struct Engine::Impl {
         render->setRebuild([this] { return rebuildGpu(); });
         buffer->start();
         render->start();
-        loaders = std::make_unique<LoaderPool>(shared, cache, log, config.loaderThreads, int(config.perimeterTiles));
+        // Each decoded tile into staging by its loader (BufferThread::prestage); the loaders go
+        // before the buffer thread (the destructor, and no rebuild replaces it).
+        loaders = std::make_unique<LoaderPool>(
+            shared, cache, log, config.loaderThreads, int(config.perimeterTiles),
+            [b = buffer.get()](uint64_t key, const uint8_t* pixels) { b->prestage(key, pixels); });
         log.info("engine ready: " + std::to_string(atlas.slotCount()) + " atlas slots, RAM budget " +
                  std::to_string(cache.budgetBytes() >> 20) + " MiB");
         return {};

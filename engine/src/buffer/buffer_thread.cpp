@@ -90,11 +90,20 @@ Result BufferThread::init() {
     handover_.uploadTimeline = timeline_.get();
     // The host schedule reads each base level back from staging to make its levels: cached
     // memory, where write-combined memory would make every read an uncached one.
-    if (Result r = vk::createMappedBuffer(device_.physical(), dev, VkDeviceSize(kStagingTiles) * stagingStride_,
-                                          VK_BUFFER_USAGE_TRANSFER_SRC_BIT, /*preferCached=*/hostMips_, staging_);
-        !r.ok())
-        return r;
-    for (uint32_t i = kStagingTiles; i-- > 0;) freeStaging_.push_back(i);
+    {
+        // Loaders copy into staging_ (prestage) only while it lives: made and destroyed under
+        // the exclusive lock.
+        std::unique_lock life(stagingLife_);
+        const uint32_t tiles = kStagingTiles + (hostWrites_ ? 0 : kPrestageTiles);
+        if (Result r = vk::createMappedBuffer(device_.physical(), dev, VkDeviceSize(tiles) * stagingStride_,
+                                              VK_BUFFER_USAGE_TRANSFER_SRC_BIT, /*preferCached=*/hostMips_, staging_);
+            !r.ok())
+            return r;
+        std::lock_guard lock(stagingMutex_);
+        freeStaging_.clear();
+        prestaged_.clear();
+        for (uint32_t i = tiles; i-- > 0;) freeStaging_.push_back(i);
+    }
     if (hostWrites_) mipScratch_.assign(size_t(kTileBytes) + gpu::mipkernel::kChainBytes, 0);
     txns_.resize(kMaxTransactions);
     const auto alloc = [&](VkCommandPool pool, VkCommandBuffer* out) -> Result {
@@ -111,7 +120,61 @@ Result BufferThread::init() {
         if (separateCopy_)
             if (Result r = alloc(copyPool_.get(), &t.copyCmd); !r.ok()) return r;
     }
+    // A host-written atlas takes tiles straight from the cache (no staging to fill ahead).
+    prestaging_.store(!hostWrites_, std::memory_order_release);
     return {};
+}
+
+void BufferThread::prestage(uint64_t key, const uint8_t* pixels) {
+    if (!prestaging_.load(std::memory_order_acquire)) return;
+    std::shared_lock life(stagingLife_, std::try_to_lock);
+    if (!life.owns_lock() || !staging_.mapped) return; // being made or destroyed: this thread copies it later
+    uint32_t st = 0;
+    {
+        std::lock_guard lock(stagingMutex_);
+        // Slots for a transaction of this thread's own stay free (tiles no loader staged).
+        if (freeStaging_.size() <= kTilesPerTransaction || prestaged_.count(key)) return;
+        st = freeStaging_.back();
+        freeStaging_.pop_back();
+    }
+    uint8_t* dst = static_cast<uint8_t*>(staging_.mapped) + size_t(st) * stagingStride_;
+    bool opaque = false;
+    if (trackOpacity_ || atlas_.swapped())
+        opaque = copyPixels(pixels, dst, kTilePixels, atlas_.swapped());
+    else
+        std::memcpy(dst, pixels, kTileBytes);
+    std::lock_guard lock(stagingMutex_);
+    if (!prestaged_.try_emplace(key, Prestaged{st, trackOpacity_ && opaque}).second) freeStaging_.push_back(st);
+    // This thread's next pass takes it (the loader bumps `wake` once it has published the tile).
+}
+
+uint32_t BufferThread::takeFreeStaging() {
+    std::lock_guard lock(stagingMutex_);
+    if (freeStaging_.empty()) return kNoStaging;
+    const uint32_t st = freeStaging_.back();
+    freeStaging_.pop_back();
+    return st;
+}
+
+std::optional<BufferThread::Prestaged> BufferThread::takePrestaged(uint64_t key) {
+    std::lock_guard lock(stagingMutex_);
+    const auto it = prestaged_.find(key);
+    if (it == prestaged_.end()) return std::nullopt;
+    const Prestaged p = it->second;
+    prestaged_.erase(it);
+    return p;
+}
+
+void BufferThread::dropPrestaged() {
+    std::lock_guard lock(stagingMutex_);
+    for (auto it = prestaged_.begin(); it != prestaged_.end();) {
+        if (!keep_.count(it->first) || atlas_.map().contains(it->first)) {
+            freeStaging_.push_back(it->second.staging);
+            it = prestaged_.erase(it);
+        } else {
+            ++it;
+        }
+    }
 }
 
 void BufferThread::start() {
@@ -151,8 +214,14 @@ void BufferThread::releaseGpu() {
         }
     }
     txns_.clear(); // their command buffers go with the pools
-    freeStaging_.clear();
-    staging_ = {};
+    prestaging_.store(false, std::memory_order_release);
+    {
+        std::unique_lock life(stagingLife_); // after every loader's copy into it
+        std::lock_guard lock(stagingMutex_);
+        freeStaging_.clear();
+        prestaged_.clear();
+        staging_ = {};
+    }
     mipTimestamps_ = {};
     copyTimeline_ = {};
     timeline_ = {};
@@ -323,8 +392,11 @@ void BufferThread::finish(Transaction& t) {
         else
             atlas_.map().activate(t.slots[i], seq, opaque, t.mipsReady[i] != 0);
     }
-    for (uint32_t s : t.staging)
-        if (s != kWritten) freeStaging_.push_back(s);
+    {
+        std::lock_guard lock(stagingMutex_);
+        for (uint32_t s : t.staging)
+            if (s != kWritten) freeStaging_.push_back(s);
+    }
     t.slots.clear();
     t.staging.clear();
     t.opaque.clear();
@@ -334,8 +406,19 @@ void BufferThread::finish(Transaction& t) {
 
 bool BufferThread::submitNew(const Snapshot& snap) {
     auto txIt = std::find_if(txns_.begin(), txns_.end(), [](const Transaction& t) { return t.signalValue == 0; });
-    if (txIt == txns_.end() || freeStaging_.empty()) return false;
+    if (txIt == txns_.end()) return false;
     Transaction& tx = *txIt;
+    // Free staging slots (loaders take some meanwhile: a count that only this thread raises
+    // is a lower bound for it) and tiles loaders staged.
+    const auto freeSlots = [&] {
+        std::lock_guard lock(stagingMutex_);
+        return freeStaging_.size();
+    };
+    const auto anyPrestaged = [&] {
+        std::lock_guard lock(stagingMutex_);
+        return !prestaged_.empty();
+    };
+    if (freeSlots() == 0 && !anyPrestaged()) return false;
     if (regionSlide_ != snap.slide.get() || regionSerial_ != snap.viewSerial) {
         // Once per view, not once per wake-up (every decoded tile wakes this thread).
         region_ = bufferRegion(snap.slide->info, snap.slide->generation, snap.viewport, perimeter_);
@@ -344,7 +427,23 @@ bool BufferThread::submitNew(const Snapshot& snap) {
         for (const TileRef& t : region_) keep_.insert(t.key);
         regionSlide_ = snap.slide.get();
         regionSerial_ = snap.viewSerial;
+        dropPrestaged(); // staged for a view left behind
     }
+    // The tiles loaders staged, taken out for this pass with one lock (not one a region tile);
+    // those it leaves go back after it.
+    {
+        std::lock_guard lock(stagingMutex_);
+        prestagedPass_.swap(prestaged_);
+    }
+    struct PutBack {
+        BufferThread& self;
+        ~PutBack() {
+            std::lock_guard lock(self.stagingMutex_);
+            for (const auto& [key, p] : self.prestagedPass_)
+                if (!self.prestaged_.try_emplace(key, p).second) self.freeStaging_.push_back(p.staging);
+            self.prestagedPass_.clear();
+        }
+    } putBack{*this};
     atlasFull_ = false;
     const std::vector<TileRef>& region = region_;
     const std::unordered_set<uint64_t>& keep = keep_;
@@ -359,9 +458,9 @@ bool BufferThread::submitNew(const Snapshot& snap) {
         keep_.insert(ph);
         if (!map.contains(ph)) {
             const int slot = map.allocate(ph, inRegion);
-            if (slot >= 0) {
-                const uint32_t st = freeStaging_.back();
-                freeStaging_.pop_back();
+            if (const uint32_t st = slot >= 0 ? takeFreeStaging() : kNoStaging; st == kNoStaging) {
+                if (slot >= 0) map.abandon(slot);
+            } else {
                 fillFailedTilePlaceholder(base + size_t(st) * stagingStride_);
                 if (atlas_.swapped()) swapRedBlue(base + size_t(st) * stagingStride_, base + size_t(st) * stagingStride_, kTilePixels);
                 tx.opaque.push_back(trackOpacity_ && allOpaque(base + size_t(st) * stagingStride_));
@@ -373,8 +472,11 @@ bool BufferThread::submitNew(const Snapshot& snap) {
         }
     }
     for (const TileRef& t : region) {
-        if (tx.slots.size() == kTilesPerTransaction || freeStaging_.empty()) break;
-        if (map.contains(t.key) || !cache_.isReady(t.key)) continue;
+        if (tx.slots.size() == kTilesPerTransaction) break;
+        if (map.contains(t.key)) continue;
+        const auto pre = prestagedPass_.find(t.key);
+        const bool staged = pre != prestagedPass_.end();
+        if (!staged && !cache_.isReady(t.key)) continue;
         const int slot = map.allocate(t.key, inRegion);
         if (slot < 0) { // atlas full of tiles that are needed or still drawn
             atlasFull_ = true;
@@ -401,14 +503,26 @@ bool BufferThread::submitNew(const Snapshot& snap) {
             tx.staging.push_back(kWritten);
             continue;
         }
-        const uint32_t st = freeStaging_.back();
-        if (!cache_.copyOut(t.key, base + size_t(st) * stagingStride_, &failed)) {
-            map.abandon(slot); // evicted from RAM meanwhile; a loader will decode it again
-            continue;
+        uint32_t st = kNoStaging;
+        if (staged) { // a loader copied it in, swapped and looked at (prestage)
+            st = pre->second.staging;
+            tx.opaque.push_back(pre->second.opaque);
+            prestagedPass_.erase(pre);
+        } else {
+            st = takeFreeStaging();
+            if (st == kNoStaging) { // loaders hold the rest: their tiles come in the next pass
+                map.abandon(slot);
+                break;
+            }
+            if (!cache_.copyOut(t.key, base + size_t(st) * stagingStride_, &failed)) {
+                map.abandon(slot); // evicted from RAM meanwhile; a loader will decode it again
+                std::lock_guard lock(stagingMutex_);
+                freeStaging_.push_back(st);
+                continue;
+            }
+            if (atlas_.swapped()) swapRedBlue(base + size_t(st) * stagingStride_, base + size_t(st) * stagingStride_, kTilePixels);
+            tx.opaque.push_back(trackOpacity_ && allOpaque(base + size_t(st) * stagingStride_));
         }
-        freeStaging_.pop_back();
-        if (atlas_.swapped()) swapRedBlue(base + size_t(st) * stagingStride_, base + size_t(st) * stagingStride_, kTilePixels);
-        tx.opaque.push_back(trackOpacity_ && allOpaque(base + size_t(st) * stagingStride_));
         if (hostMips_ && !defer) makeHostMips(base + size_t(st) * stagingStride_, snap.enhance);
         tx.mipsReady.push_back(!defer);
         if (defer) pendingMips_.push_back({slot, t.key, snap.enhance}); // made once the tile is written
@@ -435,7 +549,10 @@ bool BufferThread::submitNew(const Snapshot& snap) {
         shared_.setError(r);
         log_.error(r.message());
         for (int s : tx.slots) map.abandon(s);
-        for (uint32_t s : tx.staging) freeStaging_.push_back(s);
+        {
+            std::lock_guard lock(stagingMutex_);
+            for (uint32_t s : tx.staging) freeStaging_.push_back(s);
+        }
         tx.slots.clear();
         tx.staging.clear();
         tx.opaque.clear();

@@ -22,6 +22,9 @@
 #include <atomic>
 #include <condition_variable>
 #include <mutex>
+#include <optional>
+#include <shared_mutex>
+#include <unordered_map>
 #include <thread>
 #include <unordered_set>
 #include <vector>
@@ -57,6 +60,18 @@ public:
 
     static constexpr uint32_t kTilesPerTransaction = 8;
     static constexpr uint32_t kMaxTransactions = 8;
+    // Staging slots for tiles loaders stage ahead (prestage), beyond the transactions' own.
+    static constexpr uint32_t kPrestageTiles = kTilesPerTransaction * kMaxTransactions;
+
+    // Any loader, with a tile it has just decoded (LoaderPool's hook): where tiles go to the
+    // atlas by queue copies (not a host-written atlas), copies it into a free staging slot now,
+    // swapped and its alpha looked at as this thread would, so that this thread takes it from
+    // there instead of copying it out of the RAM cache. One thread copying every tile of a
+    // field into staging was what a new field waited for on a 16-core GPU machine (~2 ms of a
+    // 6 ms HR-TeFOV at 2774×1750; BENCHMARKS.md, "Tiles staged by the loaders"). Nothing is
+    // done when no slot is free beyond those this thread keeps for itself, when the tile is
+    // staged already, or while this thread is parked.
+    void prestage(uint64_t key, const uint8_t* pixels);
 
 private:
     struct Transaction {
@@ -138,7 +153,24 @@ private:
     uint64_t nextValue_ = 0;
     uint64_t submittedValue_ = 0; // the last timeline value a successful submission will signal
     vk::MappedBuffer staging_;
+    // Guards freeStaging_ and prestaged_, which loaders (prestage) share with this thread.
+    std::mutex stagingMutex_;
     std::vector<uint32_t> freeStaging_;
+    struct Prestaged {
+        uint32_t staging;
+        bool opaque;
+    };
+    std::unordered_map<uint64_t, Prestaged> prestaged_; // tile key → its staging slot, filled by a loader
+    // Held shared by a loader while it copies into staging_, exclusively while staging_ is made
+    // or destroyed (init, releaseGpu): a loader never writes into a buffer that is going away.
+    std::shared_mutex stagingLife_;
+    std::atomic<bool> prestaging_{false}; // staging_ takes loaders' copies (not a host-written atlas)
+    static constexpr uint32_t kNoStaging = UINT32_MAX - 1;
+    uint32_t takeFreeStaging();              // this thread: a free slot, kNoStaging when none
+    // This thread, during a pass of submitNew: prestaged_ taken out (entries it leaves go back).
+    std::unordered_map<uint64_t, Prestaged> prestagedPass_;
+    std::optional<Prestaged> takePrestaged(uint64_t key);
+    void dropPrestaged();                    // slots of tiles outside the region, or uploaded, back to the free list
     std::vector<Transaction> txns_;
     std::thread thread_;
     // park()/resume(): parkRequested_ is set by park() and cleared by resume(); parked_ is the

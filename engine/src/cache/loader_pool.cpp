@@ -3,8 +3,9 @@
 
 namespace iris {
 
-LoaderPool::LoaderPool(SharedState& shared, TileCache& cache, const Log& log, unsigned threads, int perimeter)
-    : shared_(shared), cache_(cache), log_(log), perimeter_(perimeter) {
+LoaderPool::LoaderPool(SharedState& shared, TileCache& cache, const Log& log, unsigned threads, int perimeter,
+                       Decoded decoded)
+    : shared_(shared), decoded_(std::move(decoded)), cache_(cache), log_(log), perimeter_(perimeter) {
     if (threads == 0) threads = defaultThreads(std::thread::hardware_concurrency());
     syntheticCap_ = std::max(1u, threads - 1);
     for (unsigned i = 0; i < threads; ++i)
@@ -135,6 +136,9 @@ void LoaderPool::decode(const Snapshot& snap, Plan& plan, const TileRef& t) {
         if (!source.keepsPartialTiles(t.level)) fillFailedTilePlaceholder(buf.get());
     }
     shared_.failingTiles.remove(t.key); // read (or failed for good: its own placeholder)
+    // Into staging while the tile is still in this core's cache, and beside the other loaders,
+    // rather than by the buffer thread alone later (BufferThread::prestage).
+    if (decoded_ && !failed) decoded_(t.key, buf.get());
     cache_.publish(t.key, std::move(buf), failed);
     shared_.tileStages.stamp(TileStage::Decoded);
     shared_.bump(); // the buffer thread may now upload it

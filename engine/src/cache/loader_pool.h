@@ -28,12 +28,18 @@
 #include "core/log.h"
 #include "core/shared_state.h"
 
+#include <functional>
+
 namespace iris {
 
 class LoaderPool {
 public:
+    // Called by a loader with each tile it decoded (not a failed one), before publishing it:
+    // the buffer thread's BufferThread::prestage. Must be thread-safe.
+    using Decoded = std::function<void(uint64_t key, const uint8_t* pixels)>;
     // threads 0: defaultThreads(the hardware threads).
-    LoaderPool(SharedState& shared, TileCache& cache, const Log& log, unsigned threads, int perimeter);
+    LoaderPool(SharedState& shared, TileCache& cache, const Log& log, unsigned threads, int perimeter,
+               Decoded decoded = {});
     // Loaders for `hardware` hardware threads: all of them up to 4, else two fewer, which the
     // buffer thread (staging every tile) and the render thread then have to themselves. On
     // the H100's 16 cores, 14 loaders made a new field whole sooner than 16 in 7 of 9 and 8 of
@@ -86,6 +92,7 @@ private:
     void retire(Plan& plan);
 
     SharedState& shared_;
+    const Decoded decoded_;
     TileCache& cache_;
     const Log& log_;
     const int perimeter_;

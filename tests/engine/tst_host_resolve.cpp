@@ -19,7 +19,8 @@
 //     pictures the quads draw of that view: the HR level's, the LR level's or the base level's
 //     (each the settled frame of a slide written at test time from the sample's levels from that
 //     one down, the view scaled to it), or the background. Pixels by a tile edge, where a level
-//     next to an absent tile samples its own tile alone, are left out.
+//     next to an absent tile samples its own tile alone, are left out. Fields at 1:1 on the
+//     pixel grid too: their HR level is the exact copy's once whole, the host's while it loads.
 //
 // The host resolve serves CPU devices only: on a GPU this suite skips.
 #include <QtTest>
@@ -346,10 +347,13 @@ private slots:
         // Enlarged 1.43: HR level 0, LR level 1, base the coarsest; fields spread over the slide
         // (golden-ratio steps), as many as it takes to catch frames with the HR level in part
         // (at least three; most fields give one or two).
-        iris::View views[8];
-        for (int i = 0; i < 8; ++i) {
+        // And four at 1:1 on the pixel grid, whose HR level is drawn exactly (the tile pass's
+        // copy) once whole, and while it loads over LR and base resolved on the host.
+        iris::View views[12];
+        for (int i = 0; i < 12; ++i) {
             const double fx = std::fmod(0.5 + i * 0.381966, 1.0), fy = std::fmod(0.3 + i * 0.618034, 1.0);
-            views[i] = {w * (0.12 + 0.76 * fx) + 0.37, h * (0.15 + 0.7 * fy) + 0.61, 0.7};
+            views[i] = i < 8 ? iris::View{w * (0.12 + 0.76 * fx) + 0.37, h * (0.15 + 0.7 * fy) + 0.61, 0.7}
+                             : iris::View{std::round(w * (0.12 + 0.76 * fx)), std::round(h * (0.15 + 0.7 * fy)), 1.0};
         }
         constexpr size_t kViews = std::size(views);
         // The pictures each level gives of each view: the settled frames of the quads.
@@ -385,7 +389,7 @@ private slots:
             cv.notify_all();
         });
         QVERIFY(host->open(path->string()).ok());
-        int mixed = 0, checked = 0;
+        int mixed = 0, checked = 0, checkedExact = 0;
         for (size_t vi = 0; vi < kViews; ++vi) {
             const iris::View& v = views[vi];
             std::string why;
@@ -419,6 +423,7 @@ private slots:
                 if (f->complete) break;
                 if (!rl->hostResolved(f->serial)) continue;
                 ++checked;
+                if (v.downsample == 1.0) ++checkedExact;
                 uint64_t hrOnly = 0, coarserOnly = 0, none = 0;
                 int badX = -1, badY = -1;
                 for (uint32_t y = 0; y < kLH; ++y) {
@@ -456,6 +461,8 @@ private slots:
         host->setFrameCallback({});
         qInfo("%d loading frames resolved on the host checked, %d with the HR level in part", checked, mixed);
         QVERIFY2(mixed > 0, "no frame resolved on the host showed a field in part (HR and a coarser level)");
+        qInfo("of them %d of fields at 1:1 on the pixel grid (the HR level exact)", checkedExact);
+        QVERIFY2(checkedExact > 0, "no loading frame of a field at 1:1 on the pixel grid was resolved on the host");
         for (TestEngine* e : {&host, &quads}) {
             const std::string finished = e->finish();
             QVERIFY2(finished.empty(), finished.c_str());

@@ -124,7 +124,7 @@ bool planLayer(const FrameContext& frame, const LevelDraw& d, uint32_t width, Ho
         }
     }
     // The mips: the draw list's LOD (tile_resolve.comp: trilinear between floor(lod) and the next).
-    const float lod = std::min(d.instances.front().texel[3], float(gpu::kTileMipLevels - 1));
+    const float lod = d.exact ? 0.0f : std::min(d.instances.front().texel[3], float(gpu::kTileMipLevels - 1));
     l.shrunk = lod > 0.0f;
     l.mips[0].level = uint32_t(lod);
     l.mipWeight = l.shrunk ? weightOf(lod - float(l.mips[0].level)) : 0;
@@ -219,9 +219,13 @@ bool planHostFrame(const FrameContext& frame, const DrawList& list, const gpu::T
     if (!atlas.hostWritten() || !frame.snap.slide || frame.snap.colorLut || list.placeholders > 0) return false;
     const Viewport& vp = frame.viewport;
     if (!ViewTransform::of(vp.view, vp.width, vp.height).identity()) return false;
-    // An HR level drawn exactly is the tile pass's (its copy, or its texel fetches), even where
-    // the copy took every instance out of the list.
-    if (list.levels[2].level >= 0 && list.levels[2].exact) return false;
+    // An HR level drawn exactly is the tile pass's (its copy, or its texel fetches) once the
+    // field is whole. While it loads, the LR and base levels under it are llvmpipe's slowest
+    // quads (enlarged over most of the target), so the host resolves the frame, drawing that
+    // level at its own scale (every weight 0 or 256: its texels exactly), and the tile pass's
+    // copy, recorded after, writes the same texels over its tiles.
+    const bool hrExact = list.levels[2].level >= 0 && list.levels[2].exact;
+    if (hrExact && list.hrComplete) return false;
     f.width = frame.extent.width;
     f.height = frame.extent.height;
     if (f.width == 0 || f.height == 0) return false;
@@ -229,8 +233,11 @@ bool planHostFrame(const FrameContext& frame, const DrawList& list, const gpu::T
     f.layerCount = 0;
     for (int i = 2; i >= 0; --i) { // HR, LR, base: finest first
         const LevelDraw& d = list.levels[size_t(i)];
-        if (d.level < 0 || d.range.empty() || d.instances.empty()) continue;
-        if (d.exact || !planLayer(frame, d, f.width, f.layers[f.layerCount])) return false;
+        // (An exact level's copied tiles are out of its instances, but in its layers.)
+        const bool drawn = !d.instances.empty() ||
+                           (d.exact && std::any_of(d.layers.begin(), d.layers.end(), [](int32_t s) { return s >= 0; }));
+        if (d.level < 0 || d.range.empty() || !drawn) continue;
+        if ((d.exact && i != 2) || !planLayer(frame, d, f.width, f.layers[f.layerCount])) return false;
         ++f.layerCount;
     }
     planSegments(f);

@@ -156,15 +156,6 @@ uint32_t BufferThread::takeFreeStaging() {
     return st;
 }
 
-std::optional<BufferThread::Prestaged> BufferThread::takePrestaged(uint64_t key) {
-    std::lock_guard lock(stagingMutex_);
-    const auto it = prestaged_.find(key);
-    if (it == prestaged_.end()) return std::nullopt;
-    const Prestaged p = it->second;
-    prestaged_.erase(it);
-    return p;
-}
-
 void BufferThread::dropPrestaged() {
     std::lock_guard lock(stagingMutex_);
     for (auto it = prestaged_.begin(); it != prestaged_.end();) {
@@ -408,17 +399,11 @@ bool BufferThread::submitNew(const Snapshot& snap) {
     auto txIt = std::find_if(txns_.begin(), txns_.end(), [](const Transaction& t) { return t.signalValue == 0; });
     if (txIt == txns_.end()) return false;
     Transaction& tx = *txIt;
-    // Free staging slots (loaders take some meanwhile: a count that only this thread raises
-    // is a lower bound for it) and tiles loaders staged.
-    const auto freeSlots = [&] {
+    {
+        // Nothing to stage into, and nothing loaders staged: no tile can go.
         std::lock_guard lock(stagingMutex_);
-        return freeStaging_.size();
-    };
-    const auto anyPrestaged = [&] {
-        std::lock_guard lock(stagingMutex_);
-        return !prestaged_.empty();
-    };
-    if (freeSlots() == 0 && !anyPrestaged()) return false;
+        if (freeStaging_.empty() && prestaged_.empty()) return false;
+    }
     if (regionSlide_ != snap.slide.get() || regionSerial_ != snap.viewSerial) {
         // Once per view, not once per wake-up (every decoded tile wakes this thread).
         region_ = bufferRegion(snap.slide->info, snap.slide->generation, snap.viewport, perimeter_);
@@ -473,8 +458,15 @@ bool BufferThread::submitNew(const Snapshot& snap) {
     }
     for (const TileRef& t : region) {
         if (tx.slots.size() == kTilesPerTransaction) break;
-        if (map.contains(t.key)) continue;
         const auto pre = prestagedPass_.find(t.key);
+        if (map.contains(t.key)) {
+            if (pre != prestagedPass_.end()) { // in the atlas already (decoded again after an eviction from RAM)
+                std::lock_guard lock(stagingMutex_);
+                freeStaging_.push_back(pre->second.staging);
+                prestagedPass_.erase(pre);
+            }
+            continue;
+        }
         const bool staged = pre != prestagedPass_.end();
         if (!staged && !cache_.isReady(t.key)) continue;
         const int slot = map.allocate(t.key, inRegion);

@@ -22,7 +22,6 @@
 #include <atomic>
 #include <condition_variable>
 #include <mutex>
-#include <optional>
 #include <shared_mutex>
 #include <unordered_map>
 #include <thread>
@@ -169,7 +168,6 @@ private:
     uint32_t takeFreeStaging();              // this thread: a free slot, kNoStaging when none
     // This thread, during a pass of submitNew: prestaged_ taken out (entries it leaves go back).
     std::unordered_map<uint64_t, Prestaged> prestagedPass_;
-    std::optional<Prestaged> takePrestaged(uint64_t key);
     void dropPrestaged();                    // slots of tiles outside the region, or uploaded, back to the free list
     std::vector<Transaction> txns_;
     std::thread thread_;

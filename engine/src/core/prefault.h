@@ -6,9 +6,12 @@
 // the hypervisor, and measured on the development machine (a Firecracker VM, kernel 6.18) a
 // tile's worth of first writes costs 130-420 µs against 10 µs for rewriting memory already
 // resident: more than decoding the tile. madvise(MADV_POPULATE_WRITE) (Linux 5.14) faults the
-// whole range in one call, about 75 µs a tile there (docs/BENCHMARKS.md, "Memory touched
-// ahead of need"). The engine calls it for the RAM cache's new buffers and the host-written
-// atlas's slots, where possible before they are needed (an idle loader, an idle buffer thread).
+// whole range in one call, about 75 µs a tile there (docs/BENCHMARKS.md, "Loading frames by
+// segments, and memory ahead of need"). The engine calls it for the host-written atlas's
+// slots, from the buffer thread while it is idle (BufferThread::prefaultAtlas). Not for the RAM
+// cache's buffers: each is a mapping of its own, and populating them from many loaders at once
+// contended in the kernel on a 16-core machine where plain faults did not; idle loaders zero a
+// reserve of them instead (TileCache::replenish).
 #pragma once
 
 #include <cstddef>

@@ -1,7 +1,8 @@
 // The buffer thread: moves decoded tiles from the RAM cache into the GPU tile atlas in small
 // microtransactions (up to 8 tiles: staging copy → mip chain → hand-over to rendering). Each
 // pass recomputes the buffer region from the newest published view, asks the tile map what is
-// missing, and takes only tiles already decoded in RAM (it never waits for a loader). Up to 8
+// missing, and takes only tiles already decoded in RAM (it never waits for a loader), most of
+// them already in staging, where the loader that decoded them copied them (prestage). Up to 8
 // transactions are in flight; completion is read from the upload timeline semaphore without
 // waiting, and only then are the tiles handed to rendering.
 //

@@ -49,6 +49,7 @@ struct Options {
     std::vector<std::pair<uint32_t, uint32_t>> sizes;
     int moves = 30;
     int idleMoves = -1; // ≥ 0: each move waits for the field to settle, then this many ms
+    unsigned loaders = 0; // EngineConfig::loaderThreads (0: the engine's default)
     std::vector<double> mags;
     std::string source = "auto";
     std::string baseline; // the slide the CPU baselines read (default: the benchmarked slide)
@@ -134,6 +135,7 @@ iris::EngineConfig benchConfig(const Options& o, bool colorManaged) {
     cfg.validation = o.validation;
     cfg.tuning = o.tuning;
     cfg.perimeterTiles = 1;
+    cfg.loaderThreads = o.loaders;
     cfg.network.frameCacheDirectory = o.frameCache;
     cfg.source = o.source == "openslide" ? iris::SourcePreference::OpenSlide
                  : o.source == "iris"    ? iris::SourcePreference::Iris
@@ -441,6 +443,8 @@ Json resultJson(const Options& o, const SizeResult& r) {
                    {"hr_tefov_vs_decode_floor", jsonNumber(hr.median / flo.median)}};
     j["moves"] = r.movesDone;
     j["idle_moves_ms"] = o.idleMoves; // -1: each move as soon as the field was complete
+    j["loader_threads"] = o.loaders;  // 0: the engine's default (a loader a core, two fewer above 4)
+    j["hardware_threads"] = std::thread::hardware_concurrency();
     j["mip_schedule"] = r.mipSchedule;
     j["tile_upload"] = r.tileUpload;
     // What IRIS_* asked for (an A/B run's JSON says which side it is).
@@ -709,6 +713,12 @@ int main(int argc, char** argv) {
         ->option_text("MS")
         ->default_str("")
         ->check(iris::tools::wholeNumber(0, 60000));
+    app.add_option("--loaders", o.loaders,
+                   "Decoding threads (EngineConfig::loaderThreads; default: one a\n"
+                   "hardware thread, two fewer above 4)")
+        ->option_text("N")
+        ->default_str("")
+        ->check(iris::tools::wholeNumber(1, 256));
     app.add_option("--magnifications", mags,
                    "Comma-separated magnifications (from the objective\n"
                    "power, else from mpp; without either, read as\n"

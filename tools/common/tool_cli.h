@@ -20,7 +20,8 @@ namespace iris::tools {
 // (iris::tuningFromEnvironment, iris/environment.h).
 inline constexpr const char* kTuningEnvironmentHelp =
     "\n\nEnvironment (EngineTuning, see iris/environment.h):\n"
-    "  IRIS_PACE_FRAMES=0|1           frame pacing off/on (default: on for CPU devices)\n"
+    "  IRIS_PACE_FRAMES=0|1           frame pacing off/on (default: on for CPU\n"
+    "                                 devices, for frames of 0.25 ms or more on GPUs)\n"
     "  IRIS_DRAW_COVERED=0|1          draw tiles hidden under finer ones\n"
     "  IRIS_MIP_SCHEDULE=wide|serial|host  who makes the mips (default: by device type)\n"
     "  IRIS_DEVICE=TEXT               use the Vulkan device whose name contains TEXT\n"

@@ -28,7 +28,7 @@ class AnnotationStore; // iris/annotations.h
 // (iris/environment.h).
 struct EngineTuning {
     enum class Pacing {
-        Auto, // On for CPU devices (lavapipe, llvmpipe), Off for GPUs
+        Auto, // On for CPU devices (lavapipe, llvmpipe); on a GPU only for frames of 0.25 ms or more
         On,   // while tiles arrive for an unchanged view, draw at most once per 2× the last frame's GPU time
         Off,  // draw on every arrival
     };

@@ -83,11 +83,17 @@ VkFormat RenderThread::offscreenFormat() const {
 
 Result RenderThread::init() {
     switch (tuning_.pacing) {
-    case EngineTuning::Pacing::Auto: paceFrames_ = device_.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU; break;
+    case EngineTuning::Pacing::Auto:
+        // On a GPU, only frames that cost enough to hold back uploads and mips (BENCHMARKS.md,
+        // "Frame pacing on GPUs for large targets").
+        paceFrames_ = true;
+        paceMinGpuMs_ = device_.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU ? 0.0 : kPaceGpuFrameMs;
+        break;
     case EngineTuning::Pacing::On: paceFrames_ = true; break;
     case EngineTuning::Pacing::Off: paceFrames_ = false; break;
     }
-    log_.info(std::string("frame pacing: ") + (paceFrames_ ? "on" : "off"));
+    log_.info(std::string("frame pacing: ") +
+              (!paceFrames_ ? "off" : paceMinGpuMs_ > 0 ? "frames of 0.25 ms of GPU time or more" : "on"));
     copyExact_ = copiesExact(tuning_.exactCopy, device_.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU);
     log_.info(std::string("exact copy: ") + (copyExact_ ? "on" : "off"));
     if (Result r = initGpu(); !r.ok()) return r;
@@ -381,14 +387,19 @@ void RenderThread::run() {
             }
             continue;
         }
-        // On a CPU device every frame rasterises on the cores the loaders decode on, and tiles
-        // arrive faster than frames finish: drawing each arrival took more of the CPU than the
-        // decoding. A frame that would only add some tiles to the view already on screen
-        // waits for its turn (a new view, target or setting is drawn at once, as is the
-        // frame that shows a layer whole). It polls: a wake-up it sleeps through is one it
-        // would have drawn anyway.
+        // Tiles arrive faster than frames are worth drawing. On a CPU device every frame
+        // rasterises on the cores the loaders decode on, and drawing each arrival took more of
+        // the CPU than the decoding; on a GPU, frames of a large target drawn back to back took
+        // the GPU from the mip pass of the very tiles they waited for. A frame that would only
+        // add some tiles to the view already on screen waits for its turn (a new view, target
+        // or setting is drawn at once, as is the frame that shows a layer whole). Meanwhile
+        // it looks again whenever something happened (a tile arrived: perhaps the one that
+        // makes a layer whole), at most every paceStep_.
         if (paceFrames_ && snap.viewSerial == drawnViewSerial_ && Clock::now() < paceUntil_ && !showsLayerWhole(snap)) {
-            std::this_thread::sleep_until(std::min(paceUntil_, Clock::now() + std::chrono::milliseconds(4)));
+            const auto until = std::min(paceUntil_, Clock::now() + std::chrono::milliseconds(4));
+            while (Clock::now() < until && shared_.wakeValue() == seen &&
+                   !shared_.stopping.load(std::memory_order_acquire))
+                std::this_thread::sleep_for(std::min<Clock::duration>(paceStep_, until - Clock::now()));
             continue;
         }
         if (Result r = renderFrame(snap); !r.ok()) {
@@ -402,9 +413,11 @@ void RenderThread::run() {
         renderedWake = seen;
         rendered = true;
         drawnViewSerial_ = snap.viewSerial;
-        if (paceFrames_ && lastGpuMs_ > 0) {
-            paceUntil_ = Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                            std::chrono::duration<double, std::milli>(kPaceFactor * lastGpuMs_));
+        if (paceFrames_ && lastGpuMs_ > 0 && lastGpuMs_ >= paceMinGpuMs_) {
+            const auto turn = std::chrono::duration_cast<Clock::duration>(
+                std::chrono::duration<double, std::milli>(kPaceFactor * lastGpuMs_));
+            paceUntil_ = Clock::now() + turn;
+            paceStep_ = std::max<Clock::duration>(turn / 16, kPaceStepMin);
         }
     }
 }

@@ -154,7 +154,7 @@ private:
                       const OverlayLayout& overlays);
     Result waitForSerial(const std::atomic<uint64_t>& serial, uint64_t viewSerial, std::chrono::milliseconds timeout,
                          const char* what);
-    // Frame pacing on CPU devices (see run()): whether a frame of `snap` drawn now would show
+    // Frame pacing (see run()): whether a frame of `snap` drawn now would show
     // the view's HR or LR layer whole for the first time. Such a frame is never delayed.
     bool showsLayerWhole(const Snapshot& snap) const;
 
@@ -194,12 +194,20 @@ private:
     // compute pass instead of the tile pass's quads (null otherwise).
     std::unique_ptr<render::ResolvePass> resolvePass_;
     std::unique_ptr<render::HostResolvePass> hostResolve_; // CPU devices with a host-written atlas
-    // Frame pacing (CPU devices, where drawing takes the cores the loaders decode on): a frame
-    // that only adds tiles to the view already drawn waits until kPaceFactor × the last
-    // frame's GPU time has passed since the previous one was submitted, unless it shows a
-    // layer whole. tuning_.pacing overrides the device-type default (A/B, tests).
+    // Frame pacing: a frame that only adds tiles to the view already drawn waits until
+    // kPaceFactor × the last frame's GPU time has passed since the previous one was submitted,
+    // unless it shows a layer whole, which it looks at again whenever `wake` moved, at most
+    // every paceStep_ (1/16 of the wait, at least kPaceStepMin). On a CPU device drawing takes
+    // the cores the loaders decode on: every frame is paced. On a GPU (Pacing::Auto) only a
+    // frame of kPaceGpuFrameMs or more (an 8K target: 0.39 ms on an H200) is, as the GPU time
+    // it took held back the uploads' mips; cheaper frames drawn back to back measured no
+    // such cost. tuning_.pacing overrides (On: every frame, on every device; A/B, tests).
     static constexpr double kPaceFactor = 2.0;
-    bool paceFrames_ = false;
+    static constexpr double kPaceGpuFrameMs = 0.25;
+    static constexpr std::chrono::microseconds kPaceStepMin{50};
+    bool paceFrames_ = true;
+    double paceMinGpuMs_ = 0.0; // frames that cost less GPU time than this are not paced
+    std::chrono::steady_clock::duration paceStep_ = kPaceStepMin;
     bool copyExact_ = false; // EngineTuning::exactCopy, resolved for this device
     uint64_t drawnViewSerial_ = UINT64_MAX;   // the view of the last frame drawn
     uint64_t lrWholeViewSerial_ = UINT64_MAX; // the view whose LR layer a frame has shown whole

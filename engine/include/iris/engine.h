@@ -55,7 +55,9 @@ struct EngineTuning {
     // frame's resident tiles, finest layer first, filtering across tiles by hand (offscreen
     // targets; a swapchain keeps quads). Auto, as measured: compute for offscreen targets on a
     // GPU (an H100 draws a settled 1080p frame 15× faster so, and its colour step costs
-    // nothing visible), quads on a CPU device (lavapipe resolves 3× slower per pixel).
+    // nothing visible); on a CPU device whose atlas is written from the host, the resolve on
+    // the host (docs/ARCHITECTURE.md, "The resolve on the host"), else quads (lavapipe
+    // resolves 3× slower per pixel in a compute pass).
     enum class TileResolve { Auto, Quads, Compute };
     TileResolve tileResolve = TileResolve::Auto;
     // How the colour step interpolates its table (docs/COLOR.md, "Cost"). Sampler: one

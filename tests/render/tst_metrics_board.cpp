@@ -73,6 +73,34 @@ private slots:
         QCOMPARE(log.summarise(iris::TileStage::Staged, t0, t0 + 1s).tiles, uint32_t(iris::StageLog::kSlots));
     }
 
+    // Tiles being read at once over a field (FieldStats::decodesInFlight): the time each spent
+    // between DecodeStart and Decoded within the field, summed, over the time to the last
+    // Decoded. One tile begun before the move counts from the move.
+    void decodesInFlightOfAField() {
+        using namespace std::chrono_literals;
+        UploadCounters counters;
+        iris::StageLog log;
+        MetricsBoard board(counters, &log);
+        Snapshot s = field(1, 0);
+        const auto t0 = s.fieldStart; // 20 ms ago
+        log.stamp(iris::TileStage::DecodeStart, 1, t0 - 1ms); // the previous field's: [0, 2] in this one
+        log.stamp(iris::TileStage::DecodeStart, 2, t0);        // [0, 4] and [0, 6]
+        log.stamp(iris::TileStage::DecodeStart, 1, t0 + 2ms);  // [2, 8]
+        log.stamp(iris::TileStage::Decoded, 1, t0 + 2ms);
+        log.stamp(iris::TileStage::Decoded, 1, t0 + 4ms);
+        log.stamp(iris::TileStage::Decoded, 1, t0 + 6ms);
+        log.stamp(iris::TileStage::Decoded, 1, t0 + 8ms);
+        // (2 + 4 + 6 + 6) ms of reading over 8 ms.
+        QVERIFY(std::abs(log.meanBetween(iris::TileStage::DecodeStart, iris::TileStage::Decoded, t0, t0 + 1s) - 2.25) < 1e-9);
+        board.frameDrawn(s, progress(true, true, 3));
+        (void)board.frameFinished(s, 1, true, 4, 0.1, 0.1);
+        QCOMPARE(board.read().fields.size(), size_t(1));
+        QVERIFY(std::abs(board.read().fields.back().decodesInFlight - 2.25) < 1e-9);
+        // No tile read: none.
+        iris::StageLog quiet;
+        QCOMPARE(quiet.meanBetween(iris::TileStage::DecodeStart, iris::TileStage::Decoded, t0, t0 + 1s), -1.0);
+    }
+
     void revisitsAndFastFields() {
         UploadCounters counters;
         counters.tiles = 100;

@@ -69,6 +69,21 @@ void TestMetrics::scriptedMoves() {
     }
     QCOMPARE(f.stages[size_t(iris::TileStage::GpuDone)].tiles, 5u);
     QVERIFY(f.stages[size_t(iris::TileStage::Shown)].tiles >= f.hrTiles);
+    // Loaders read its five tiles: at least one at a time, never more than tiles were read.
+    QVERIFY2(f.decodesInFlight > 0 && f.decodesInFlight <= 5.0 + 1e-9, QByteArray::number(f.decodesInFlight));
+    {
+        // The loaders' time: reads within the passes that decoded, buffers within those too.
+        const iris::EngineMetrics m = e.metrics();
+        QVERIFY(m.decodeTiles >= 5);
+        QVERIFY(m.decodeMs > 0);
+        QVERIFY(m.loaderWorkMs >= m.decodeMs);
+        QVERIFY(m.loaderWorkMs >= m.loaderAcquireMs && m.loaderAcquireMs >= 0);
+        QVERIFY(m.loaderSearchMs >= 0 && m.loaderReplenishMs >= 0 && m.loaderAsleepMs > 0);
+        // A tile a loader copied into staging (GPUs) was taken from there by the buffer thread.
+        QVERIFY(m.stagedPickupTiles <= m.prestageTiles);
+        if (m.stagedPickupTiles > 0) QVERIFY(m.stagedPickupMs > 0 && m.prestageCopyMs > 0);
+        if (m.uploadTransactions > 0) QVERIFY(m.uploadMs > 0);
+    }
 
     // Back to A: its tiles are still resident (a revisit): no new sample.
     e.setView(a);

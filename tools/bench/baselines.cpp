@@ -139,6 +139,7 @@ BaselineResult decodeFloorBaseline(const std::string& slide, const std::vector<B
             break;
         }
     }
+    uint64_t allNs = 0, allTiles = 0;
     for (const BenchField& f : fields) {
         if (!r.note.empty()) break;
         const LevelDir& ld = dirs[size_t(f.level)];
@@ -157,6 +158,7 @@ BaselineResult decodeFloorBaseline(const std::string& slide, const std::vector<B
         for (int64_t ty = ty0; ty <= ty1; ++ty)
             for (int64_t tx = tx0; tx <= tx1; ++tx) tiles.emplace_back(tx, ty);
         std::atomic<size_t> next{0};
+        std::atomic<uint64_t> busyNs{0}, decoded{0};
         const auto t0 = Clock::now();
         std::vector<std::thread> pool;
         for (Worker& w : workers) {
@@ -164,7 +166,9 @@ BaselineResult decodeFloorBaseline(const std::string& slide, const std::vector<B
                 Worker& k = *wp;
                 uint64_t* sizes = nullptr;
                 TIFFGetField(k.tif, TIFFTAG_TILEBYTECOUNTS, &sizes);
+                uint64_t ns = 0, n = 0;
                 for (size_t i; (i = next.fetch_add(1)) < tiles.size();) {
+                    const auto tileStart = Clock::now();
                     const ttile_t tile = TIFFComputeTile(k.tif, uint32_t(tiles[i].first * ld.tw),
                                                          uint32_t(tiles[i].second * ld.th), 0, 0);
                     const uint64_t sz = sizes ? sizes[tile] : 0;
@@ -180,12 +184,19 @@ BaselineResult decodeFloorBaseline(const std::string& slide, const std::vector<B
                     }
                     tjDecompress2(k.tj, src, (unsigned long)len, k.rgb.data(), int(ld.tw), int(ld.tw) * 4, int(ld.th),
                                   TJPF_RGBA, 0);
+                    ns += uint64_t(std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - tileStart).count());
+                    ++n;
                 }
+                busyNs += ns;
+                decoded += n;
             });
         }
         for (auto& t : pool) t.join();
         r.ms.push_back(msSince(t0));
+        allNs += busyNs;
+        allTiles += decoded;
     }
+    if (allTiles > 0) r.threadUsPerTile = double(allNs) / 1000.0 / double(allTiles);
     for (Worker& w : workers) {
         if (w.tj) tjDestroy(w.tj);
         if (w.tif) TIFFClose(w.tif);

@@ -5,6 +5,7 @@
 //    libjpeg-turbo (no GPU, no OpenSlide): the practical lower bound on this machine.
 #pragma once
 
+#include <cmath>
 #include <optional>
 #include <string>
 #include <vector>
@@ -19,6 +20,7 @@ struct BenchField {
 struct BaselineResult {
     std::vector<double> ms; // one per field
     std::string note;       // why it is missing, when it is
+    double threadUsPerTile = NAN; // decode floor: one thread's read and decode of a tile, mean over all fields
 };
 
 BaselineResult openslideBaseline(const std::string& slide, const std::vector<BenchField>& fields, unsigned threads);

@@ -121,6 +121,14 @@ struct SizeResult {
     int movesDone = 0, movesWanted = 0, timeouts = 0;
     int untimed = 0; // moves the engine did not time (the new field was already resident)
     double mipUsPerTile = NAN; // GPU time of the mip dispatch per tile (timestamps)
+    double pickupUs = NAN;     // a tile's wait in staging, from its loader's copy to the buffer thread taking it
+    double uploadUs = NAN;     // a transaction's time from submission to the buffer thread seeing it complete
+    double prestageUs = NAN;   // a loader's copy of a tile into staging
+    double decodeUs = NAN;     // a loader's read and decode of a tile (SlideSource::readTile)
+    // The loaders' time over the timed walk, summed over them (EngineMetrics::loader*Ms), and
+    // the tiles they decoded.
+    double loaderWorkMs = 0, loaderAcquireMs = 0, loaderSearchMs = 0, loaderReplenishMs = 0, loaderAsleepMs = 0;
+    uint64_t loaderTiles = 0;
     // Opening (issue 20): open() alone, and open() to the first complete frame of the fit view,
     // into a fresh engine (a first slide) and with another slide shown (a switch).
     std::vector<double> openCallMs, openFrameMs, switchCallMs, switchFrameMs;
@@ -340,6 +348,20 @@ SizeResult runSize(const Options& o, uint32_t W, uint32_t H, bool colorManaged) 
     const iris::EngineMetrics m1 = e.metrics();
     if (m1.mipTiles > m0.mipTiles)
         res.mipUsPerTile = (m1.mipGpuMs - m0.mipGpuMs) * 1000.0 / double(m1.mipTiles - m0.mipTiles);
+    if (m1.stagedPickupTiles > m0.stagedPickupTiles)
+        res.pickupUs = (m1.stagedPickupMs - m0.stagedPickupMs) * 1000.0 / double(m1.stagedPickupTiles - m0.stagedPickupTiles);
+    if (m1.uploadTransactions > m0.uploadTransactions)
+        res.uploadUs = (m1.uploadMs - m0.uploadMs) * 1000.0 / double(m1.uploadTransactions - m0.uploadTransactions);
+    if (m1.prestageTiles > m0.prestageTiles)
+        res.prestageUs = (m1.prestageCopyMs - m0.prestageCopyMs) * 1000.0 / double(m1.prestageTiles - m0.prestageTiles);
+    if (m1.decodeTiles > m0.decodeTiles)
+        res.decodeUs = (m1.decodeMs - m0.decodeMs) * 1000.0 / double(m1.decodeTiles - m0.decodeTiles);
+    res.loaderWorkMs = m1.loaderWorkMs - m0.loaderWorkMs;
+    res.loaderAcquireMs = m1.loaderAcquireMs - m0.loaderAcquireMs;
+    res.loaderSearchMs = m1.loaderSearchMs - m0.loaderSearchMs;
+    res.loaderReplenishMs = m1.loaderReplenishMs - m0.loaderReplenishMs;
+    res.loaderAsleepMs = m1.loaderAsleepMs - m0.loaderAsleepMs;
+    res.loaderTiles = m1.decodeTiles - m0.decodeTiles;
     {
         std::lock_guard lock(traceMutex);
         for (const TracePoint& t : res.trace) {
@@ -486,10 +508,28 @@ Json resultJson(const Options& o, const SizeResult& r) {
                               {"lr_tefov_ms", jsonNumber(f->lrTeFovMs)},
                               {"hr_tiles", f->hrTiles},
                               {"tiles_buffered", f->tilesBuffered},
+                              {"decodes_in_flight", jsonNumber(f->decodesInFlight)},
                               {"stages", stages}};
     }
     j["mip_us_per_tile"] = jsonNumber(r.mipUsPerTile);
     j["mip_share_of_hr_tpt"] = jsonNumber(r.mipUsPerTile / quartiles(r.hrTpt).median);
+    {
+        std::vector<double> inFlight;
+        for (const iris::FieldStats& f : r.timed)
+            if (f.decodesInFlight >= 0) inFlight.push_back(f.decodesInFlight);
+        j["decodes_in_flight"] = jsonQuartiles(quartiles(inFlight));
+    }
+    j["staged_pickup_us"] = jsonNumber(r.pickupUs);
+    j["upload_transaction_us"] = jsonNumber(r.uploadUs);
+    j["prestage_copy_us"] = jsonNumber(r.prestageUs);
+    j["decode_us_per_tile"] = jsonNumber(r.decodeUs);
+    j["loader_time_ms"] = {{"work", jsonNumber(r.loaderWorkMs)},
+                           {"acquire_buffer", jsonNumber(r.loaderAcquireMs)},
+                           {"search", jsonNumber(r.loaderSearchMs)},
+                           {"replenish", jsonNumber(r.loaderReplenishMs)},
+                           {"asleep", jsonNumber(r.loaderAsleepMs)},
+                           {"tiles", r.loaderTiles}};
+    j["floor_decode_us_per_tile"] = jsonNumber(r.floor.threadUsPerTile);
     j["timeouts"] = r.timeouts;
     j["untimed_moves"] = r.untimed;
     j["notes"] = r.notes;
@@ -526,6 +566,25 @@ void printTable(const SizeResult& r) {
     std::printf("  mip pass (%s schedule, %s): %.2f us per tile = %.1f%% of the HR time per tile\n",
                 r.mipSchedule.c_str(), r.mipSchedule == "host" ? "buffer thread's clock" : "GPU timestamps", r.mipUsPerTile,
                 100.0 * r.mipUsPerTile / quartiles(r.hrTpt).median);
+    std::printf("  a loader reads and decodes a tile in %.1f us (the decode floor's threads: %.1f us) and copies it into\n"
+                "  staging in %.1f us; a staged tile waits %.1f us for the buffer thread; an upload completes %.1f us\n"
+                "  after its submission (means over the timed walk)\n",
+                r.decodeUs, r.floor.threadUsPerTile, r.prestageUs, r.pickupUs, r.uploadUs);
+    if (r.loaderTiles > 0) {
+        const double t = double(r.loaderTiles);
+        std::printf("  the loaders' time a tile decoded (us): %.1f working, of which %.1f getting a buffer; %.1f finding\n"
+                    "  no tile, %.1f making the cache's reserve, %.1f asleep\n",
+                    r.loaderWorkMs * 1e3 / t, r.loaderAcquireMs * 1e3 / t, r.loaderSearchMs * 1e3 / t,
+                    r.loaderReplenishMs * 1e3 / t, r.loaderAsleepMs * 1e3 / t);
+    }
+    {
+        std::vector<double> inFlight;
+        for (const iris::FieldStats& f : r.timed)
+            if (f.decodesInFlight >= 0) inFlight.push_back(f.decodesInFlight);
+        if (!inFlight.empty())
+            std::printf("  tiles being read at once, from the move to the field's last: %.2f (median over fields)\n",
+                        quartiles(inFlight).median);
+    }
     // Where a field's time goes: each stage's events from the move to HR completion.
     const auto rows = stageTimeline(r.timed);
     std::printf("  tile stages, ms after the move (medians over %zu fields): %10s %10s %10s %8s\n", r.timed.size(),

@@ -414,6 +414,9 @@ struct FieldStats {
     double lrTptUs = -1;       // TeFOV / tiles buffered by then
     double hrTptUs = -1;
     std::array<StageTimes, kTileStageCount> stages{}; // by TileStage: where the field's time went
+    // Tiles the loaders were reading at once, on average, from the move to the last tile they
+    // finished before the field was done (DecodeStart to Decoded); -1 when none was read.
+    double decodesInFlight = -1;
 };
 
 struct EngineMetrics {
@@ -423,6 +426,22 @@ struct EngineMetrics {
     double mipGpuMs = 0;           // GPU time of the mip (reduction-enhancement) dispatches, summed; under
                                    // the host schedule the buffer thread's time making the levels
     uint64_t mipTiles = 0;         // tiles those covered (0: no timestamps on the compute queue)
+    // Tiles that a loader copied into staging as it decoded them (GPUs): the time from that
+    // copy to the buffer thread taking the tile into an upload, summed, and the tiles.
+    double stagedPickupMs = 0;
+    uint64_t stagedPickupTiles = 0;
+    double prestageCopyMs = 0;    // loaders' copies into staging, summed, and the tiles copied
+    uint64_t prestageTiles = 0;
+    double decodeMs = 0;          // the loaders' reads and decodes (SlideSource::readTile), summed
+    uint64_t decodeTiles = 0;
+    // The loaders' time, summed over them: passes that decoded a tile (all of its work), the
+    // part of those spent getting a buffer to decode into, passes that found no tile, making
+    // the RAM cache's reserve of buffers, asleep.
+    double loaderWorkMs = 0, loaderAcquireMs = 0, loaderSearchMs = 0, loaderReplenishMs = 0, loaderAsleepMs = 0;
+    // Uploads through the device's queues: the time from a transaction's submission to the
+    // buffer thread seeing it complete, summed, and the transactions (up to 8 tiles each).
+    double uploadMs = 0;
+    uint64_t uploadTransactions = 0;
     FrameStats lastFrame;
     std::vector<FieldStats> fields; // completed or superseded field moves, oldest first (last 4096)
     uint32_t tileReadsInProgress = 0; // tiles the loader threads are reading and decoding now

@@ -137,14 +137,19 @@ void BufferThread::prestage(uint64_t key, const uint8_t* pixels) {
         st = freeStaging_.back();
         freeStaging_.pop_back();
     }
+    const auto copyStart = std::chrono::steady_clock::now();
     uint8_t* dst = static_cast<uint8_t*>(staging_.mapped) + size_t(st) * stagingStride_;
     bool opaque = false;
     if (trackOpacity_ || atlas_.swapped())
         opaque = copyPixels(pixels, dst, kTilePixels, atlas_.swapped());
     else
         std::memcpy(dst, pixels, kTileBytes);
+    const auto at = std::chrono::steady_clock::now();
+    counters_.prestageNs.fetch_add(uint64_t(std::chrono::duration_cast<std::chrono::nanoseconds>(at - copyStart).count()),
+                                   std::memory_order_relaxed);
+    counters_.prestageTiles.fetch_add(1, std::memory_order_relaxed);
     std::lock_guard lock(stagingMutex_);
-    if (!prestaged_.try_emplace(key, Prestaged{st, trackOpacity_ && opaque}).second) freeStaging_.push_back(st);
+    if (!prestaged_.try_emplace(key, Prestaged{st, trackOpacity_ && opaque, at}).second) freeStaging_.push_back(st);
     // This thread's next pass takes it (the loader bumps `wake` once it has published the tile).
 }
 
@@ -367,6 +372,11 @@ void BufferThread::finish(Transaction& t) {
     // tells metrics whether a tile was uploaded after a move).
     uint64_t seq = counters_.tiles.fetch_add(t.slots.size(), std::memory_order_relaxed);
     const auto now = StageLog::Clock::now();
+    if (!hostWrites_) {
+        counters_.uploadNs.fetch_add(uint64_t(std::chrono::duration_cast<std::chrono::nanoseconds>(now - t.submitted).count()),
+                                     std::memory_order_relaxed);
+        counters_.uploadTransactions.fetch_add(1, std::memory_order_relaxed);
+    }
     shared_.tileStages.stamp(TileStage::GpuDone, uint32_t(t.slots.size()), now);
     if (!handover_.needed) shared_.tileStages.stamp(TileStage::Drawable, uint32_t(t.slots.size()), now);
     counters_.bytes.fetch_add(t.slots.size() * gpu::TileAtlas::bytesPerSlot(), std::memory_order_relaxed);
@@ -499,6 +509,10 @@ bool BufferThread::submitNew(const Snapshot& snap) {
         if (staged) { // a loader copied it in, swapped and looked at (prestage)
             st = pre->second.staging;
             tx.opaque.push_back(pre->second.opaque);
+            const auto waited = std::chrono::steady_clock::now() - pre->second.at;
+            counters_.pickupNs.fetch_add(uint64_t(std::chrono::duration_cast<std::chrono::nanoseconds>(waited).count()),
+                                         std::memory_order_relaxed);
+            counters_.pickupTiles.fetch_add(1, std::memory_order_relaxed);
             prestagedPass_.erase(pre);
         } else {
             st = takeFreeStaging();
@@ -552,6 +566,7 @@ bool BufferThread::submitNew(const Snapshot& snap) {
         return false;
     }
     tx.signalValue = ++nextValue_;
+    tx.submitted = std::chrono::steady_clock::now();
     if (Result r = submit(tx); !r.ok()) {
         // The GPU state is unknown after a failed submit: leave the slots FILLING (never drawn).
         // A lost device is the render thread's to recover (Device marked it); anything else is

@@ -21,6 +21,7 @@
 #pragma once
 
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <mutex>
 #include <shared_mutex>
@@ -78,6 +79,7 @@ private:
         VkCommandBuffer copyCmd = VK_NULL_HANDLE; // transfer queue (only when its family differs); freed with copyPool_
         VkCommandBuffer cmd = VK_NULL_HANDLE;     // compute queue; freed with pool_
         uint64_t signalValue = 0; // 0: idle
+        std::chrono::steady_clock::time_point submitted; // UploadCounters::uploadNs
         bool enhance = true;      // Snapshot::enhance of the view this transaction was made for
         std::vector<int> slots;
         std::vector<uint32_t> staging;
@@ -159,6 +161,7 @@ private:
     struct Prestaged {
         uint32_t staging;
         bool opaque;
+        std::chrono::steady_clock::time_point at; // when the loader's copy ended (UploadCounters::pickupNs)
     };
     std::unordered_map<uint64_t, Prestaged> prestaged_; // tile key → its staging slot, filled by a loader
     // Held shared by a loader while it copies into staging_, exclusively while staging_ is made

@@ -33,7 +33,19 @@ void LoaderPool::run() {
         const uint64_t seen = shared_.wakeValue();
         // With nothing to decode, buffers for the next field's tiles first (TileCache::replenish:
         // a few at a time, so that a new view waits at most ~0.3 ms for this loader).
-        if (!loadOne() && !cache_.replenish(4)) shared_.waitChange(seen);
+        using Kind = StageLog::LoaderTime;
+        StageLog& log = shared_.tileStages;
+        auto t0 = StageLog::Clock::now();
+        const bool loaded = loadOne();
+        auto t1 = StageLog::Clock::now();
+        log.addLoaderTime(loaded ? Kind::Work : Kind::Search, t1 - t0);
+        if (loaded) continue;
+        const bool made = cache_.replenish(4);
+        t0 = StageLog::Clock::now();
+        log.addLoaderTime(Kind::Replenish, t0 - t1);
+        if (made) continue;
+        shared_.waitChange(seen);
+        log.addLoaderTime(Kind::Asleep, StageLog::Clock::now() - t0);
     }
 }
 
@@ -104,10 +116,14 @@ void LoaderPool::hold(Plan& plan, const TileRef& t, std::vector<TileRef> Plan::*
 
 void LoaderPool::decode(const Snapshot& snap, Plan& plan, const TileRef& t) {
     SlideSource& source = *snap.slide->source;
+    const auto asked = StageLog::Clock::now();
     std::unique_ptr<uint8_t[]> buf = cache_.acquireBuffer();
+    shared_.tileStages.addLoaderTime(StageLog::LoaderTime::Acquire, StageLog::Clock::now() - asked);
     reads_.fetch_add(1, std::memory_order_relaxed);
-    shared_.tileStages.stamp(TileStage::DecodeStart);
+    const auto started = StageLog::Clock::now();
+    shared_.tileStages.stamp(TileStage::DecodeStart, 1, started);
     const Result r = source.readTile(t.level, t.tx, t.ty, buf.get());
+    shared_.tileStages.addDecode(StageLog::Clock::now() - started);
     reads_.fetch_sub(1, std::memory_order_relaxed);
     const bool failed = !r.ok();
     if (r.status() == Status::Cancelled) {

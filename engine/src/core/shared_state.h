@@ -67,6 +67,16 @@ struct UploadCounters {
     std::atomic<uint64_t> bytes{0};
     std::atomic<uint64_t> mipNs{0};    // GPU time of the mip dispatches (timestamps), or host time (host schedule), summed
     std::atomic<uint64_t> mipTiles{0}; // tiles those dispatches covered
+    // Tiles a loader copied into staging (BufferThread::prestage): the time from that copy to
+    // the buffer thread taking the tile into a transaction, summed, and the tiles.
+    std::atomic<uint64_t> pickupNs{0};
+    std::atomic<uint64_t> pickupTiles{0};
+    std::atomic<uint64_t> prestageNs{0}; // the loaders' copies into staging, summed, and the tiles copied
+    std::atomic<uint64_t> prestageTiles{0};
+    // Queue transactions: the time from their submission to the buffer thread seeing them
+    // complete, summed, and the transactions.
+    std::atomic<uint64_t> uploadNs{0};
+    std::atomic<uint64_t> uploadTransactions{0};
 };
 
 class SharedState {

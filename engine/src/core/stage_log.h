@@ -39,17 +39,9 @@ public:
 
     // The events of `stage` at or after `from` and at or before `to`, as offsets from `from`.
     StageTimes summarise(TileStage stage, Clock::time_point from, Clock::time_point to) const {
-        const Ring& r = rings_[size_t(stage)];
-        const int64_t a = from.time_since_epoch().count(), b = to.time_since_epoch().count();
-        std::vector<int64_t> in;
-        const size_t n = std::min<uint64_t>(r.next.load(std::memory_order_relaxed), kSlots);
-        for (size_t i = 0; i < n; ++i) {
-            const int64_t t = r.times[i].load(std::memory_order_relaxed);
-            if (t >= a && t <= b) in.push_back(t - a);
-        }
+        const std::vector<int64_t> in = within(stage, from, to);
         StageTimes s;
         if (in.empty()) return s;
-        std::sort(in.begin(), in.end());
         const auto ms = [](int64_t d) { return std::chrono::duration<double, std::milli>(Clock::duration(d)).count(); };
         s.tiles = uint32_t(in.size());
         s.firstMs = ms(in.front());
@@ -58,7 +50,66 @@ public:
         return s;
     }
 
+    // The mean number of tiles between stages `a` and `b` (begun, not yet through) from `from` to
+    // the last event of `b` at or before `to`: how many loaders were decoding at once, for
+    // DecodeStart and Decoded. Tiles begun before `from` and ended after it count from `from`
+    // (as many as the window's ends exceed its starts at any point). -1 with no event of `b`.
+    double meanBetween(TileStage a, TileStage b, Clock::time_point from, Clock::time_point to) const {
+        const std::vector<int64_t> starts = within(a, from, to), ends = within(b, from, to);
+        if (ends.empty()) return -1;
+        const int64_t last = ends.back();
+        std::vector<std::pair<int64_t, int>> steps; // (time, +1 begun / -1 through), up to `last`
+        for (const int64_t t : starts)
+            if (t <= last) steps.emplace_back(t, 1);
+        for (const int64_t t : ends) steps.emplace_back(t, -1);
+        std::sort(steps.begin(), steps.end());
+        int64_t open = 0, lowest = 0; // in flight at `from`: the deepest the running count goes below 0
+        for (const auto& step : steps) lowest = std::min(lowest, open += step.second);
+        open = -lowest;
+        int64_t area = 0, at = 0; // tiles in flight × time, from `from`
+        for (const auto& [t, d] : steps) {
+            area += open * (t - at);
+            at = t;
+            open += d;
+        }
+        return last > 0 ? double(area) / double(last) : -1;
+    }
+
+    // A loader read and decoded one tile (SlideSource::readTile) in `d`: summed with the tiles,
+    // for the decoders' own speed beside the stages' times.
+    void addDecode(Clock::duration d) noexcept {
+        decodeNs_.fetch_add(uint64_t(std::chrono::duration_cast<std::chrono::nanoseconds>(d).count()), std::memory_order_relaxed);
+        decodeTiles_.fetch_add(1, std::memory_order_relaxed);
+    }
+    uint64_t decodeNs() const noexcept { return decodeNs_.load(std::memory_order_relaxed); }
+    // Where the loaders' time goes, summed over all of them: getting a buffer to decode into, a
+    // pass that decoded a tile (the buffer, the read, the copy into staging, publishing), a pass
+    // that found none, making the cache's reserve, asleep.
+    enum class LoaderTime { Acquire, Work, Search, Replenish, Asleep, Count };
+    void addLoaderTime(LoaderTime k, Clock::duration d) noexcept {
+        loaderNs_[size_t(k)].fetch_add(uint64_t(std::chrono::duration_cast<std::chrono::nanoseconds>(d).count()),
+                                       std::memory_order_relaxed);
+    }
+    uint64_t loaderNs(LoaderTime k) const noexcept { return loaderNs_[size_t(k)].load(std::memory_order_relaxed); }
+    uint64_t decodeTiles() const noexcept { return decodeTiles_.load(std::memory_order_relaxed); }
+
 private:
+    // The events of `stage` in [from, to], as offsets from `from` (clock ticks), sorted.
+    std::vector<int64_t> within(TileStage stage, Clock::time_point from, Clock::time_point to) const {
+        const Ring& r = rings_[size_t(stage)];
+        const int64_t a = from.time_since_epoch().count(), b = to.time_since_epoch().count();
+        std::vector<int64_t> in;
+        const size_t n = std::min<uint64_t>(r.next.load(std::memory_order_relaxed), kSlots);
+        for (size_t i = 0; i < n; ++i) {
+            const int64_t t = r.times[i].load(std::memory_order_relaxed);
+            if (t >= a && t <= b) in.push_back(t - a);
+        }
+        std::sort(in.begin(), in.end());
+        return in;
+    }
+
+    std::atomic<uint64_t> decodeNs_{0}, decodeTiles_{0};
+    std::array<std::atomic<uint64_t>, size_t(LoaderTime::Count)> loaderNs_{};
     struct Ring {
         std::atomic<uint64_t> next{0};
         std::array<std::atomic<int64_t>, kSlots> times{};

@@ -40,6 +40,7 @@ void MetricsBoard::finishField(bool superseded) {
         const auto now = std::chrono::steady_clock::now();
         for (int s = 0; s < kTileStageCount; ++s)
             field_.stats.stages[size_t(s)] = stages_->summarise(TileStage(s), field_.start, now);
+        field_.stats.decodesInFlight = stages_->meanBetween(TileStage::DecodeStart, TileStage::Decoded, field_.start, now);
     }
     // A new list (boards already published keep theirs); a field finishes at most once a frame.
     auto next = std::make_shared<std::vector<FieldStats>>();
@@ -122,6 +123,23 @@ FrameStats MetricsBoard::frameFinished(const Snapshot& snap, uint64_t serial, bo
     m.bytesBuffered = bytes;
     m.mipGpuMs = double(counters_.mipNs.load(std::memory_order_relaxed)) / 1e6;
     m.mipTiles = counters_.mipTiles.load(std::memory_order_relaxed);
+    m.stagedPickupMs = double(counters_.pickupNs.load(std::memory_order_relaxed)) / 1e6;
+    m.stagedPickupTiles = counters_.pickupTiles.load(std::memory_order_relaxed);
+    m.prestageCopyMs = double(counters_.prestageNs.load(std::memory_order_relaxed)) / 1e6;
+    m.prestageTiles = counters_.prestageTiles.load(std::memory_order_relaxed);
+    if (stages_) {
+        m.decodeMs = double(stages_->decodeNs()) / 1e6;
+        m.decodeTiles = stages_->decodeTiles();
+        using Kind = StageLog::LoaderTime;
+        const auto ms = [&](Kind k) { return double(stages_->loaderNs(k)) / 1e6; };
+        m.loaderWorkMs = ms(Kind::Work);
+        m.loaderAcquireMs = ms(Kind::Acquire);
+        m.loaderSearchMs = ms(Kind::Search);
+        m.loaderReplenishMs = ms(Kind::Replenish);
+        m.loaderAsleepMs = ms(Kind::Asleep);
+    }
+    m.uploadMs = double(counters_.uploadNs.load(std::memory_order_relaxed)) / 1e6;
+    m.uploadTransactions = counters_.uploadTransactions.load(std::memory_order_relaxed);
     board->fields = fields_;
     board->fieldsTotal = fieldsTotal_;
     board_.store(std::move(board));

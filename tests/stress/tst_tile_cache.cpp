@@ -73,8 +73,8 @@ private slots:
         QVERIFY(cache.replenish(3));
         QCOMPARE(cache.bytesUsed(), 3ull * iris::kTileBytes);
         {
-            // Loaders replenishing at once (one makes buffers, the others find it busy) stop at
-            // the reserve.
+            // Loaders replenishing at once (each counts what the others are making) stop at the
+            // reserve, never past it.
             std::vector<std::thread> loaders;
             for (int i = 0; i < 4; ++i)
                 loaders.emplace_back([&] {

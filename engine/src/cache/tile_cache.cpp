@@ -38,10 +38,13 @@ bool TileCache::replenish(size_t batch) {
         const uint64_t held = readyCount_ + freeBuffers_.size() + reserving_;
         const uint64_t maxReady = budget_ / kTileBytes;
         const size_t free = freeBuffers_.size() + reserving_;
-        // One loader at a time: many making memory resident at once contend in the kernel
-        // (each new buffer is a mapping of its own), and slowed the decodes of the next field
-        // on a 16-core machine.
-        if (reserving_ > 0 || free >= reserveTarget_ || held >= maxReady) return false;
+        // Any number of idle loaders at once. (One at a time until 2026-11-29: many making
+        // memory resident at once contend in the kernel, each buffer being a mapping of its
+        // own; but with one, a walk of fields back to back left the reserve empty, and every
+        // loader then paid 135-270 µs a tile for fresh memory while the cache filled. Every idle
+        // loader refilling made new fields whole sooner in 7 of 7 alternated pairs on the H200:
+        // BENCHMARKS.md, "Where the loaders' time goes".)
+        if (free >= reserveTarget_ || held >= maxReady) return false;
         n = size_t(std::min<uint64_t>({batch, reserveTarget_ - free, maxReady - held}));
         reserving_ += n;
     }

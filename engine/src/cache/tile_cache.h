@@ -26,9 +26,9 @@ public:
     // For a loader with nothing to decode: while the cache is filling, makes up to `batch` new
     // buffers ahead of need (zeroed, so their pages are resident: a first write to fresh
     // memory costs more than decoding a tile on some virtual machines, core/prefault.h), keeping at most reserveTarget() of them
-    // free, and never more buffers in all than the budget holds; one loader at a time. False
-    // when none was made (the reserve is full, the budget spoken for, or another loader is
-    // making them): the loader may sleep.
+    // free, and never more buffers in all than the budget holds; any number of loaders at
+    // once. False when none was made (the reserve is full, counting the buffers other loaders
+    // are making, or the budget spoken for): the loader may sleep.
     bool replenish(size_t batch);
     size_t reserveTarget() const { return reserveTarget_; }
     // Publishes a decoded (or failed, with placeholder pixels) tile and drops the claim.

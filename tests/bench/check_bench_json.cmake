@@ -17,7 +17,7 @@ function(check_keys object where)
                    fps:OBJECT settled_frame_gpu_ms:OBJECT baselines:OBJECT ratios:OBJECT moves:NUMBER
                    mip_schedule:STRING tuning:OBJECT timeouts:NUMBER untimed_moves:NUMBER notes:STRING
                    open_to_first_frame_ms:OBJECT open_call_ms:OBJECT switch_to_first_frame_ms:OBJECT
-                   switch_call_ms:OBJECT opening:OBJECT)
+                   switch_call_ms:OBJECT opening:OBJECT decodes_in_flight:OBJECT loader_time_ms:OBJECT)
     string(REPLACE ":" ";" kt ${key_type})
     list(GET kt 0 key)
     list(GET kt 1 want)
@@ -77,6 +77,8 @@ check_quartiles(frame_ms 0.01 60000)
 check_quartiles(fps 0.01 100000)
 # GPU time of frames redrawing a loaded field (timestamp queries; lavapipe has them).
 check_quartiles(settled_frame_gpu_ms 0.0001 60000)
+# Tiles the loaders read at once over a field (2026-11-29): more than none, at most a few hundred.
+check_quartiles(decodes_in_flight 0.001 1000 ON)
 # Opening (issue 20): open() to the first complete frame, into a fresh engine and as a switch;
 # the open() call alone is part of it, so it cannot take longer.
 check_quartiles(open_to_first_frame_ms 0.01 60000)

@@ -436,7 +436,8 @@ struct EngineMetrics {
     uint64_t decodeTiles = 0;
     // The loaders' time, summed over them: passes that decoded a tile (all of its work), the
     // part of those spent getting a buffer to decode into, passes that found no tile, making
-    // the RAM cache's reserve of buffers, asleep.
+    // the RAM cache's reserve of buffers, asleep. Each pass counts when it ends: a loader asleep
+    // now adds its sleep when it wakes (a board read while all sleep lacks their current naps).
     double loaderWorkMs = 0, loaderAcquireMs = 0, loaderSearchMs = 0, loaderReplenishMs = 0, loaderAsleepMs = 0;
     // Uploads through the device's queues: the time from a transaction's submission to the
     // buffer thread seeing it complete, summed, and the transactions (up to 8 tiles each).

@@ -5,8 +5,11 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <csetjmp>
+#include <cstdio>
 #include <thread>
 
+#include <jpeglib.h>
 #include <openslide.h>
 #include <tiffio.h>
 #include <turbojpeg.h>
@@ -14,6 +17,23 @@
 namespace {
 using Clock = std::chrono::steady_clock;
 double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+// The entropy decode alone of one JPEG stream (libjpeg's coefficient API); false if it failed.
+struct JpegError {
+    jpeg_error_mgr mgr;
+    std::jmp_buf jump;
+};
+bool entropyDecode(jpeg_decompress_struct& cinfo, JpegError& err, const uint8_t* data, size_t len) {
+    if (setjmp(err.jump)) {
+        jpeg_abort_decompress(&cinfo);
+        return false;
+    }
+    jpeg_mem_src(&cinfo, data, (unsigned long)len);
+    if (jpeg_read_header(&cinfo, TRUE) != JPEG_HEADER_OK) return false;
+    if (!jpeg_read_coefficients(&cinfo)) return false;
+    jpeg_finish_decompress(&cinfo);
+    return true;
+}
 } // namespace
 
 BaselineResult openslideBaseline(const std::string& slide, const std::vector<BenchField>& fields, unsigned threads) {
@@ -127,11 +147,17 @@ BaselineResult decodeFloorBaseline(const std::string& slide, const std::vector<B
     struct Worker {
         TIFF* tif = nullptr;
         tjhandle tj = nullptr;
+        jpeg_decompress_struct coef{};
+        JpegError err{};
         tdir_t dir = tdir_t(-1);
         std::vector<uint8_t> raw, stream, rgb;
     };
     std::vector<Worker> workers(threads);
     for (Worker& w : workers) {
+        w.coef.err = jpeg_std_error(&w.err.mgr);
+        w.err.mgr.error_exit = [](j_common_ptr c) { std::longjmp(reinterpret_cast<JpegError*>(c->err)->jump, 1); };
+        w.err.mgr.output_message = [](j_common_ptr) {};
+        jpeg_create_decompress(&w.coef);
         w.tif = TIFFOpen(slide.c_str(), "r");
         w.tj = tjInitDecompress();
         if (!w.tif || !w.tj) {
@@ -139,7 +165,7 @@ BaselineResult decodeFloorBaseline(const std::string& slide, const std::vector<B
             break;
         }
     }
-    uint64_t allNs = 0, allTiles = 0;
+    uint64_t allNs = 0, allTiles = 0, allEntropyNs = 0, allEntropyTiles = 0;
     for (const BenchField& f : fields) {
         if (!r.note.empty()) break;
         const LevelDir& ld = dirs[size_t(f.level)];
@@ -157,47 +183,69 @@ BaselineResult decodeFloorBaseline(const std::string& slide, const std::vector<B
         std::vector<std::pair<int64_t, int64_t>> tiles;
         for (int64_t ty = ty0; ty <= ty1; ++ty)
             for (int64_t tx = tx0; tx <= tx1; ++tx) tiles.emplace_back(tx, ty);
-        std::atomic<size_t> next{0};
-        std::atomic<uint64_t> busyNs{0}, decoded{0};
-        const auto t0 = Clock::now();
-        std::vector<std::thread> pool;
-        for (Worker& w : workers) {
-            pool.emplace_back([&, wp = &w] {
-                Worker& k = *wp;
-                uint64_t* sizes = nullptr;
-                TIFFGetField(k.tif, TIFFTAG_TILEBYTECOUNTS, &sizes);
-                uint64_t ns = 0, n = 0;
-                for (size_t i; (i = next.fetch_add(1)) < tiles.size();) {
-                    const auto tileStart = Clock::now();
-                    const ttile_t tile = TIFFComputeTile(k.tif, uint32_t(tiles[i].first * ld.tw),
-                                                         uint32_t(tiles[i].second * ld.th), 0, 0);
-                    const uint64_t sz = sizes ? sizes[tile] : 0;
-                    k.raw.resize(size_t(sz));
-                    if (sz == 0 || TIFFReadRawTile(k.tif, tile, k.raw.data(), tmsize_t(sz)) <= 0) continue;
-                    const uint8_t* src = k.raw.data();
-                    size_t len = k.raw.size();
-                    if (!ld.tables.empty() && len > 2) { // abbreviated stream: tables + tile minus its SOI
-                        k.stream.assign(ld.tables.begin(), ld.tables.end());
-                        k.stream.insert(k.stream.end(), k.raw.begin() + 2, k.raw.end());
-                        src = k.stream.data();
-                        len = k.stream.size();
+        // One tile's compressed bytes as a whole JPEG stream in the worker's buffers (false: none).
+        const auto stream = [&](Worker& k, size_t i, const uint8_t*& src, size_t& len) {
+            uint64_t* sizes = nullptr;
+            TIFFGetField(k.tif, TIFFTAG_TILEBYTECOUNTS, &sizes);
+            const ttile_t tile =
+                TIFFComputeTile(k.tif, uint32_t(tiles[i].first * ld.tw), uint32_t(tiles[i].second * ld.th), 0, 0);
+            const uint64_t sz = sizes ? sizes[tile] : 0;
+            k.raw.resize(size_t(sz));
+            if (sz == 0 || TIFFReadRawTile(k.tif, tile, k.raw.data(), tmsize_t(sz)) <= 0) return false;
+            src = k.raw.data();
+            len = k.raw.size();
+            if (!ld.tables.empty() && len > 2) { // abbreviated stream: tables + tile minus its SOI
+                k.stream.assign(ld.tables.begin(), ld.tables.end());
+                k.stream.insert(k.stream.end(), k.raw.begin() + 2, k.raw.end());
+                src = k.stream.data();
+                len = k.stream.size();
+            }
+            return true;
+        };
+        // The timed pass (full decodes), then an untimed one of the entropy decode alone.
+        for (const bool entropyOnly : {false, true}) {
+            std::atomic<size_t> next{0};
+            std::atomic<uint64_t> busyNs{0}, decoded{0};
+            const auto t0 = Clock::now();
+            std::vector<std::thread> pool;
+            for (Worker& w : workers) {
+                pool.emplace_back([&, wp = &w] {
+                    Worker& k = *wp;
+                    uint64_t ns = 0, n = 0;
+                    for (size_t i; (i = next.fetch_add(1)) < tiles.size();) {
+                        const auto tileStart = Clock::now();
+                        const uint8_t* src = nullptr;
+                        size_t len = 0;
+                        if (!stream(k, i, src, len)) continue;
+                        if (entropyOnly) {
+                            if (!entropyDecode(k.coef, k.err, src, len)) continue;
+                        } else {
+                            tjDecompress2(k.tj, src, (unsigned long)len, k.rgb.data(), int(ld.tw), int(ld.tw) * 4,
+                                          int(ld.th), TJPF_RGBA, 0);
+                        }
+                        ns += uint64_t(
+                            std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - tileStart).count());
+                        ++n;
                     }
-                    tjDecompress2(k.tj, src, (unsigned long)len, k.rgb.data(), int(ld.tw), int(ld.tw) * 4, int(ld.th),
-                                  TJPF_RGBA, 0);
-                    ns += uint64_t(std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - tileStart).count());
-                    ++n;
-                }
-                busyNs += ns;
-                decoded += n;
-            });
+                    busyNs += ns;
+                    decoded += n;
+                });
+            }
+            for (auto& t : pool) t.join();
+            if (entropyOnly) {
+                allEntropyNs += busyNs;
+                allEntropyTiles += decoded;
+            } else {
+                r.ms.push_back(msSince(t0));
+                allNs += busyNs;
+                allTiles += decoded;
+            }
         }
-        for (auto& t : pool) t.join();
-        r.ms.push_back(msSince(t0));
-        allNs += busyNs;
-        allTiles += decoded;
     }
     if (allTiles > 0) r.threadUsPerTile = double(allNs) / 1000.0 / double(allTiles);
+    if (allEntropyTiles > 0) r.entropyUsPerTile = double(allEntropyNs) / 1000.0 / double(allEntropyTiles);
     for (Worker& w : workers) {
+        jpeg_destroy_decompress(&w.coef);
         if (w.tj) tjDestroy(w.tj);
         if (w.tif) TIFFClose(w.tif);
     }

@@ -21,6 +21,11 @@ struct BaselineResult {
     std::vector<double> ms; // one per field
     std::string note;       // why it is missing, when it is
     double threadUsPerTile = NAN; // decode floor: one thread's read and decode of a tile, mean over all fields
+    // Decode floor: one thread's read and entropy decode alone of the same tiles
+    // (jpeg_read_coefficients: the Huffman decode, before the inverse DCT, upsampling and
+    // colour conversion), in an untimed pass after each field's: the CPU part that would be left
+    // if those three ran on the GPU.
+    double entropyUsPerTile = NAN;
 };
 
 BaselineResult openslideBaseline(const std::string& slide, const std::vector<BenchField>& fields, unsigned threads);

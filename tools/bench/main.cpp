@@ -530,6 +530,7 @@ Json resultJson(const Options& o, const SizeResult& r) {
                            {"asleep", jsonNumber(r.loaderAsleepMs)},
                            {"tiles", r.loaderTiles}};
     j["floor_decode_us_per_tile"] = jsonNumber(r.floor.threadUsPerTile);
+    j["floor_entropy_us_per_tile"] = jsonNumber(r.floor.entropyUsPerTile);
     j["timeouts"] = r.timeouts;
     j["untimed_moves"] = r.untimed;
     j["notes"] = r.notes;
@@ -570,6 +571,10 @@ void printTable(const SizeResult& r) {
                 "  staging in %.1f us; a staged tile waits %.1f us for the buffer thread; an upload completes %.1f us\n"
                 "  after its submission (means over the timed walk)\n",
                 r.decodeUs, r.floor.threadUsPerTile, r.prestageUs, r.pickupUs, r.uploadUs);
+    if (std::isfinite(r.floor.entropyUsPerTile))
+        std::printf("  the decode floor's threads read and entropy-decode a tile alone (no inverse DCT, upsampling or\n"
+                    "  colour conversion) in %.1f us, %.0f%% of the whole decode\n",
+                    r.floor.entropyUsPerTile, 100.0 * r.floor.entropyUsPerTile / r.floor.threadUsPerTile);
     if (r.loaderTiles > 0) {
         const double t = double(r.loaderTiles);
         std::printf("  the loaders' time a tile decoded (us): %.1f working, of which %.1f getting a buffer; %.1f finding\n"

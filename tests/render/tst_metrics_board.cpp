@@ -9,6 +9,11 @@
 //     HR-TeFOV and TPT at the first complete one.
 #include <QtTest>
 
+#include <atomic>
+#include <cmath>
+#include <thread>
+#include <vector>
+
 #include "metrics/field_metrics.h"
 
 using iris::Snapshot;
@@ -137,6 +142,52 @@ private slots:
         QCOMPARE(slow.tilesBuffered, 5u);
         QVERIFY(slow.lrTeFovMs > 0 && slow.lrTeFovMs <= slow.hrTeFovMs);
         QVERIFY(std::abs(slow.hrTptUs - slow.hrTeFovMs * 1000.0 / 5) < 1e-6);
+    }
+
+    // The loaders' sums read while loaders count passes: a pass's parts never show without
+    // its whole (StageLog::addDecodedPass, and the board reading parts first). The passes have
+    // no time beyond one part, so that part counted ahead of its whole, or the whole read before
+    // the parts, shows as a part larger than the whole: two loaders count passes while the
+    // render thread's side publishes 100000 boards, once with passes all read and decode, once
+    // with passes all getting a buffer.
+    void loaderSumsWhileCounted_data() {
+        QTest::addColumn<bool>("decodePart");
+        QTest::newRow("read and decode") << true;
+        QTest::newRow("getting a buffer") << false;
+    }
+    void loaderSumsWhileCounted() {
+        QFETCH(bool, decodePart);
+        using D = iris::StageLog::Clock::duration;
+        const D none(0), part(5);
+        UploadCounters counters;
+        iris::StageLog log;
+        MetricsBoard board(counters, &log);
+        std::atomic<bool> stop{false};
+        std::atomic<int> running{0};
+        std::vector<std::thread> loaders;
+        for (int i = 0; i < 2; ++i)
+            loaders.emplace_back([&] {
+                running.fetch_add(1);
+                while (!stop.load(std::memory_order_relaxed))
+                    log.addDecodedPass(part, decodePart ? none : part, decodePart ? part : none);
+            });
+        while (running.load() < 2) std::this_thread::yield();
+        const Snapshot s = field(1, 0);
+        size_t bad = 0;
+        uint64_t serial = 0;
+        for (int reads = 0; reads < 100000; ++reads) {
+            (void)board.frameFinished(s, ++serial, true, 1, 0.1, 0.1);
+            const iris::EngineMetrics m = board.read();
+            if ((decodePart ? m.decodeMs : m.loaderAcquireMs) > m.loaderWorkMs) ++bad;
+        }
+        stop = true;
+        for (std::thread& t : loaders) t.join();
+        (void)board.frameFinished(s, ++serial, true, 1, 0.1, 0.1);
+        const iris::EngineMetrics m = board.read();
+        QVERIFY2(bad == 0, QByteArray::number(qulonglong(bad)) + " of 100000 boards had a part over the whole");
+        QVERIFY(m.decodeTiles > 0);
+        // Every pass counted: the whole is its parts.
+        QCOMPARE(qint64(std::llround(m.loaderWorkMs * 1e6)), qint64(std::llround((m.decodeMs + m.loaderAcquireMs) * 1e6)));
     }
 };
 

@@ -375,7 +375,7 @@ void BufferThread::finish(Transaction& t) {
     if (!hostWrites_) {
         counters_.uploadNs.fetch_add(uint64_t(std::chrono::duration_cast<std::chrono::nanoseconds>(now - t.submitted).count()),
                                      std::memory_order_relaxed);
-        counters_.uploadTransactions.fetch_add(1, std::memory_order_relaxed);
+        counters_.uploadTransactions.fetch_add(1, std::memory_order_release); // after its time (MetricsBoard)
     }
     shared_.tileStages.stamp(TileStage::GpuDone, uint32_t(t.slots.size()), now);
     if (!handover_.needed) shared_.tileStages.stamp(TileStage::Drawable, uint32_t(t.slots.size()), now);
@@ -512,7 +512,7 @@ bool BufferThread::submitNew(const Snapshot& snap) {
             const auto waited = std::chrono::steady_clock::now() - pre->second.at;
             counters_.pickupNs.fetch_add(uint64_t(std::chrono::duration_cast<std::chrono::nanoseconds>(waited).count()),
                                          std::memory_order_relaxed);
-            counters_.pickupTiles.fetch_add(1, std::memory_order_relaxed);
+            counters_.pickupTiles.fetch_add(1, std::memory_order_release); // after its time (MetricsBoard)
             prestagedPass_.erase(pre);
         } else {
             st = takeFreeStaging();

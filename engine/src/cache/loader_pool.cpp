@@ -3,6 +3,15 @@
 
 namespace iris {
 
+namespace {
+// The parts of this loader thread's pass that decode() times, counted with the pass's whole time
+// when it ends (run; StageLog::addDecodedPass keeps the sums consistent while it is counted).
+struct PassParts {
+    StageLog::Clock::duration acquire{}, decode{};
+};
+thread_local PassParts passParts;
+} // namespace
+
 LoaderPool::LoaderPool(SharedState& shared, TileCache& cache, const Log& log, unsigned threads, int perimeter,
                        Decoded decoded)
     : shared_(shared), decoded_(std::move(decoded)), cache_(cache), log_(log), perimeter_(perimeter) {
@@ -38,8 +47,12 @@ void LoaderPool::run() {
         auto t0 = StageLog::Clock::now();
         const bool loaded = loadOne();
         auto t1 = StageLog::Clock::now();
-        log.addLoaderTime(loaded ? Kind::Work : Kind::Search, t1 - t0);
-        if (loaded) continue;
+        if (loaded) { // a pass that decoded a tile (LoaderPool::decode): counted whole with its parts
+            log.addDecodedPass(t1 - t0, passParts.acquire, passParts.decode);
+            passParts = {};
+            continue;
+        }
+        log.addLoaderTime(Kind::Search, t1 - t0);
         const bool made = cache_.replenish(4);
         t0 = StageLog::Clock::now();
         log.addLoaderTime(Kind::Replenish, t0 - t1);
@@ -118,12 +131,12 @@ void LoaderPool::decode(const Snapshot& snap, Plan& plan, const TileRef& t) {
     SlideSource& source = *snap.slide->source;
     const auto asked = StageLog::Clock::now();
     std::unique_ptr<uint8_t[]> buf = cache_.acquireBuffer();
-    shared_.tileStages.addLoaderTime(StageLog::LoaderTime::Acquire, StageLog::Clock::now() - asked);
-    reads_.fetch_add(1, std::memory_order_relaxed);
     const auto started = StageLog::Clock::now();
+    passParts.acquire = started - asked;
+    reads_.fetch_add(1, std::memory_order_relaxed);
     shared_.tileStages.stamp(TileStage::DecodeStart, 1, started);
     const Result r = source.readTile(t.level, t.tx, t.ty, buf.get());
-    shared_.tileStages.addDecode(StageLog::Clock::now() - started);
+    passParts.decode = StageLog::Clock::now() - started;
     reads_.fetch_sub(1, std::memory_order_relaxed);
     const bool failed = !r.ok();
     if (r.status() == Status::Cancelled) {

@@ -75,25 +75,34 @@ public:
         return last > 0 ? double(area) / double(last) : -1;
     }
 
-    // A loader read and decoded one tile (SlideSource::readTile) in `d`: summed with the tiles,
-    // for the decoders' own speed beside the stages' times.
-    void addDecode(Clock::duration d) noexcept {
-        decodeNs_.fetch_add(uint64_t(std::chrono::duration_cast<std::chrono::nanoseconds>(d).count()), std::memory_order_relaxed);
-        decodeTiles_.fetch_add(1, std::memory_order_relaxed);
-    }
-    uint64_t decodeNs() const noexcept { return decodeNs_.load(std::memory_order_relaxed); }
-    // Where the loaders' time goes, summed over all of them: getting a buffer to decode into, a
-    // pass that decoded a tile (the buffer, the read, the copy into staging, publishing), a pass
-    // that found none, making the cache's reserve, asleep.
+    // Where the loaders' time goes, summed over all of them: a pass that decoded a tile (the
+    // buffer, the read, the copy into staging, publishing), of which getting a buffer to decode
+    // into; a pass that found none, making the cache's reserve, asleep. Beside them the reads
+    // and decodes alone (SlideSource::readTile) and their tiles, for the decoders' own speed.
     enum class LoaderTime { Acquire, Work, Search, Replenish, Asleep, Count };
-    void addLoaderTime(LoaderTime k, Clock::duration d) noexcept {
-        loaderNs_[size_t(k)].fetch_add(uint64_t(std::chrono::duration_cast<std::chrono::nanoseconds>(d).count()),
-                                       std::memory_order_relaxed);
+    // A pass that decoded a tile, counted when it ends: its whole time, then its parts (getting
+    // the buffer, the read and decode). The parts are added after the whole with release and
+    // read before it with acquire (the getters below, MetricsBoard), so that any sums read
+    // together have work ≥ acquire and work ≥ decode, even while a pass is being counted.
+    void addDecodedPass(Clock::duration work, Clock::duration acquire, Clock::duration decode) noexcept {
+        loaderNs_[size_t(LoaderTime::Work)].fetch_add(ns(work), std::memory_order_relaxed);
+        loaderNs_[size_t(LoaderTime::Acquire)].fetch_add(ns(acquire), std::memory_order_release);
+        decodeTiles_.fetch_add(1, std::memory_order_release);
+        decodeNs_.fetch_add(ns(decode), std::memory_order_release);
     }
-    uint64_t loaderNs(LoaderTime k) const noexcept { return loaderNs_[size_t(k)].load(std::memory_order_relaxed); }
-    uint64_t decodeTiles() const noexcept { return decodeTiles_.load(std::memory_order_relaxed); }
+    // A pass of another kind (Search, Replenish, Asleep), counted when it ends.
+    void addLoaderTime(LoaderTime k, Clock::duration d) noexcept {
+        loaderNs_[size_t(k)].fetch_add(ns(d), std::memory_order_relaxed);
+    }
+    // Read the parts (decodeNs, decodeTiles, Acquire) before Work (see addDecodedPass).
+    uint64_t decodeNs() const noexcept { return decodeNs_.load(std::memory_order_acquire); }
+    uint64_t decodeTiles() const noexcept { return decodeTiles_.load(std::memory_order_acquire); }
+    uint64_t loaderNs(LoaderTime k) const noexcept { return loaderNs_[size_t(k)].load(std::memory_order_acquire); }
 
 private:
+    static uint64_t ns(Clock::duration d) noexcept {
+        return uint64_t(std::chrono::duration_cast<std::chrono::nanoseconds>(d).count());
+    }
     // The events of `stage` in [from, to], as offsets from `from` (clock ticks), sorted.
     std::vector<int64_t> within(TileStage stage, Clock::time_point from, Clock::time_point to) const {
         const Ring& r = rings_[size_t(stage)];

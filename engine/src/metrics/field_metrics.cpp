@@ -123,23 +123,27 @@ FrameStats MetricsBoard::frameFinished(const Snapshot& snap, uint64_t serial, bo
     m.bytesBuffered = bytes;
     m.mipGpuMs = double(counters_.mipNs.load(std::memory_order_relaxed)) / 1e6;
     m.mipTiles = counters_.mipTiles.load(std::memory_order_relaxed);
+    // The pickups first (acquire; the buffer thread adds a pickup's tile with release after its
+    // time, and after the loader's copy counted it): the sums read have every picked-up tile's
+    // copy and wait in them.
+    m.stagedPickupTiles = counters_.pickupTiles.load(std::memory_order_acquire);
     m.stagedPickupMs = double(counters_.pickupNs.load(std::memory_order_relaxed)) / 1e6;
-    m.stagedPickupTiles = counters_.pickupTiles.load(std::memory_order_relaxed);
-    m.prestageCopyMs = double(counters_.prestageNs.load(std::memory_order_relaxed)) / 1e6;
     m.prestageTiles = counters_.prestageTiles.load(std::memory_order_relaxed);
+    m.prestageCopyMs = double(counters_.prestageNs.load(std::memory_order_relaxed)) / 1e6;
     if (stages_) {
-        m.decodeMs = double(stages_->decodeNs()) / 1e6;
-        m.decodeTiles = stages_->decodeTiles();
+        // The parts of the passes that decoded before their whole (StageLog::addDecodedPass).
         using Kind = StageLog::LoaderTime;
         const auto ms = [&](Kind k) { return double(stages_->loaderNs(k)) / 1e6; };
-        m.loaderWorkMs = ms(Kind::Work);
+        m.decodeMs = double(stages_->decodeNs()) / 1e6;
+        m.decodeTiles = stages_->decodeTiles();
         m.loaderAcquireMs = ms(Kind::Acquire);
+        m.loaderWorkMs = ms(Kind::Work);
         m.loaderSearchMs = ms(Kind::Search);
         m.loaderReplenishMs = ms(Kind::Replenish);
         m.loaderAsleepMs = ms(Kind::Asleep);
     }
+    m.uploadTransactions = counters_.uploadTransactions.load(std::memory_order_acquire); // before its time
     m.uploadMs = double(counters_.uploadNs.load(std::memory_order_relaxed)) / 1e6;
-    m.uploadTransactions = counters_.uploadTransactions.load(std::memory_order_relaxed);
     board->fields = fields_;
     board->fieldsTotal = fieldsTotal_;
     board_.store(std::move(board));

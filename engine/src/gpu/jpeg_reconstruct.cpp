@@ -1,0 +1,160 @@
+#include "gpu/jpeg_reconstruct.h"
+
+#include <algorithm>
+#include <bit>
+#include <cstring>
+
+#include "gpu/vk_util.h"
+#include <iris_shaders/jpeg_color_comp.h>
+#include <iris_shaders/jpeg_idct_comp.h>
+
+namespace iris::gpu {
+
+namespace {
+constexpr uint32_t kCompWord = 16; // JPEG_COMP_WORD(0)
+constexpr uint32_t kCompStride = 8;
+static_assert(kCompWord + 3 * kCompStride == JpegReconstruct::kDescriptorWords);
+
+// A component's sample plane: rows of blocksWide·8 samples, four a word.
+uint64_t planePitch(const JpegCoefficients::Component& c) { return uint64_t(c.blocksWide) * 2; }
+uint64_t planeWords(const JpegCoefficients::Component& c) { return planePitch(c) * c.blocksHigh * 8; }
+} // namespace
+
+JpegReconstruct::Sizes JpegReconstruct::measure(std::span<const JpegCoefficients* const> tiles) {
+    Sizes s;
+    s.tiles = uint32_t(tiles.size());
+    s.inputWords = uint64_t(tiles.size()) * kDescriptorWords;
+    for (const JpegCoefficients* t : tiles) {
+        s.inputWords += uint64_t(t->components) * 64 + uint64_t(t->blockCount()) * 32;
+        for (uint32_t c = 0; c < t->components; ++c) s.planeWords += planeWords(t->comp[c]);
+        s.maxBlocks = std::max(s.maxBlocks, t->blockCount());
+        s.maxWidth = std::max(s.maxWidth, t->width);
+        s.maxHeight = std::max(s.maxHeight, t->height);
+    }
+    return s;
+}
+
+void JpegReconstruct::pack(std::span<const JpegCoefficients* const> tiles, std::span<const Placement> placements,
+                           uint32_t* dst) {
+    uint64_t next = uint64_t(tiles.size()) * kDescriptorWords; // the first word after the descriptors
+    uint64_t plane = 0;
+    for (size_t i = 0; i < tiles.size(); ++i) {
+        const JpegCoefficients& t = *tiles[i];
+        uint32_t* d = dst + i * kDescriptorWords;
+        std::memset(d, 0, kDescriptorWords * 4);
+        d[0] = t.width;
+        d[1] = t.height;
+        d[2] = uint32_t(t.transform);
+        d[3] = t.hMax;
+        d[4] = t.vMax;
+        d[5] = t.components;
+        d[6] = t.blockCount();
+        d[7] = placements[i].outputWord;
+        d[8] = placements[i].outputPitch;
+        for (uint32_t c = 0; c < t.components; ++c) {
+            const JpegCoefficients::Component& k = t.comp[c];
+            uint32_t* cd = d + kCompWord + kCompStride * c;
+            cd[0] = k.blocksWide;
+            cd[1] = k.blocksHigh;
+            cd[2] = k.firstBlock;
+            cd[4] = uint32_t(next); // its quantisation table
+            for (int q = 0; q < 64; ++q) dst[next + q] = k.quant[q];
+            next += 64;
+            cd[5] = uint32_t(plane);
+            cd[6] = uint32_t(planePitch(k));
+            plane += planeWords(k);
+        }
+        // The coefficients, two int16 a word: the vector's own bytes on a little-endian host
+        // (the lower half first).
+        static_assert(std::endian::native == std::endian::little);
+        for (uint32_t c = 0; c < t.components; ++c) d[kCompWord + kCompStride * c + 3] = uint32_t(next + uint64_t(t.comp[c].firstBlock) * 32);
+        std::memcpy(dst + next, t.blocks.data(), t.blocks.size() * sizeof(int16_t));
+        next += uint64_t(t.blockCount()) * 32;
+    }
+}
+
+Result JpegReconstruct::init(uint32_t maxSets) {
+    VkDevice dev = device_.device();
+    if (Result r = vk::createShaderModule(dev, jpeg_idct_comp_spv, sizeof(jpeg_idct_comp_spv), *idctModule_.replace(dev));
+        !r.ok())
+        return r;
+    if (Result r = vk::createShaderModule(dev, jpeg_color_comp_spv, sizeof(jpeg_color_comp_spv), *colorModule_.replace(dev));
+        !r.ok())
+        return r;
+    VkDescriptorSetLayoutBinding bindings[3];
+    for (uint32_t b = 0; b < 3; ++b)
+        bindings[b] = {.binding = b, .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, .descriptorCount = 1,
+                       .stageFlags = VK_SHADER_STAGE_COMPUTE_BIT, .pImmutableSamplers = nullptr};
+    const VkDescriptorSetLayoutCreateInfo dslci{
+        .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO, .pNext = nullptr, .flags = 0, .bindingCount = 3, .pBindings = bindings};
+    IRIS_VK_TRY(vkCreateDescriptorSetLayout(dev, &dslci, nullptr, setLayout_.replace(dev)));
+    const VkDescriptorSetLayout setLayout = setLayout_.get();
+    const VkPushConstantRange push{.stageFlags = VK_SHADER_STAGE_COMPUTE_BIT, .offset = 0, .size = sizeof(uint32_t)};
+    const VkPipelineLayoutCreateInfo plci{.sType = VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO,
+                                          .pNext = nullptr,
+                                          .flags = 0,
+                                          .setLayoutCount = 1,
+                                          .pSetLayouts = &setLayout,
+                                          .pushConstantRangeCount = 1,
+                                          .pPushConstantRanges = &push};
+    IRIS_VK_TRY(vkCreatePipelineLayout(dev, &plci, nullptr, layout_.replace(dev)));
+    Expected<VkPipeline> idct = vk::createComputePipeline(dev, layout_.get(), idctModule_.get());
+    if (!idct) return idct.error();
+    idct_ = vk::Pipeline(dev, *idct);
+    Expected<VkPipeline> color = vk::createComputePipeline(dev, layout_.get(), colorModule_.get());
+    if (!color) return color.error();
+    color_ = vk::Pipeline(dev, *color);
+    const VkDescriptorPoolSize ps{.type = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, .descriptorCount = 3 * maxSets};
+    const VkDescriptorPoolCreateInfo dpci{.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO,
+                                          .pNext = nullptr,
+                                          .flags = VK_DESCRIPTOR_POOL_CREATE_FREE_DESCRIPTOR_SET_BIT,
+                                          .maxSets = maxSets,
+                                          .poolSizeCount = 1,
+                                          .pPoolSizes = &ps};
+    IRIS_VK_TRY(vkCreateDescriptorPool(dev, &dpci, nullptr, pool_.replace(dev)));
+    return {};
+}
+
+Expected<VkDescriptorSet> JpegReconstruct::makeSet(VkBuffer input, VkDeviceSize inputOffset, VkDeviceSize inputBytes,
+                                                   VkBuffer planes, VkDeviceSize planeBytes, VkBuffer output,
+                                                   VkDeviceSize outputOffset, VkDeviceSize outputBytes) {
+    VkDevice dev = device_.device();
+    const VkDescriptorSetLayout setLayout = setLayout_.get();
+    const VkDescriptorSetAllocateInfo dsai{.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO,
+                                           .pNext = nullptr,
+                                           .descriptorPool = pool_.get(),
+                                           .descriptorSetCount = 1,
+                                           .pSetLayouts = &setLayout};
+    VkDescriptorSet set = VK_NULL_HANDLE;
+    if (Result r = vk::check(vkAllocateDescriptorSets(dev, &dsai, &set), "vkAllocateDescriptorSets"); !r.ok()) return r;
+    const VkDescriptorBufferInfo infos[3] = {{.buffer = input, .offset = inputOffset, .range = inputBytes},
+                                             {.buffer = planes, .offset = 0, .range = planeBytes},
+                                             {.buffer = output, .offset = outputOffset, .range = outputBytes}};
+    VkWriteDescriptorSet writes[3];
+    for (uint32_t b = 0; b < 3; ++b)
+        writes[b] = {.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .pNext = nullptr, .dstSet = set, .dstBinding = b,
+                     .dstArrayElement = 0, .descriptorCount = 1, .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+                     .pImageInfo = nullptr, .pBufferInfo = &infos[b], .pTexelBufferView = nullptr};
+    vkUpdateDescriptorSets(dev, 3, writes, 0, nullptr);
+    return set;
+}
+
+void JpegReconstruct::freeSet(VkDescriptorSet set) {
+    if (set != VK_NULL_HANDLE) vkFreeDescriptorSets(device_.device(), pool_.get(), 1, &set);
+}
+
+void JpegReconstruct::record(VkCommandBuffer cmd, VkDescriptorSet set, const Sizes& sizes) {
+    if (sizes.tiles == 0) return;
+    const uint32_t tiles = sizes.tiles;
+    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, layout_.get(), 0, 1, &set, 0, nullptr);
+    vkCmdPushConstants(cmd, layout_.get(), VK_SHADER_STAGE_COMPUTE_BIT, 0, sizeof tiles, &tiles);
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, idct_.get());
+    vkCmdDispatch(cmd, (sizes.maxBlocks + 7) / 8, tiles, 1);
+    // The planes written by the first pass, read by the second.
+    vk::memoryBarrier(cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                      VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_COMPUTE, color_.get());
+    vkCmdDispatch(cmd, (sizes.maxWidth + 15) / 16, (sizes.maxHeight + 15) / 16, tiles);
+}
+
+} // namespace iris::gpu

@@ -1,0 +1,398 @@
+// engine.jpeg_gpu: the GPU half of a JPEG decode (gpu/jpeg_reconstruct.h: dequantisation, islow
+// inverse DCT, fancy upsampling, YCbCr → RGB in two compute dispatches, from the coefficients
+// slide/jpeg_coefficients.h reads) against libjpeg-turbo's own decode of the same stream
+// (decodeJpegFrameRgba, the decode every CPU path of the engine makes): equal byte for byte.
+//
+// Cases:
+//   synthetic      TurboJPEG-encoded pictures made to reach every corner of the arithmetic
+//                  (smooth ramps, fine sinusoids, noise, saturated colours and hard edges that
+//                  push the IDCT and the colour conversion into their clamps), in each layout
+//                  the path takes (4:4:4, 4:2:2, 4:2:0, grey), at qualities 35, 90 and 100,
+//                  baseline and progressive, at tile sizes 256, 240, 512×1024 and odd sizes
+//                  whose chroma planes end mid-block;
+//   mixedBatch     all of them in one batch of two dispatches: each tile's descriptor, planes
+//                  and output are its own;
+//   slideTiles     every JPEG tile (up to 200 a level) of the test slides (Aperio SVS, YCbCr
+//                  and RGB JPEG, generic TIFF) and of the built-in sample slide, read raw with
+//                  the directory's JPEGTables as the TIFF reader reads them, in batches of 32;
+//   refused        layouts the path does not take (4:1:1, 4:4:0) say UnsupportedFormat; a
+//                  truncated stream, garbage and a stream of other dimensions say CorruptData.
+// The Vulkan validation layer is on (where installed) and must stay silent.
+// The engine's headers first: gpu/vk_util.h names a parameter `signals`, a macro of Qt's.
+#include "gpu/device.h"
+#include "gpu/jpeg_reconstruct.h"
+#include "gpu/vk_util.h"
+#include "slide/jpeg_coefficients.h"
+#include "slide/jpeg_frame_decode.h"
+
+#include <QtTest>
+
+#include <cstring>
+#include <random>
+
+#include <tiffio.h>
+#include <turbojpeg.h>
+
+#include "test_support.h"
+
+using namespace iristest;
+using iris::JpegCoefficients;
+using iris::JpegColour;
+
+namespace {
+
+struct Stream {
+    std::string name;
+    std::vector<uint8_t> bytes;
+    int width = 0;
+    int height = 0;
+    JpegColour colour = JpegColour::Auto;
+};
+
+// A picture that reaches the clamps: ramps, a fine sinusoid, noise, saturated patches and a
+// hard-edged checker, all at once in different places.
+std::vector<uint8_t> testPicture(int w, int h, uint32_t seed) {
+    std::vector<uint8_t> rgb(size_t(w) * h * 3);
+    std::mt19937 rng(seed);
+    std::uniform_int_distribution<int> noise(-40, 40);
+    static constexpr uint8_t kSaturated[6][3] = {{255, 0, 0}, {0, 255, 0}, {0, 0, 255}, {255, 255, 255}, {0, 0, 0}, {255, 0, 255}};
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            uint8_t* p = &rgb[(size_t(y) * w + x) * 3];
+            const int region = ((x * 4) / std::max(w, 1) + 4 * ((y * 3) / std::max(h, 1))) % 5;
+            for (int c = 0; c < 3; ++c) {
+                int v = 0;
+                switch (region) {
+                case 0: v = (x * 255) / std::max(w - 1, 1) * (c != 1) + (y * 255) / std::max(h - 1, 1) * (c == 1); break;
+                case 1: v = int(127.5 + 127.5 * std::sin(x * 1.9 + y * 0.7 + c)); break;
+                case 2: v = 128 + (c - 1) * 60 + noise(rng); break;
+                case 3: v = kSaturated[((x / 5) + (y / 7)) % 6][c]; break;
+                default: v = ((x / 3 + y / 3) & 1) ? 255 : 0; break;
+                }
+                p[c] = uint8_t(std::clamp(v, 0, 255));
+            }
+        }
+    return rgb;
+}
+
+Stream encode(int w, int h, int subsamp, int quality, bool progressive, uint32_t seed) {
+    const std::vector<uint8_t> rgb = testPicture(w, h, seed);
+    tjhandle tj = tjInitCompress();
+    unsigned char* out = nullptr;
+    unsigned long size = 0;
+    const int flags = TJFLAG_ACCURATEDCT | (progressive ? TJFLAG_PROGRESSIVE : 0);
+    Stream s;
+    if (tj && tjCompress2(tj, rgb.data(), w, 0, h, TJPF_RGB, &out, &size, subsamp, quality, flags) == 0)
+        s.bytes.assign(out, out + size);
+    tjFree(out);
+    if (tj) tjDestroy(tj);
+    static const char* kNames[] = {"444", "422", "420", "gray", "440", "411"};
+    s.name = std::string(kNames[subsamp]) + " q" + std::to_string(quality) + (progressive ? " progressive " : " ") +
+             std::to_string(w) + "x" + std::to_string(h);
+    s.width = w;
+    s.height = h;
+    return s;
+}
+
+// The JPEG tiles of a TIFF's tiled JPEG directories, as the TIFF reader reads them: the
+// directory's JPEGTables (without their EOI), then the tile's stream after its SOI.
+std::vector<Stream> tiffJpegTiles(const fs::path& path, uint32_t perLevel) {
+    std::vector<Stream> out;
+    TIFFSetWarningHandler(nullptr);
+    TIFF* tif = TIFFOpen(path.c_str(), "rm");
+    if (!tif) return out;
+    int dir = 0;
+    do {
+        uint16_t compression = 0, photometric = 0, spp = 0, bps = 0;
+        uint32_t tw = 0, th = 0;
+        TIFFGetField(tif, TIFFTAG_COMPRESSION, &compression);
+        TIFFGetField(tif, TIFFTAG_PHOTOMETRIC, &photometric);
+        TIFFGetFieldDefaulted(tif, TIFFTAG_SAMPLESPERPIXEL, &spp);
+        TIFFGetFieldDefaulted(tif, TIFFTAG_BITSPERSAMPLE, &bps);
+        if (!TIFFIsTiled(tif) || compression != COMPRESSION_JPEG || spp != 3 || bps != 8 ||
+            (photometric != PHOTOMETRIC_YCBCR && photometric != PHOTOMETRIC_RGB) || !TIFFGetField(tif, TIFFTAG_TILEWIDTH, &tw) ||
+            !TIFFGetField(tif, TIFFTAG_TILELENGTH, &th)) {
+            ++dir;
+            continue;
+        }
+        std::vector<uint8_t> tables;
+        uint32_t count = 0;
+        void* data = nullptr;
+        if (TIFFGetField(tif, TIFFTAG_JPEGTABLES, &count, &data) && data && count > 2)
+            tables.assign(static_cast<uint8_t*>(data), static_cast<uint8_t*>(data) + count - 2);
+        const uint32_t tiles = TIFFNumberOfTiles(tif);
+        const uint32_t step = std::max<uint32_t>(1, tiles / perLevel);
+        for (uint32_t t = 0; t < tiles && out.size() < size_t(perLevel) * (dir + 1); t += step) {
+            const uint64_t bytes = TIFFGetStrileByteCount(tif, t);
+            if (bytes < 4 || bytes > (16u << 20)) continue;
+            std::vector<uint8_t> raw(bytes);
+            if (TIFFReadRawTile(tif, t, raw.data(), tmsize_t(bytes)) != tmsize_t(bytes)) continue;
+            Stream s;
+            s.bytes = tables;
+            s.bytes.insert(s.bytes.end(), raw.begin() + (tables.empty() ? 0 : 2), raw.end());
+            s.width = int(tw);
+            s.height = int(th);
+            s.colour = photometric == PHOTOMETRIC_YCBCR ? JpegColour::YCbCr : JpegColour::Rgb;
+            s.name = path.filename().string() + " dir " + std::to_string(dir) + " tile " + std::to_string(t);
+            out.push_back(std::move(s));
+        }
+        ++dir;
+    } while (TIFFReadDirectory(tif));
+    TIFFClose(tif);
+    return out;
+}
+
+} // namespace
+
+class TestJpegGpu : public QObject {
+    Q_OBJECT
+
+    iris::Log log_{[](iris::LogLevel level, std::string_view line) {
+        if (level >= iris::LogLevel::Warning) qWarning("%.*s", int(line.size()), line.data());
+    }};
+    std::unique_ptr<iris::gpu::Device> device_;
+    std::unique_ptr<iris::gpu::JpegReconstruct> jpeg_;
+    iris::vk::CommandPool pool_;
+    VkCommandBuffer cmd_ = VK_NULL_HANDLE;
+    iris::vk::Fence fence_;
+    iris::vk::MappedBuffer input_, output_;
+    iris::vk::Buffer planes_;
+    iris::vk::Memory planesMemory_;
+    VkDeviceSize planesBytes_ = 0;
+
+    bool ensure(iris::vk::MappedBuffer& b, VkDeviceSize bytes, bool readBack) {
+        if (b.size >= bytes) return true;
+        return iris::vk::createMappedBuffer(device_->physical(), device_->device(), bytes,
+                                            VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, readBack, b)
+            .ok();
+    }
+
+    // Reconstructs `streams` in one batch; their libjpeg-turbo decodes must equal it. Returns
+    // the tiles compared (streams the path refuses are counted out, and must be refusals).
+    int reconstructAndCompare(const std::vector<Stream>& streams) {
+        std::vector<JpegCoefficients> coefficients;
+        std::vector<const Stream*> taken;
+        for (const Stream& s : streams) {
+            auto c = iris::readJpegCoefficients(s.bytes.data(), s.bytes.size(), s.width, s.height, s.colour);
+            if (!c) {
+                if (c.error().status() != iris::Status::UnsupportedFormat) {
+                    QTest::qFail(("coefficients of " + s.name + ": " + describe(c.error())).c_str(), __FILE__, __LINE__);
+                    return -1;
+                }
+                continue;
+            }
+            coefficients.push_back(std::move(c.value()));
+            taken.push_back(&s);
+        }
+        if (taken.empty()) return 0;
+        std::vector<const JpegCoefficients*> tiles;
+        std::vector<iris::gpu::JpegReconstruct::Placement> places;
+        uint64_t outputWords = 0;
+        for (const JpegCoefficients& c : coefficients) {
+            tiles.push_back(&c);
+            places.push_back({.outputWord = uint32_t(outputWords), .outputPitch = c.width});
+            outputWords += uint64_t(c.width) * c.height;
+        }
+        const auto sizes = iris::gpu::JpegReconstruct::measure(tiles);
+        if (!ensure(input_, sizes.inputWords * 4, false) || !ensure(output_, outputWords * 4, true)) {
+            QTest::qFail("buffers", __FILE__, __LINE__);
+            return -1;
+        }
+        if (planesBytes_ < sizes.planeWords * 4) {
+            planesBytes_ = sizes.planeWords * 4;
+            if (!iris::vk::createDeviceBuffer(device_->physical(), device_->device(), planesBytes_,
+                                              VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, planes_, planesMemory_)
+                     .ok()) {
+                QTest::qFail("planes", __FILE__, __LINE__);
+                return -1;
+            }
+        }
+        iris::gpu::JpegReconstruct::pack(tiles, places, static_cast<uint32_t*>(input_.mapped));
+        std::memset(output_.mapped, 0x5a, outputWords * 4); // a pixel left unwritten shows
+        if (!iris::vk::flush(device_->device(), input_).ok() || !iris::vk::flush(device_->device(), output_).ok()) return -1;
+        auto set = jpeg_->makeSet(input_.buffer, 0, sizes.inputWords * 4, planes_.get(), sizes.planeWords * 4,
+                                  output_.buffer, 0, outputWords * 4);
+        if (!set) {
+            QTest::qFail(describe(set.error()).c_str(), __FILE__, __LINE__);
+            return -1;
+        }
+        const VkCommandBufferBeginInfo begin{.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO, .pNext = nullptr,
+                                             .flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT, .pInheritanceInfo = nullptr};
+        vkResetCommandBuffer(cmd_, 0);
+        vkBeginCommandBuffer(cmd_, &begin);
+        jpeg_->record(cmd_, *set, sizes);
+        iris::vk::memoryBarrier(cmd_, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                                VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT);
+        vkEndCommandBuffer(cmd_);
+        const VkCommandBufferSubmitInfo cmdInfo = iris::vk::commandInfo(cmd_);
+        VkFence fence = fence_.get();
+        vkResetFences(device_->device(), 1, &fence);
+        if (device_->submit(iris::gpu::Device::Role::Compute, iris::vk::submitInfo(&cmdInfo), fence) != VK_SUCCESS ||
+            vkWaitForFences(device_->device(), 1, &fence, VK_TRUE, 60'000'000'000ull) != VK_SUCCESS) {
+            QTest::qFail("submit or wait failed", __FILE__, __LINE__);
+            return -1;
+        }
+        jpeg_->freeSet(*set);
+        if (!iris::vk::invalidate(device_->device(), output_).ok()) return -1;
+
+        int compared = 0;
+        for (size_t i = 0; i < taken.size(); ++i) {
+            const Stream& s = *taken[i];
+            std::vector<uint8_t> cpu(size_t(s.width) * s.height * 4);
+            const iris::Result r = iris::decodeJpegFrameRgba(s.bytes.data(), s.bytes.size(), s.width, s.height, s.colour,
+                                                             cpu.data(), size_t(s.width) * 4);
+            if (!r.ok()) {
+                QTest::qFail(("libjpeg-turbo refused " + s.name + ": " + describe(r)).c_str(), __FILE__, __LINE__);
+                return -1;
+            }
+            const uint8_t* gpu = static_cast<const uint8_t*>(output_.mapped) + uint64_t(places[i].outputWord) * 4;
+            if (std::memcmp(gpu, cpu.data(), cpu.size()) != 0) {
+                size_t differ = 0, first = SIZE_MAX;
+                int worst = 0;
+                for (size_t b = 0; b < cpu.size(); ++b)
+                    if (gpu[b] != cpu[b]) {
+                        ++differ;
+                        first = std::min(first, b);
+                        worst = std::max(worst, std::abs(int(gpu[b]) - int(cpu[b])));
+                    }
+                const size_t px = first / 4;
+                const std::string why = s.name + ": " + std::to_string(differ) + " bytes differ, worst by " +
+                                        std::to_string(worst) + "; first at (" + std::to_string(px % s.width) + ", " +
+                                        std::to_string(px / s.width) + ") channel " + std::to_string(first % 4) +
+                                        ": GPU " + std::to_string(gpu[first]) + ", libjpeg-turbo " + std::to_string(cpu[first]);
+                QTest::qFail(why.c_str(), __FILE__, __LINE__);
+                return -1;
+            }
+            ++compared;
+        }
+        return compared;
+    }
+
+private slots:
+    void initTestCase() {
+        iris::EngineConfig config;
+        config.validation = validationLayerInstalled();
+        device_ = std::make_unique<iris::gpu::Device>(log_);
+        const iris::Result r = device_->init(config);
+        QVERIFY2(r.ok(), describe(r).c_str());
+        jpeg_ = std::make_unique<iris::gpu::JpegReconstruct>(*device_);
+        const iris::Result j = jpeg_->init();
+        QVERIFY2(j.ok(), describe(j).c_str());
+        VkDevice dev = device_->device();
+        const VkCommandPoolCreateInfo cpci{.sType = VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO, .pNext = nullptr,
+                                           .flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT,
+                                           .queueFamilyIndex = device_->family(iris::gpu::Device::Role::Compute)};
+        QCOMPARE(vkCreateCommandPool(dev, &cpci, nullptr, pool_.replace(dev)), VK_SUCCESS);
+        const VkCommandBufferAllocateInfo cbai{.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO, .pNext = nullptr,
+                                               .commandPool = pool_.get(), .level = VK_COMMAND_BUFFER_LEVEL_PRIMARY,
+                                               .commandBufferCount = 1};
+        QCOMPARE(vkAllocateCommandBuffers(dev, &cbai, &cmd_), VK_SUCCESS);
+        const VkFenceCreateInfo fci{.sType = VK_STRUCTURE_TYPE_FENCE_CREATE_INFO, .pNext = nullptr, .flags = 0};
+        QCOMPARE(vkCreateFence(dev, &fci, nullptr, fence_.replace(dev)), VK_SUCCESS);
+        qInfo("device: %s (%s), validation %s", device_->properties().deviceName, device_->driverName().c_str(),
+              config.validation ? "on" : "not installed");
+    }
+
+    void cleanupTestCase() {
+        if (!device_) return;
+        (void)device_->waitIdle();
+        const uint64_t messages = device_->validationMessages();
+        jpeg_.reset();
+        input_ = {};
+        output_ = {};
+        planes_.reset();
+        planesMemory_.reset();
+        fence_.reset();
+        pool_.reset();
+        QCOMPARE(messages, uint64_t(0));
+    }
+
+    void synthetic_data() {
+        QTest::addColumn<int>("subsamp");
+        QTest::addColumn<int>("quality");
+        QTest::addColumn<bool>("progressive");
+        QTest::addColumn<int>("width");
+        QTest::addColumn<int>("height");
+        const std::pair<int, int> sizes[] = {{256, 256}, {240, 240}, {512, 1024}, {250, 131}, {17, 9}, {33, 70}};
+        uint32_t row = 0;
+        for (int subsamp : {int(TJSAMP_444), int(TJSAMP_422), int(TJSAMP_420), int(TJSAMP_GRAY)})
+            for (int quality : {35, 90, 100})
+                for (bool progressive : {false, true}) {
+                    if (progressive && quality != 90) continue;
+                    for (auto [w, h] : sizes) {
+                        const Stream s = encode(w, h, subsamp, quality, progressive, row++);
+                        QTest::newRow(s.name.c_str()) << subsamp << quality << progressive << w << h;
+                    }
+                }
+    }
+
+    void synthetic() {
+        QFETCH(int, subsamp);
+        QFETCH(int, quality);
+        QFETCH(bool, progressive);
+        QFETCH(int, width);
+        QFETCH(int, height);
+        const Stream s = encode(width, height, subsamp, quality, progressive, uint32_t(width * 31 + height + quality));
+        QVERIFY(!s.bytes.empty());
+        QCOMPARE(reconstructAndCompare({s}), 1);
+    }
+
+    void mixedBatch() {
+        std::vector<Stream> streams;
+        uint32_t seed = 1000;
+        for (int subsamp : {int(TJSAMP_420), int(TJSAMP_GRAY), int(TJSAMP_444), int(TJSAMP_422)})
+            for (auto [w, h] : {std::pair{256, 256}, std::pair{250, 131}, std::pair{240, 240}})
+            {
+                streams.push_back(encode(w, h, subsamp, 85, seed % 2 == 0, seed));
+                ++seed;
+            }
+        QCOMPARE(reconstructAndCompare(streams), int(streams.size()));
+    }
+
+    void slideTiles() {
+        std::vector<fs::path> slides;
+        if (auto dir = slidesDir("aperio"))
+            for (const fs::path& p : filesUnder(*dir, false)) slides.push_back(p);
+        if (auto dir = slidesDir("generic-tiff"))
+            for (const fs::path& p : filesUnder(*dir, false)) slides.push_back(p);
+        if (auto sample = sampleSlidePath(); sample && fs::exists(*sample)) slides.push_back(*sample);
+        if (slides.empty()) QSKIP("no test slides (IRIS_TESTDATA) and no sample slide");
+        int total = 0;
+        for (const fs::path& path : slides) {
+            const std::vector<Stream> tiles = tiffJpegTiles(path, 200);
+            int compared = 0;
+            for (size_t at = 0; at < tiles.size(); at += 32) {
+                const std::vector<Stream> batch(tiles.begin() + at, tiles.begin() + std::min(tiles.size(), at + 32));
+                const int n = reconstructAndCompare(batch);
+                if (n < 0) return;
+                compared += n;
+            }
+            qInfo("%s: %d JPEG tiles equal libjpeg-turbo's decode (%zu read)", path.filename().c_str(), compared,
+                  tiles.size());
+            total += compared;
+        }
+        QVERIFY2(total > 0, "no slide had a JPEG tile the GPU path takes");
+    }
+
+    void refused() {
+        for (int subsamp : {int(TJSAMP_411), int(TJSAMP_440)}) {
+            const Stream s = encode(256, 256, subsamp, 80, false, 5);
+            auto c = iris::readJpegCoefficients(s.bytes.data(), s.bytes.size(), 256, 256, JpegColour::Auto);
+            QVERIFY2(!c && c.error().status() == iris::Status::UnsupportedFormat, s.name.c_str());
+        }
+        const Stream s = encode(256, 256, TJSAMP_420, 80, false, 6);
+        auto wrongSize = iris::readJpegCoefficients(s.bytes.data(), s.bytes.size(), 240, 256, JpegColour::Auto);
+        QVERIFY(!wrongSize && wrongSize.error().status() == iris::Status::CorruptData);
+        auto truncated = iris::readJpegCoefficients(s.bytes.data(), s.bytes.size() / 2, 256, 256, JpegColour::Auto);
+        QVERIFY(!truncated && truncated.error().status() == iris::Status::CorruptData);
+        const std::vector<uint8_t> garbage(4096, 0x37);
+        auto bad = iris::readJpegCoefficients(garbage.data(), garbage.size(), 256, 256, JpegColour::Auto);
+        QVERIFY(!bad && bad.error().status() == iris::Status::CorruptData);
+        const Stream g = encode(64, 64, TJSAMP_GRAY, 80, false, 7);
+        auto grey = iris::readJpegCoefficients(g.bytes.data(), g.bytes.size(), 64, 64, JpegColour::YCbCr);
+        QVERIFY2(!grey && grey.error().status() == iris::Status::CorruptData, "a grey stream read as YCbCr");
+    }
+};
+
+QTEST_GUILESS_MAIN(TestJpegGpu)
+#include "tst_jpeg_gpu.moc"

@@ -15,6 +15,8 @@
 //   slideTiles     every JPEG tile (up to 200 a level) of the test slides (Aperio SVS, YCbCr
 //                  and RGB JPEG, generic TIFF) and of the built-in sample slide, read raw with
 //                  the directory's JPEGTables as the TIFF reader reads them, in batches of 32;
+//   intoCallerMemory  the coefficients read into the caller's memory equal those read into
+//                  the result's own vector;
 //   refused        layouts the path does not take (4:1:1, 4:4:0) say UnsupportedFormat; a
 //                  truncated stream, garbage and a stream of other dimensions say CorruptData.
 // The Vulkan validation layer is on (where installed) and must stay silent.
@@ -372,6 +374,25 @@ private slots:
             total += compared;
         }
         QVERIFY2(total > 0, "no slide had a JPEG tile the GPU path takes");
+    }
+
+    // The overload that reads into the caller's memory (iris-bench's split floor) gives the same
+    // coefficients, and refuses a room too small for them.
+    void intoCallerMemory() {
+        const Stream s = encode(256, 256, TJSAMP_420, 90, false, 11);
+        auto own = iris::readJpegCoefficients(s.bytes.data(), s.bytes.size(), 256, 256, JpegColour::Auto);
+        QVERIFY2(own.ok(), describe(own.error()).c_str());
+        QCOMPARE(own->blockCount(), 1024u + 2 * 256u);
+        std::vector<int16_t> room(size_t(own->blockCount()) * 64, 0x7777);
+        auto into = iris::readJpegCoefficients(s.bytes.data(), s.bytes.size(), 256, 256, JpegColour::Auto, room.data(),
+                                               room.size());
+        QVERIFY2(into.ok(), describe(into.error()).c_str());
+        QVERIFY(into->blocks.empty());
+        QCOMPARE(into->blockCount(), own->blockCount());
+        QVERIFY(room == own->blocks);
+        auto small = iris::readJpegCoefficients(s.bytes.data(), s.bytes.size(), 256, 256, JpegColour::Auto, room.data(),
+                                                room.size() - 1);
+        QVERIFY(!small && small.error().status() == iris::Status::CorruptData);
     }
 
     void refused() {

@@ -14,6 +14,9 @@
 #include <tiffio.h>
 #include <turbojpeg.h>
 
+#include "gpu_split.h"
+#include "slide/jpeg_frame_decode.h"
+
 namespace {
 using Clock = std::chrono::steady_clock;
 double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
@@ -73,6 +76,7 @@ namespace {
 struct LevelDir {
     tdir_t dir;
     uint32_t tw, th, width, height;
+    bool ycbcr;                  // photometric YCbCr (else RGB: the JPEG's components taken as they are)
     std::vector<uint8_t> tables; // JPEGTables without the trailing EOI, or empty
 };
 
@@ -96,7 +100,9 @@ bool mapLevels(TIFF* tif, openslide_t* osr, std::vector<LevelDir>& out, std::str
                 why = "level " + std::to_string(l) + " is not JPEG-compressed (compression " + std::to_string(comp) + ")";
                 return false;
             }
-            LevelDir ld{d, tw, th, iw, ih, {}};
+            uint16_t photometric = 0;
+            TIFFGetField(tif, TIFFTAG_PHOTOMETRIC, &photometric);
+            LevelDir ld{d, tw, th, iw, ih, photometric == PHOTOMETRIC_YCBCR, {}};
             uint32_t n = 0;
             void* tables = nullptr;
             if (TIFFGetField(tif, TIFFTAG_JPEGTABLES, &n, &tables) && n > 2) {
@@ -115,9 +121,65 @@ bool mapLevels(TIFF* tif, openslide_t* osr, std::vector<LevelDir>& out, std::str
     return true;
 }
 
+// The third pass of a field (BaselineResult::splitMs): every core reads and entropy-decodes
+// the field's tiles into the GPU's input, one batch reconstructs them; then, untimed, each
+// tile's pixels are compared with libjpeg-turbo's decode of its stream.
+template <class Worker, class Stream>
+void splitPass(benchsplit::GpuSplit& split, BaselineResult& r, const LevelDir& ld, size_t count,
+               std::vector<Worker>& workers, const Stream& stream) {
+    if (ld.tw > 256 || ld.th > 256) {
+        r.splitNote = "tiles larger than 256x256";
+        return;
+    }
+    if (!split.reserve(uint32_t(count), r.splitNote)) return;
+    const auto across = [&](auto&& body) {
+        std::atomic<size_t> next{0};
+        std::vector<std::thread> pool;
+        for (Worker& w : workers)
+            pool.emplace_back([&, wp = &w] {
+                for (size_t i; (i = next.fetch_add(1)) < count;) body(*wp, i);
+            });
+        for (auto& t : pool) t.join();
+    };
+    std::atomic<bool> refused{false};
+    const auto t0 = Clock::now();
+    across([&](Worker& k, size_t i) {
+        const uint8_t* src = nullptr;
+        size_t len = 0;
+        if (!stream(k, i, src, len) ||
+            !split.entropyDecode(uint32_t(i), {src, len}, int(ld.tw), int(ld.th), ld.ycbcr))
+            refused = true;
+    });
+    if (refused) {
+        r.splitNote = "a tile the GPU path does not take (its layout, or a read failed)";
+        return;
+    }
+    double gpuMs = NAN;
+    if (!split.reconstruct(uint32_t(count), gpuMs, r.splitNote)) return;
+    r.splitMs.push_back(msSince(t0));
+    r.splitGpuMs.push_back(gpuMs);
+    if (!split.readBack(uint32_t(count), r.splitNote)) return;
+    std::atomic<uint64_t> mismatched{0};
+    across([&](Worker& k, size_t i) {
+        const uint8_t* src = nullptr;
+        size_t len = 0;
+        const size_t bytes = size_t(ld.tw) * ld.th * 4;
+        k.rgb.resize(bytes);
+        if (!stream(k, i, src, len) ||
+            !iris::decodeJpegFrameRgba(src, len, int(ld.tw), int(ld.th),
+                                       ld.ycbcr ? iris::JpegColour::YCbCr : iris::JpegColour::Rgb, k.rgb.data(), size_t(ld.tw) * 4)
+                 .ok() ||
+            std::memcmp(k.rgb.data(), split.pixels(uint32_t(i)), bytes) != 0)
+            ++mismatched;
+    });
+    r.splitTiles += count;
+    r.splitMismatched += mismatched;
+}
+
 } // namespace
 
-BaselineResult decodeFloorBaseline(const std::string& slide, const std::vector<BenchField>& fields, unsigned threads) {
+BaselineResult decodeFloorBaseline(const std::string& slide, const std::vector<BenchField>& fields, unsigned threads,
+                                   benchsplit::GpuSplit* split) {
     BaselineResult r;
     openslide_t* osr = openslide_open(slide.c_str());
     if (!osr || openslide_get_error(osr)) {
@@ -241,6 +303,7 @@ BaselineResult decodeFloorBaseline(const std::string& slide, const std::vector<B
                 allTiles += decoded;
             }
         }
+        if (split && r.splitNote.empty()) splitPass(*split, r, ld, tiles.size(), workers, stream);
     }
     if (allTiles > 0) r.threadUsPerTile = double(allNs) / 1000.0 / double(allTiles);
     if (allEntropyTiles > 0) r.entropyUsPerTile = double(allEntropyNs) / 1000.0 / double(allEntropyTiles);

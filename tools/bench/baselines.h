@@ -26,9 +26,19 @@ struct BaselineResult {
     // colour conversion), in an untimed pass after each field's: the CPU part that would be left
     // if those three ran on the GPU.
     double entropyUsPerTile = NAN;
+    // The decode floor split between the CPU and the GPU (gpu_split.h), in a third pass after
+    // each field's: its wall time (entropy decodes on every core, then one GPU batch) and the
+    // GPU's own time; the tiles it reconstructed, and how many of them differ in any byte from
+    // libjpeg-turbo's decode (checked untimed). Empty with a note where it could not run.
+    std::vector<double> splitMs, splitGpuMs;
+    uint64_t splitTiles = 0, splitMismatched = 0;
+    std::string splitNote;
 };
 
 BaselineResult openslideBaseline(const std::string& slide, const std::vector<BenchField>& fields, unsigned threads);
 // Needs a TIFF whose level directories are JPEG-tiled (Aperio SVS, generic TIFF such as the
 // sample slide); otherwise returns no figures and a note.
-BaselineResult decodeFloorBaseline(const std::string& slide, const std::vector<BenchField>& fields, unsigned threads);
+// `split`: the GPU half of the split floor, or null to leave it out.
+namespace benchsplit { class GpuSplit; }
+BaselineResult decodeFloorBaseline(const std::string& slide, const std::vector<BenchField>& fields, unsigned threads,
+                                   benchsplit::GpuSplit* split = nullptr);

@@ -32,6 +32,7 @@
 #include <nlohmann/json.hpp>
 
 #include "baselines.h"
+#include "gpu_split.h"
 #include "annotations.h"
 #include "layers.h"
 #include "linked.h"
@@ -379,7 +380,11 @@ SizeResult runSize(const Options& o, uint32_t W, uint32_t H, bool colorManaged) 
     const std::string& base = o.baseline.empty() ? o.slide : o.baseline;
     res.osr = openslideBaseline(base, fields, 1);
     res.osrMt = openslideBaseline(base, fields, cores);
-    res.floor = decodeFloorBaseline(base, fields, cores);
+    // The floor split between the CPU and the GPU, on the device the engine used (gpu_split.h).
+    std::string splitWhy;
+    std::unique_ptr<benchsplit::GpuSplit> split = benchsplit::GpuSplit::create(benchConfig(o, false), splitWhy);
+    res.floor = decodeFloorBaseline(base, fields, cores, split.get());
+    if (!split) res.floor.splitNote = "no device for it: " + splitWhy;
     return res;
 }
 
@@ -460,6 +465,11 @@ Json resultJson(const Options& o, const SizeResult& r) {
     j["baselines"] = {{"openslide_fov_ms", jsonQuartiles(osr)},
                       {"openslide_mt_fov_ms", jsonQuartiles(quartiles(r.osrMt.ms))},
                       {"decode_floor_fov_ms", jsonQuartiles(flo)},
+                      {"decode_floor_split_fov_ms", jsonQuartiles(quartiles(r.floor.splitMs))},
+                      {"decode_floor_split_gpu_ms", jsonQuartiles(quartiles(r.floor.splitGpuMs))},
+                      {"decode_floor_split_tiles", r.floor.splitTiles},
+                      {"decode_floor_split_mismatched_tiles", r.floor.splitMismatched},
+                      {"decode_floor_split_note", r.floor.splitNote},
                       {"notes", r.osr.note + (r.floor.note.empty() ? "" : " decode floor: " + r.floor.note)}};
     j["ratios"] = {{"hr_tefov_vs_openslide", jsonNumber(hr.median / osr.median)},
                    {"hr_tefov_vs_decode_floor", jsonNumber(hr.median / flo.median)}};
@@ -561,6 +571,8 @@ void printTable(const SizeResult& r) {
     row("baseline: OpenSlide 1 thread", r.osr.ms, "ms");
     row("baseline: OpenSlide all cores", r.osrMt.ms, "ms");
     row("baseline: decode floor", r.floor.ms, "ms");
+    row("  split: CPU entropy, GPU rest", r.floor.splitMs, "ms");
+    row("    of which the GPU's", r.floor.splitGpuMs, "ms");
     const double hr = quartiles(r.hrTefov).median;
     std::printf("  HR TeFOV vs OpenSlide: %.3f×   vs decode floor: %.3f×\n", hr / quartiles(r.osr.ms).median,
                 hr / quartiles(r.floor.ms).median);
@@ -575,6 +587,10 @@ void printTable(const SizeResult& r) {
         std::printf("  the decode floor's threads read and entropy-decode a tile alone (no inverse DCT, upsampling or\n"
                     "  colour conversion) in %.1f us, %.0f%% of the whole decode\n",
                     r.floor.entropyUsPerTile, 100.0 * r.floor.entropyUsPerTile / r.floor.threadUsPerTile);
+    if (r.floor.splitTiles > 0)
+        std::printf("  the split floor reconstructed %llu tiles on the GPU; %llu differ from libjpeg-turbo's decode\n",
+                    (unsigned long long)r.floor.splitTiles, (unsigned long long)r.floor.splitMismatched);
+    if (!r.floor.splitNote.empty()) std::printf("  split floor: %s\n", r.floor.splitNote.c_str());
     if (r.loaderTiles > 0) {
         const double t = double(r.loaderTiles);
         std::printf("  the loaders' time a tile decoded (us): %.1f working, of which %.1f getting a buffer; %.1f finding\n"

@@ -17,16 +17,22 @@ static_assert(kCompWord + 3 * kCompStride == JpegReconstruct::kDescriptorWords);
 
 // A component's sample plane: rows of blocksWide·8 samples, four a word.
 uint64_t planePitch(const JpegCoefficients::Component& c) { return uint64_t(c.blocksWide) * 2; }
-uint64_t planeWords(const JpegCoefficients::Component& c) { return planePitch(c) * c.blocksHigh * 8; }
+uint64_t componentPlaneWords(const JpegCoefficients::Component& c) { return planePitch(c) * c.blocksHigh * 8; }
 } // namespace
+
+uint64_t JpegReconstruct::planeWords(const JpegCoefficients& t) {
+    uint64_t words = 0;
+    for (uint32_t c = 0; c < t.components; ++c) words += componentPlaneWords(t.comp[c]);
+    return words;
+}
 
 JpegReconstruct::Sizes JpegReconstruct::measure(std::span<const JpegCoefficients* const> tiles) {
     Sizes s;
     s.tiles = uint32_t(tiles.size());
     s.inputWords = uint64_t(tiles.size()) * kDescriptorWords;
     for (const JpegCoefficients* t : tiles) {
-        s.inputWords += uint64_t(t->components) * 64 + uint64_t(t->blockCount()) * 32;
-        for (uint32_t c = 0; c < t->components; ++c) s.planeWords += planeWords(t->comp[c]);
+        s.inputWords += quantWords(*t) + coefficientWords(*t);
+        s.planeWords += planeWords(*t);
         s.maxBlocks = std::max(s.maxBlocks, t->blockCount());
         s.maxWidth = std::max(s.maxWidth, t->width);
         s.maxHeight = std::max(s.maxHeight, t->height);
@@ -34,42 +40,49 @@ JpegReconstruct::Sizes JpegReconstruct::measure(std::span<const JpegCoefficients
     return s;
 }
 
+void JpegReconstruct::describe(const JpegCoefficients& t, const Placement& placement, uint32_t index, uint64_t quantWord,
+                               uint64_t coefficientWord, uint64_t planeWord, uint32_t* dst) {
+    uint32_t* d = dst + uint64_t(index) * kDescriptorWords;
+    std::memset(d, 0, kDescriptorWords * 4);
+    d[0] = t.width;
+    d[1] = t.height;
+    d[2] = uint32_t(t.transform);
+    d[3] = t.hMax;
+    d[4] = t.vMax;
+    d[5] = t.components;
+    d[6] = t.blockCount();
+    d[7] = placement.outputWord;
+    d[8] = placement.outputPitch;
+    uint64_t plane = planeWord;
+    for (uint32_t c = 0; c < t.components; ++c) {
+        const JpegCoefficients::Component& k = t.comp[c];
+        uint32_t* cd = d + kCompWord + kCompStride * c;
+        cd[0] = k.blocksWide;
+        cd[1] = k.blocksHigh;
+        cd[2] = k.firstBlock;
+        cd[3] = uint32_t(coefficientWord + uint64_t(k.firstBlock) * 32);
+        cd[4] = uint32_t(quantWord + uint64_t(c) * 64);
+        for (int q = 0; q < 64; ++q) dst[quantWord + uint64_t(c) * 64 + q] = k.quant[q];
+        cd[5] = uint32_t(plane);
+        cd[6] = uint32_t(planePitch(k));
+        plane += componentPlaneWords(k);
+    }
+}
+
 void JpegReconstruct::pack(std::span<const JpegCoefficients* const> tiles, std::span<const Placement> placements,
                            uint32_t* dst) {
     uint64_t next = uint64_t(tiles.size()) * kDescriptorWords; // the first word after the descriptors
     uint64_t plane = 0;
+    // The coefficients, two int16 a word: the vector's own bytes on a little-endian host (the
+    // lower half first).
+    static_assert(std::endian::native == std::endian::little);
     for (size_t i = 0; i < tiles.size(); ++i) {
         const JpegCoefficients& t = *tiles[i];
-        uint32_t* d = dst + i * kDescriptorWords;
-        std::memset(d, 0, kDescriptorWords * 4);
-        d[0] = t.width;
-        d[1] = t.height;
-        d[2] = uint32_t(t.transform);
-        d[3] = t.hMax;
-        d[4] = t.vMax;
-        d[5] = t.components;
-        d[6] = t.blockCount();
-        d[7] = placements[i].outputWord;
-        d[8] = placements[i].outputPitch;
-        for (uint32_t c = 0; c < t.components; ++c) {
-            const JpegCoefficients::Component& k = t.comp[c];
-            uint32_t* cd = d + kCompWord + kCompStride * c;
-            cd[0] = k.blocksWide;
-            cd[1] = k.blocksHigh;
-            cd[2] = k.firstBlock;
-            cd[4] = uint32_t(next); // its quantisation table
-            for (int q = 0; q < 64; ++q) dst[next + q] = k.quant[q];
-            next += 64;
-            cd[5] = uint32_t(plane);
-            cd[6] = uint32_t(planePitch(k));
-            plane += planeWords(k);
-        }
-        // The coefficients, two int16 a word: the vector's own bytes on a little-endian host
-        // (the lower half first).
-        static_assert(std::endian::native == std::endian::little);
-        for (uint32_t c = 0; c < t.components; ++c) d[kCompWord + kCompStride * c + 3] = uint32_t(next + uint64_t(t.comp[c].firstBlock) * 32);
-        std::memcpy(dst + next, t.blocks.data(), t.blocks.size() * sizeof(int16_t));
-        next += uint64_t(t.blockCount()) * 32;
+        const uint64_t coefficients = next + quantWords(t);
+        describe(t, placements[i], uint32_t(i), next, coefficients, plane, dst);
+        std::memcpy(dst + coefficients, t.blocks.data(), t.blocks.size() * sizeof(int16_t));
+        next = coefficients + coefficientWords(t);
+        plane += planeWords(t);
     }
 }
 

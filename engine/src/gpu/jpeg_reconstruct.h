@@ -47,8 +47,21 @@ public:
     Result init(uint32_t maxSets = 4);
 
     static Sizes measure(std::span<const JpegCoefficients* const> tiles);
-    // Writes measure(tiles).inputWords words to `dst`.
+    // Writes measure(tiles).inputWords words to `dst`: the descriptors, then each tile's
+    // tables and blocks.
     static void pack(std::span<const JpegCoefficients* const> tiles, std::span<const Placement> placements, uint32_t* dst);
+
+    // The pieces of pack() for a caller that lays the input out itself (fixed room per tile,
+    // filled by several threads at once): words of one tile's quantisation tables, of its
+    // blocks, and of its planes (a 256×256 tile's most: 3·64, 3072·32 and 3·64·256).
+    static uint32_t quantWords(const JpegCoefficients& t) { return t.components * 64; }
+    static uint64_t coefficientWords(const JpegCoefficients& t) { return uint64_t(t.blockCount()) * 32; }
+    static uint64_t planeWords(const JpegCoefficients& t);
+    // Writes tile `index`'s descriptor at dst[index · kDescriptorWords] and its quantisation
+    // tables at dst[quantWord]; its blocks must be at dst[coefficientWord] (readJpegCoefficients
+    // into the caller's memory puts them there) and its planes go at planeWord.
+    static void describe(const JpegCoefficients& t, const Placement& placement, uint32_t index, uint64_t quantWord,
+                         uint64_t coefficientWord, uint64_t planeWord, uint32_t* dst);
 
     // A descriptor set over the three buffers (whole ranges from the offsets given); freed by
     // freeSet or with the pipeline.

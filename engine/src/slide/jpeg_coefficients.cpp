@@ -3,6 +3,7 @@
 #include <csetjmp>
 #include <cstdio>
 #include <cstring>
+#include <new>
 #include <string>
 
 #include <jpeglib.h>
@@ -31,11 +32,29 @@ void emitMessage(j_common_ptr cinfo, int level) {
 
 enum Outcome { Read = 0, Corrupt = 1, Unsupported = 2 };
 
+// Where the blocks go: the result's vector (dst null), or the caller's memory.
+struct Sink {
+    JpegCoefficients* out;
+    int16_t* dst;
+    size_t capacity;
+};
+
+int16_t* blocksFor(Sink* sink, size_t values) {
+    if (sink->dst) return values <= sink->capacity ? sink->dst : nullptr;
+    try {
+        sink->out->blocks.resize(values);
+    } catch (const std::bad_alloc&) {
+        return nullptr;
+    }
+    return sink->out->blocks.data();
+}
+
 // The part between setjmp and the end: no C++ object with a destructor lives in this frame
-// (longjmp would skip it). The blocks' vector is the caller's; `grow` sizes it and turns a
+// (longjmp would skip it). The blocks' vector is the caller's; blocksFor sizes it and turns a
 // failed allocation into a null pointer, so no exception crosses the jump either.
 int read(jpeg_decompress_struct* cinfo, ErrorManager* err, const uint8_t* data, size_t size, int width, int height,
-         JpegColour colour, JpegCoefficients* out, int16_t* (*grow)(JpegCoefficients*, size_t)) {
+         JpegColour colour, Sink* sink) {
+    JpegCoefficients* out = sink->out;
     if (setjmp(err->jump)) return Corrupt;
     jpeg_create_decompress(cinfo);
     jpeg_mem_src(cinfo, data, static_cast<unsigned long>(size));
@@ -103,9 +122,14 @@ int read(jpeg_decompress_struct* cinfo, ErrorManager* err, const uint8_t* data, 
         for (int k = 0; k < 64; ++k) out->comp[ci].quant[k] = c[ci].quant_table->quantval[k];
         total += size_t(c[ci].width_in_blocks) * c[ci].height_in_blocks;
     }
-    int16_t* dst = grow(out, total * 64);
+    if (total > (1u << 26)) {
+        std::snprintf(err->message, sizeof err->message, "%zu blocks", total);
+        return Corrupt;
+    }
+    out->blocksTotal = uint32_t(total);
+    int16_t* dst = blocksFor(sink, total * 64);
     if (!dst) {
-        std::snprintf(err->message, sizeof err->message, "out of memory for %zu blocks", total);
+        std::snprintf(err->message, sizeof err->message, "no room for %zu blocks", total);
         return Corrupt;
     }
     for (int ci = 0; ci < n; ++ci) {
@@ -122,19 +146,15 @@ int read(jpeg_decompress_struct* cinfo, ErrorManager* err, const uint8_t* data, 
     return Read;
 }
 
-int16_t* growBlocks(JpegCoefficients* out, size_t values) {
-    try {
-        out->blocks.resize(values);
-    } catch (const std::bad_alloc&) {
-        return nullptr;
-    }
-    return out->blocks.data();
-}
-
 } // namespace
 
 Expected<JpegCoefficients> readJpegCoefficients(const uint8_t* data, size_t size, int width, int height,
                                                 JpegColour colour) {
+    return readJpegCoefficients(data, size, width, height, colour, nullptr, 0);
+}
+
+Expected<JpegCoefficients> readJpegCoefficients(const uint8_t* data, size_t size, int width, int height,
+                                                JpegColour colour, int16_t* dst, size_t capacity) {
     if (!data || size == 0) return Result(Status::CorruptData, "the JPEG stream is empty");
     if (size > 0xffffffffu) return Result(Status::CorruptData, "the JPEG stream is too large");
     if (width <= 0 || height <= 0) return Result(Status::InvalidArgument, "bad size for the JPEG read");
@@ -146,7 +166,8 @@ Expected<JpegCoefficients> readJpegCoefficients(const uint8_t* data, size_t size
     cinfo.err = jpeg_std_error(&err.pub);
     err.pub.error_exit = errorExit;
     err.pub.emit_message = emitMessage;
-    const int outcome = read(&cinfo, &err, data, size, width, height, colour, &out, growBlocks);
+    Sink sink{&out, dst, capacity};
+    const int outcome = read(&cinfo, &err, data, size, width, height, colour, &sink);
     if (outcome == Read) out.components = uint32_t(cinfo.num_components);
     jpeg_destroy_decompress(&cinfo);
     if (outcome == Corrupt) return Result(Status::CorruptData, std::string("the JPEG data is corrupt (") + err.message + ")");

@@ -38,11 +38,13 @@ struct JpegCoefficients {
     uint32_t hMax = 1; // luma's sampling factors (the chroma components' are 1×1)
     uint32_t vMax = 1;
     std::array<Component, 3> comp{};
+    uint32_t blocksTotal = 0; // all components'
     // Every component's blocks, row by row, one component after another; each block its 64
-    // quantised coefficients in natural (row-major) order.
+    // quantised coefficients in natural (row-major) order. Empty when they were read into the
+    // caller's memory instead (the overload below).
     std::vector<int16_t> blocks;
 
-    uint32_t blockCount() const { return uint32_t(blocks.size() / 64); }
+    uint32_t blockCount() const { return blocksTotal; }
 };
 
 // Reads the coefficients of a JPEG of exactly width × height pixels. CorruptData for a stream
@@ -50,5 +52,10 @@ struct JpegCoefficients {
 // stream whose layout the GPU path does not take (see above).
 Expected<JpegCoefficients> readJpegCoefficients(const uint8_t* data, size_t size, int width, int height,
                                                 JpegColour colour);
+// The same, with the blocks written to `dst` (room for `capacity` values) rather than to the
+// result's vector: a caller that packs tiles for the GPU saves a copy. CorruptData when they
+// do not fit.
+Expected<JpegCoefficients> readJpegCoefficients(const uint8_t* data, size_t size, int width, int height,
+                                                JpegColour colour, int16_t* dst, size_t capacity);
 
 } // namespace iris

@@ -142,22 +142,26 @@ void splitPass(benchsplit::GpuSplit& split, BaselineResult& r, const LevelDir& l
         for (auto& t : pool) t.join();
     };
     std::atomic<bool> refused{false};
+    std::atomic<uint64_t> busyNs{0};
     const auto t0 = Clock::now();
     across([&](Worker& k, size_t i) {
+        const auto tileStart = Clock::now();
         const uint8_t* src = nullptr;
         size_t len = 0;
         if (!stream(k, i, src, len) ||
             !split.entropyDecode(uint32_t(i), {src, len}, int(ld.tw), int(ld.th), ld.ycbcr))
             refused = true;
+        busyNs += uint64_t(std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - tileStart).count());
     });
     if (refused) {
         r.splitNote = "a tile the GPU path does not take (its layout, or a read failed)";
         return;
     }
-    double gpuMs = NAN;
-    if (!split.reconstruct(uint32_t(count), gpuMs, r.splitNote)) return;
+    double gpuMs = NAN, computeMs = NAN;
+    if (!split.reconstruct(uint32_t(count), gpuMs, computeMs, r.splitNote)) return;
     r.splitMs.push_back(msSince(t0));
     r.splitGpuMs.push_back(gpuMs);
+    r.splitComputeMs.push_back(computeMs);
     if (!split.readBack(uint32_t(count), r.splitNote)) return;
     std::atomic<uint64_t> mismatched{0};
     across([&](Worker& k, size_t i) {
@@ -172,7 +176,11 @@ void splitPass(benchsplit::GpuSplit& split, BaselineResult& r, const LevelDir& l
             std::memcmp(k.rgb.data(), split.pixels(uint32_t(i)), bytes) != 0)
             ++mismatched;
     });
+    // A running mean over the fields' tiles.
+    const double us = double(busyNs) / 1000.0;
+    const double before = std::isfinite(r.splitEntropyUsPerTile) ? r.splitEntropyUsPerTile * double(r.splitTiles) : 0.0;
     r.splitTiles += count;
+    r.splitEntropyUsPerTile = (before + us) / double(r.splitTiles);
     r.splitMismatched += mismatched;
 }
 

@@ -30,8 +30,9 @@ struct BaselineResult {
     // each field's: its wall time (entropy decodes on every core, then one GPU batch) and the
     // GPU's own time; the tiles it reconstructed, and how many of them differ in any byte from
     // libjpeg-turbo's decode (checked untimed). Empty with a note where it could not run.
-    std::vector<double> splitMs, splitGpuMs;
+    std::vector<double> splitMs, splitGpuMs, splitComputeMs; // wall; GPU; of which its dispatches
     uint64_t splitTiles = 0, splitMismatched = 0;
+    double splitEntropyUsPerTile = NAN; // its threads' read and entropy decode into the GPU's input, a tile
     std::string splitNote;
 };
 

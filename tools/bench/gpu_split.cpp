@@ -35,8 +35,10 @@ struct GpuSplit::Impl {
     double periodNs = 0;
     uint32_t room = 0; // tiles
     iris::vk::MappedBuffer input, readback;
-    iris::vk::Memory planesMemory, outputMemory;
-    iris::vk::Buffer planes, output;
+    // The input copied into device memory before the dispatches, as an engine would upload it
+    // (the shaders' scattered reads of host memory would cross the bus one by one).
+    iris::vk::Memory deviceInputMemory, planesMemory, outputMemory;
+    iris::vk::Buffer deviceInput, planes, output;
     VkDescriptorSet set = VK_NULL_HANDLE;
     std::vector<iris::JpegCoefficients> headers;
 
@@ -96,7 +98,7 @@ std::unique_ptr<GpuSplit> GpuSplit::create(const iris::EngineConfig& config, std
         return nullptr;
     }
     VkQueryPool q = VK_NULL_HANDLE;
-    if (iris::Result r = iris::vk::createTimestampPool(m.device.physical(), dev, family, 2, q, m.periodNs); r.ok() && q)
+    if (iris::Result r = iris::vk::createTimestampPool(m.device.physical(), dev, family, 3, q, m.periodNs); r.ok() && q)
         m.queries = iris::vk::QueryPool(dev, q);
     return s;
 }
@@ -115,14 +117,17 @@ bool GpuSplit::reserve(uint32_t tiles, std::string& why) {
     const VkDeviceSize inputBytes = (uint64_t(tiles) * kDescriptorWords + uint64_t(tiles) * kRoomWords) * 4;
     const VkDeviceSize planeBytes = uint64_t(tiles) * kPlaneRoomWords * 4;
     const VkDeviceSize outputBytes = uint64_t(tiles) * kTilePixels * 4;
-    iris::Result r = iris::vk::createMappedBuffer(pd, dev, inputBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, m.input);
+    iris::Result r = iris::vk::createMappedBuffer(pd, dev, inputBytes, VK_BUFFER_USAGE_TRANSFER_SRC_BIT, false, m.input);
+    if (r.ok())
+        r = iris::vk::createDeviceBuffer(pd, dev, inputBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_DST_BIT,
+                                         m.deviceInput, m.deviceInputMemory);
     if (r.ok()) r = iris::vk::createMappedBuffer(pd, dev, outputBytes, VK_BUFFER_USAGE_TRANSFER_DST_BIT, true, m.readback);
     if (r.ok()) r = iris::vk::createDeviceBuffer(pd, dev, planeBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, m.planes, m.planesMemory);
     if (r.ok())
         r = iris::vk::createDeviceBuffer(pd, dev, outputBytes, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_TRANSFER_SRC_BIT,
                                          m.output, m.outputMemory);
     if (r.ok()) {
-        auto set = m.jpeg->makeSet(m.input.buffer, 0, inputBytes, m.planes.get(), planeBytes, m.output.get(), 0, outputBytes);
+        auto set = m.jpeg->makeSet(m.deviceInput.get(), 0, inputBytes, m.planes.get(), planeBytes, m.output.get(), 0, outputBytes);
         if (set) m.set = *set;
         else r = set.error();
     }
@@ -150,9 +155,9 @@ bool GpuSplit::entropyDecode(uint32_t index, const TileStream& s, int width, int
     return true;
 }
 
-bool GpuSplit::reconstruct(uint32_t count, double& gpuMs, std::string& why) {
+bool GpuSplit::reconstruct(uint32_t count, double& gpuMs, double& computeMs, std::string& why) {
     Impl& m = *impl_;
-    gpuMs = NAN;
+    gpuMs = computeMs = NAN;
     if (count == 0 || count > m.room) return true;
     if (iris::Result r = iris::vk::flush(m.device.device(), m.input); !r.ok()) {
         why = r.message();
@@ -172,22 +177,37 @@ bool GpuSplit::reconstruct(uint32_t count, double& gpuMs, std::string& why) {
     vkResetCommandBuffer(m.cmd, 0);
     vkBeginCommandBuffer(m.cmd, &begin);
     if (m.queries) {
-        vkCmdResetQueryPool(m.cmd, m.queries.get(), 0, 2);
+        vkCmdResetQueryPool(m.cmd, m.queries.get(), 0, 3);
         vkCmdWriteTimestamp2(m.cmd, VK_PIPELINE_STAGE_2_TOP_OF_PIPE_BIT, m.queries.get(), 0);
     }
-    // Earlier fields' reads of the planes and output (a copy back) before this one's writes.
+    // Earlier fields' work on these buffers (dispatches, a copy back) before this one's.
     iris::vk::memoryBarrier(m.cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT,
-                            VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT,
-                            VK_ACCESS_2_SHADER_STORAGE_READ_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT);
+                            VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
+    // The descriptors, then each tile's tables and blocks (not the rest of its room).
+    std::vector<VkBufferCopy> regions;
+    regions.reserve(count + 1);
+    regions.push_back({.srcOffset = 0, .dstOffset = 0, .size = uint64_t(count) * kDescriptorWords * 4});
+    for (uint32_t i = 0; i < count; ++i) {
+        const uint64_t at = m.roomWord(i) * 4;
+        // Three tables' room before the blocks, whatever the component count.
+        const uint64_t used = 3 * 64 + JpegReconstruct::coefficientWords(m.headers[i]);
+        regions.push_back({.srcOffset = at, .dstOffset = at, .size = used * 4});
+    }
+    vkCmdCopyBuffer(m.cmd, m.input.buffer, m.deviceInput.get(), uint32_t(regions.size()), regions.data());
+    iris::vk::memoryBarrier(m.cmd, VK_PIPELINE_STAGE_2_COPY_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                            VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
+    if (m.queries) vkCmdWriteTimestamp2(m.cmd, VK_PIPELINE_STAGE_2_COPY_BIT, m.queries.get(), 1);
     m.jpeg->record(m.cmd, m.set, sizes);
-    if (m.queries) vkCmdWriteTimestamp2(m.cmd, VK_PIPELINE_STAGE_2_BOTTOM_OF_PIPE_BIT, m.queries.get(), 1);
+    if (m.queries) vkCmdWriteTimestamp2(m.cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, m.queries.get(), 2);
     vkEndCommandBuffer(m.cmd);
     if (!m.submitAndWait(why)) return false;
     if (m.queries) {
-        uint64_t ts[2] = {};
-        if (vkGetQueryPoolResults(m.device.device(), m.queries.get(), 0, 2, sizeof ts, ts, sizeof ts[0],
-                                  VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT) == VK_SUCCESS)
-            gpuMs = double(ts[1] - ts[0]) * m.periodNs / 1e6;
+        uint64_t ts[3] = {};
+        if (vkGetQueryPoolResults(m.device.device(), m.queries.get(), 0, 3, sizeof ts, ts, sizeof ts[0],
+                                  VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT) == VK_SUCCESS) {
+            gpuMs = double(ts[2] - ts[0]) * m.periodNs / 1e6;
+            computeMs = double(ts[2] - ts[1]) * m.periodNs / 1e6;
+        }
     }
     return true;
 }

@@ -36,9 +36,10 @@ public:
     // Thread-safe for distinct `index`: entropy-decodes the tile into its room and writes its
     // descriptor. False when the GPU path does not take it (the field then does not count).
     bool entropyDecode(uint32_t index, const TileStream& s, int width, int height, bool ycbcr);
-    // Reconstructs tiles [0, count) on the GPU and waits for it; the GPU's own time (timestamps)
-    // in gpuMs, NaN where the queue has none. False on a Vulkan error (`why`).
-    bool reconstruct(uint32_t count, double& gpuMs, std::string& why);
+    // Uploads tiles [0, count)'s input into device memory, reconstructs them there and waits;
+    // the GPU's own time (timestamps) in gpuMs, of which the two dispatches' in computeMs (the
+    // rest is the upload), NaN where the queue has none. False on a Vulkan error (`why`).
+    bool reconstruct(uint32_t count, double& gpuMs, double& computeMs, std::string& why);
     // Copies tiles [0, count)'s pixels back to the host (after reconstruct, untimed).
     bool readBack(uint32_t count, std::string& why);
     // After readBack: tile `index`'s RGBA8 pixels (width × height, rows width·4 bytes).

@@ -91,7 +91,7 @@ struct Engine::Impl {
         render = std::make_unique<RenderThread>(shared, device, atlas, pipeline, *handover, counters, log, config.tuning);
         if (Result r = render->init(); !r.ok()) return r;
         buffer = std::make_unique<BufferThread>(shared, cache, device, atlas, mips, *handover, counters, log,
-                                                int(config.perimeterTiles), render->copiesExact());
+                                                int(config.perimeterTiles), render->copiesExact(), config.tuning.jpegDecode);
         if (Result r = buffer->init(); !r.ok()) return r;
         shared.update([&](Snapshot& s) { s.background = config.background; });
         (void)bakeColor(nullptr, color, colorStatus); // the display profile's description
@@ -102,9 +102,15 @@ struct Engine::Impl {
         render->start();
         // Each decoded tile into staging by its loader (BufferThread::prestage); the loaders go
         // before the buffer thread (the destructor, and no rebuild replaces it).
+        // Where the buffer thread finishes JPEG tiles on the GPU, the loaders hand it their
+        // coefficients (EngineTuning::jpegDecode).
+        log.info(std::string("JPEG decode: ") + (buffer->reconstructsJpeg() ? "entropy on the CPU, the rest on the GPU" : "CPU"));
         loaders = std::make_unique<LoaderPool>(
             shared, cache, log, config.loaderThreads, int(config.perimeterTiles),
-            [b = buffer.get()](uint64_t key, const uint8_t* pixels) { b->prestage(key, pixels); });
+            [b = buffer.get()](uint64_t key, const uint8_t* pixels, bool coefficients) {
+                b->prestage(key, pixels, coefficients);
+            },
+            buffer->reconstructsJpeg());
         log.info("engine ready: " + std::to_string(atlas.slotCount()) + " atlas slots, RAM budget " +
                  std::to_string(cache.budgetBytes() >> 20) + " MiB");
         return {};
@@ -816,6 +822,7 @@ DeviceInfo Engine::device() const {
     d.atlasSlots = impl_->atlas.slotCount();
     d.mipSchedule = gpu::MipPipeline::scheduleName(impl_->mips.schedule());
     d.tileUpload = impl_->atlas.hostWritten() ? "host" : "queue";
+    d.jpegDecode = impl_->buffer->reconstructsJpeg() ? "gpu" : "cpu";
     return d;
 }
 

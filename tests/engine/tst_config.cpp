@@ -28,7 +28,8 @@ using namespace std::chrono_literals;
 namespace {
 
 constexpr const char* kVariables[] = {"IRIS_PACE_FRAMES", "IRIS_DRAW_COVERED", "IRIS_MIP_SCHEDULE", "IRIS_DEVICE",
-                                      "IRIS_QUEUES",      "IRIS_TILE_RESOLVE", "IRIS_COLOR_LOOKUP", "IRIS_EXACT_COPY"};
+                                      "IRIS_QUEUES",      "IRIS_TILE_RESOLVE", "IRIS_COLOR_LOOKUP", "IRIS_EXACT_COPY",
+                                      "IRIS_TILE_UPLOAD", "IRIS_JPEG_DECODE"};
 
 // Sets the variables for its lifetime and puts back what was there before.
 class ScopedEnvironment {
@@ -85,6 +86,7 @@ private slots:
             QVERIFY(!t->singleQueue);
             QVERIFY(t->exactCopy == T::ExactCopy::Auto);
             QVERIFY(t->tileUpload == T::TileUpload::Auto);
+            QVERIFY(t->jpegDecode == T::JpegDecode::Auto);
         }
         {
             ScopedEnvironment env({{"IRIS_PACE_FRAMES", "1"},
@@ -95,11 +97,13 @@ private slots:
                                    {"IRIS_TILE_RESOLVE", "quads"},
                                    {"IRIS_COLOR_LOOKUP", "nodes"},
                                    {"IRIS_EXACT_COPY", "1"},
-                                   {"IRIS_TILE_UPLOAD", "host"}});
+                                   {"IRIS_TILE_UPLOAD", "host"},
+                                   {"IRIS_JPEG_DECODE", "gpu"}});
             auto t = iris::tuningFromEnvironment();
             QVERIFY(t.ok());
             QVERIFY(t->exactCopy == T::ExactCopy::On);
             QVERIFY(t->tileUpload == T::TileUpload::Host);
+            QVERIFY(t->jpegDecode == T::JpegDecode::Gpu);
             QVERIFY(t->tileResolve == T::TileResolve::Quads);
             QVERIFY(t->colorLookup == T::ColorLookup::Nodes);
             QVERIFY(t->pacing == T::Pacing::On);
@@ -116,7 +120,8 @@ private slots:
                                    {"IRIS_TILE_RESOLVE", "compute"},
                                    {"IRIS_COLOR_LOOKUP", "sampler"},
                                    {"IRIS_EXACT_COPY", "0"},
-                                   {"IRIS_TILE_UPLOAD", "queue"}});
+                                   {"IRIS_TILE_UPLOAD", "queue"},
+                                   {"IRIS_JPEG_DECODE", "cpu"}});
             T base;
             base.singleQueue = true;
             base.drawCovered = true;
@@ -130,6 +135,7 @@ private slots:
             QVERIFY(t->colorLookup == T::ColorLookup::Sampler);
             QVERIFY(t->exactCopy == T::ExactCopy::Off);
             QVERIFY(t->tileUpload == T::TileUpload::Queue);
+            QVERIFY(t->jpegDecode == T::JpegDecode::Cpu);
         }
         {
             ScopedEnvironment env(std::map<std::string, std::string>{{"IRIS_MIP_SCHEDULE", "host"}});

@@ -17,6 +17,8 @@
 //                  the directory's JPEGTables as the TIFF reader reads them, in batches of 32;
 //   intoCallerMemory  the coefficients read into the caller's memory equal those read into
 //                  the result's own vector;
+//   records        the RAM cache's coefficient records: their header, the layouts that fit a
+//                  tile buffer, and an edge tile's padding (the valid part's last column and row);
 //   refused        layouts the path does not take (4:1:1, 4:4:0) say UnsupportedFormat; a
 //                  truncated stream, garbage and a stream of other dimensions say CorruptData.
 // The Vulkan validation layer is on (where installed) and must stay silent.
@@ -169,6 +171,36 @@ class TestJpegGpu : public QObject {
             .ok();
     }
 
+    // Records and submits the two dispatches over the input, planes and output buffers, waits,
+    // and makes the output visible to the host.
+    bool dispatch(const iris::gpu::JpegReconstruct::Sizes& sizes, uint64_t inputWords, uint64_t outputWords) {
+        if (!iris::vk::flush(device_->device(), input_).ok() || !iris::vk::flush(device_->device(), output_).ok()) return false;
+        auto set = jpeg_->makeSet(input_.buffer, 0, inputWords * 4, planes_.get(), planesBytes_, output_.buffer, 0,
+                                  outputWords * 4);
+        if (!set) {
+            QTest::qFail(describe(set.error()).c_str(), __FILE__, __LINE__);
+            return false;
+        }
+        const VkCommandBufferBeginInfo begin{.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO, .pNext = nullptr,
+                                             .flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT, .pInheritanceInfo = nullptr};
+        vkResetCommandBuffer(cmd_, 0);
+        vkBeginCommandBuffer(cmd_, &begin);
+        jpeg_->record(cmd_, *set, sizes);
+        iris::vk::memoryBarrier(cmd_, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                                VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT);
+        vkEndCommandBuffer(cmd_);
+        const VkCommandBufferSubmitInfo cmdInfo = iris::vk::commandInfo(cmd_);
+        VkFence fence = fence_.get();
+        vkResetFences(device_->device(), 1, &fence);
+        if (device_->submit(iris::gpu::Device::Role::Compute, iris::vk::submitInfo(&cmdInfo), fence) != VK_SUCCESS ||
+            vkWaitForFences(device_->device(), 1, &fence, VK_TRUE, 60'000'000'000ull) != VK_SUCCESS) {
+            QTest::qFail("submit or wait failed", __FILE__, __LINE__);
+            return false;
+        }
+        jpeg_->freeSet(*set);
+        return iris::vk::invalidate(device_->device(), output_).ok();
+    }
+
     // Reconstructs `streams` in one batch; their libjpeg-turbo decodes must equal it. Returns
     // the tiles compared (streams the path refuses are counted out, and must be refusals).
     int reconstructAndCompare(const std::vector<Stream>& streams) {
@@ -211,31 +243,7 @@ class TestJpegGpu : public QObject {
         }
         iris::gpu::JpegReconstruct::pack(tiles, places, static_cast<uint32_t*>(input_.mapped));
         std::memset(output_.mapped, 0x5a, outputWords * 4); // a pixel left unwritten shows
-        if (!iris::vk::flush(device_->device(), input_).ok() || !iris::vk::flush(device_->device(), output_).ok()) return -1;
-        auto set = jpeg_->makeSet(input_.buffer, 0, sizes.inputWords * 4, planes_.get(), sizes.planeWords * 4,
-                                  output_.buffer, 0, outputWords * 4);
-        if (!set) {
-            QTest::qFail(describe(set.error()).c_str(), __FILE__, __LINE__);
-            return -1;
-        }
-        const VkCommandBufferBeginInfo begin{.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO, .pNext = nullptr,
-                                             .flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT, .pInheritanceInfo = nullptr};
-        vkResetCommandBuffer(cmd_, 0);
-        vkBeginCommandBuffer(cmd_, &begin);
-        jpeg_->record(cmd_, *set, sizes);
-        iris::vk::memoryBarrier(cmd_, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
-                                VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT);
-        vkEndCommandBuffer(cmd_);
-        const VkCommandBufferSubmitInfo cmdInfo = iris::vk::commandInfo(cmd_);
-        VkFence fence = fence_.get();
-        vkResetFences(device_->device(), 1, &fence);
-        if (device_->submit(iris::gpu::Device::Role::Compute, iris::vk::submitInfo(&cmdInfo), fence) != VK_SUCCESS ||
-            vkWaitForFences(device_->device(), 1, &fence, VK_TRUE, 60'000'000'000ull) != VK_SUCCESS) {
-            QTest::qFail("submit or wait failed", __FILE__, __LINE__);
-            return -1;
-        }
-        jpeg_->freeSet(*set);
-        if (!iris::vk::invalidate(device_->device(), output_).ok()) return -1;
+        if (!dispatch(sizes, sizes.inputWords, outputWords)) return -1;
 
         int compared = 0;
         for (size_t i = 0; i < taken.size(); ++i) {
@@ -393,6 +401,62 @@ private slots:
         auto small = iris::readJpegCoefficients(s.bytes.data(), s.bytes.size(), 256, 256, JpegColour::Auto, room.data(),
                                                 room.size() - 1);
         QVERIFY(!small && small.error().status() == iris::Status::CorruptData);
+    }
+
+    // The RAM cache's coefficient records (jpegrecord, EngineTuning::JpegDecode::Gpu): what the
+    // header says, which layouts fit a tile buffer, and a record reconstructed with a valid part
+    // smaller than the tile equals libjpeg-turbo's decode padded as padTileEdges pads it.
+    void records() {
+        namespace rec = iris::jpegrecord;
+        std::vector<uint8_t> record(iris::kTileBytes);
+        const Stream s420 = encode(256, 256, TJSAMP_420, 90, false, 21);
+        QVERIFY(rec::write(s420.bytes.data(), s420.bytes.size(), 256, 256, JpegColour::Auto, 200, 100, record.data()).ok());
+        JpegCoefficients h;
+        uint32_t vw = 0, vh = 0;
+        QVERIFY(rec::header(record.data(), h, vw, vh));
+        QCOMPARE(h.width, 256u);
+        QCOMPARE(vw, 200u);
+        QCOMPARE(vh, 100u);
+        QCOMPARE(h.components, 3u);
+        QCOMPARE(h.blockCount(), 1536u);
+        QVERIFY(h.hMax == 2 && h.vMax == 2);
+        QVERIFY(h.transform == JpegCoefficients::Transform::YCbCr);
+        const Stream grey = encode(256, 256, TJSAMP_GRAY, 90, false, 22);
+        QVERIFY(rec::write(grey.bytes.data(), grey.bytes.size(), 256, 256, JpegColour::Auto, 256, 256, record.data()).ok());
+        for (int subsamp : {int(TJSAMP_422), int(TJSAMP_444)}) {
+            const Stream big = encode(256, 256, subsamp, 90, false, 23);
+            const iris::Result r =
+                rec::write(big.bytes.data(), big.bytes.size(), 256, 256, JpegColour::Auto, 256, 256, record.data());
+            QVERIFY2(r.status() == iris::Status::UnsupportedFormat, big.name.c_str());
+        }
+        std::vector<uint8_t> notRecord(iris::kTileBytes, 0x43);
+        QVERIFY(!rec::header(notRecord.data(), h, vw, vh));
+
+        // The padded reconstruction, through the buffer path with the record's own layout.
+        QVERIFY(rec::write(s420.bytes.data(), s420.bytes.size(), 256, 256, JpegColour::Auto, 200, 100, record.data()).ok());
+        QVERIFY(rec::header(record.data(), h, vw, vh));
+        const uint64_t inputWords = iris::gpu::JpegReconstruct::kDescriptorWords + iris::kTileBytes / 4;
+        QVERIFY(ensure(input_, inputWords * 4, false) && ensure(output_, uint64_t(iris::kTileBytes), true));
+        if (planesBytes_ < 3 * 64 * 256 * 4) {
+            planesBytes_ = 3 * 64 * 256 * 4;
+            QVERIFY(iris::vk::createDeviceBuffer(device_->physical(), device_->device(), planesBytes_,
+                                                 VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, planes_, planesMemory_)
+                        .ok());
+        }
+        auto* words = static_cast<uint32_t*>(input_.mapped);
+        const uint32_t at = iris::gpu::JpegReconstruct::kDescriptorWords;
+        std::memcpy(words + at, record.data(), record.size());
+        iris::gpu::JpegReconstruct::describe(h, {.outputWord = 0, .outputPitch = 256, .validWidth = vw, .validHeight = vh}, 0,
+                                             at + rec::kQuantWord, at + rec::kBlocksWord, 0, words);
+        iris::gpu::JpegReconstruct::Sizes sizes{.tiles = 1, .inputWords = inputWords, .planeWords = 3 * 64 * 256,
+                                                .maxBlocks = h.blockCount(), .maxWidth = 256, .maxHeight = 256};
+        QVERIFY(dispatch(sizes, inputWords, uint64_t(iris::kTileBytes) / 4));
+        std::vector<uint8_t> cpu(iris::kTileBytes);
+        QVERIFY(iris::decodeJpegFrameRgba(s420.bytes.data(), s420.bytes.size(), 256, 256, JpegColour::Auto, cpu.data(), 1024).ok());
+        for (int y = 0; y < 256; ++y)
+            for (int x = 0; x < 256; ++x)
+                std::memcpy(&cpu[(size_t(y) * 256 + x) * 4], &cpu[(size_t(std::min(y, 99)) * 256 + std::min(x, 199)) * 4], 4);
+        QVERIFY(std::memcmp(output_.mapped, cpu.data(), cpu.size()) == 0);
     }
 
     void refused() {

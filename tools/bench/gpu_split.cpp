@@ -151,6 +151,7 @@ bool GpuSplit::entropyDecode(uint32_t index, const TileStream& s, int width, int
     if (!c) return false;
     const JpegReconstruct::Placement place{.outputWord = uint32_t(uint64_t(index) * kTilePixels), .outputPitch = uint32_t(width)};
     JpegReconstruct::describe(*c, place, index, at, at + 3 * 64, uint64_t(index) * kPlaneRoomWords, words);
+    JpegReconstruct::writeQuant(*c, words + at);
     m.headers[index] = std::move(c.value());
     return true;
 }

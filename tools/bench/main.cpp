@@ -111,6 +111,7 @@ struct SizeResult {
     std::string device;
     std::string mipSchedule;
     std::string tileUpload; // as the engine resolved it
+    std::string jpegDecode; // as the engine resolved it
     std::vector<double> lrTefov, hrTefov, lrTpt, hrTpt, rate, frameMs;
     std::vector<double> settledGpuMs; // GPU time of frames redrawing a loaded field (nothing to upload)
     std::vector<double> settledCpuMs; // the render thread's time on the same frames (FrameStats::cpuMs)
@@ -220,6 +221,7 @@ SizeResult runSize(const Options& o, uint32_t W, uint32_t H, bool colorManaged) 
     res.device = e.device().name;
     res.mipSchedule = e.device().mipSchedule;
     res.tileUpload = e.device().tileUpload;
+    res.jpegDecode = e.device().jpegDecode;
     if (auto r = e.bindOffscreen(W, H, /*readback=*/false); !r) {
         res.notes = r.message();
         return res;
@@ -481,6 +483,7 @@ Json resultJson(const Options& o, const SizeResult& r) {
     j["hardware_threads"] = std::thread::hardware_concurrency();
     j["mip_schedule"] = r.mipSchedule;
     j["tile_upload"] = r.tileUpload;
+    j["jpeg_decode"] = r.jpegDecode;
     // What IRIS_* asked for (an A/B run's JSON says which side it is).
     const auto pacing = o.tuning.pacing == iris::EngineTuning::Pacing::On    ? "on"
                         : o.tuning.pacing == iris::EngineTuning::Pacing::Off ? "off"
@@ -500,6 +503,9 @@ Json resultJson(const Options& o, const SizeResult& r) {
                    {"tile_upload", o.tuning.tileUpload == iris::EngineTuning::TileUpload::Host    ? "host"
                                    : o.tuning.tileUpload == iris::EngineTuning::TileUpload::Queue ? "queue"
                                                                                                   : "auto"},
+                   {"jpeg_decode", o.tuning.jpegDecode == iris::EngineTuning::JpegDecode::Gpu   ? "gpu"
+                                   : o.tuning.jpegDecode == iris::EngineTuning::JpegDecode::Cpu ? "cpu"
+                                                                                                : "auto"},
                    {"device_filter", o.tuning.deviceName}};
     // Per stage, medians over the timed fields; then the typical field's own (see stageTimeline).
     Json timeline;

@@ -33,7 +33,9 @@ inline constexpr const char* kTuningEnvironmentHelp =
     "  IRIS_EXACT_COPY=auto|0|1       copy levels at their own scale, not draw them\n"
     "                                 (default: on for CPU devices)\n"
     "  IRIS_TILE_UPLOAD=auto|queue|host  tiles into the atlas by a queue copy or by\n"
-    "                                 host writes (default: host for CPU devices)";
+    "                                 host writes (default: host for CPU devices)\n"
+    "  IRIS_JPEG_DECODE=auto|cpu|gpu  finish JPEG tiles (inverse DCT, upsampling,\n"
+    "                                 colour) on the GPU (default: cpu)";
 
 // "  -o, --output FILE       text (default: x)" within 80 columns.
 class HelpFormatter : public CLI::Formatter {

@@ -88,6 +88,16 @@ struct EngineTuning {
     // wherever the device allows it (else Queue, with a log line).
     enum class TileUpload { Auto, Queue, Host };
     TileUpload tileUpload = TileUpload::Auto;
+    // Where a JPEG tile's decode ends (issue 20). Cpu: the loaders decode whole tiles. Gpu: for
+    // levels of 256×256 JPEG tiles of the direct TIFF reader (Aperio SVS, generic TIFF), the
+    // loaders only entropy-decode each tile, the RAM cache keeps its coefficients, and the
+    // buffer thread's compute pass finishes it into the atlas (dequantisation, inverse DCT,
+    // upsampling, colour conversion: libjpeg-turbo's bytes, docs/ARCHITECTURE.md); tiles whose
+    // coefficients do not fit a tile buffer (4:2:2, 4:4:4) and all other sources decode as with
+    // Cpu. Gpu needs tiles uploaded by queue copies and mips made on the device (else Cpu, with
+    // a log line). Auto: Cpu (docs/BENCHMARKS.md, "The GPU's share of the decode in the engine").
+    enum class JpegDecode { Auto, Cpu, Gpu };
+    JpegDecode jpegDecode = JpegDecode::Auto;
     // Fault injection for tests: a device allocation of the tile atlas larger than this many
     // bytes fails as VK_ERROR_OUT_OF_DEVICE_MEMORY would (0: no limit), so that the fallback to a
     // smaller atlas can be tested on any device.

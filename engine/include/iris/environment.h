@@ -13,6 +13,7 @@
 //   IRIS_COLOR_LOOKUP=auto|sampler|nodes  tuning.colorLookup = Auto | Sampler | Nodes
 //   IRIS_EXACT_COPY=auto|0|1      tuning.exactCopy = Auto | Off | On
 //   IRIS_TILE_UPLOAD=auto|queue|host  tuning.tileUpload = Auto | Queue | Host
+//   IRIS_JPEG_DECODE=auto|cpu|gpu  tuning.jpegDecode = Auto | Cpu | Gpu
 //
 // An unset or empty variable leaves `base`'s value. Any other value is an error
 // (InvalidArgument) naming the variable and the values it takes, so a typo in a benchmark

@@ -457,6 +457,7 @@ struct DeviceInfo {
     uint32_t atlasSlots = 0;     // tile slots the VRAM budget bought
     std::string mipSchedule;     // "wide" (16 workgroups per tile, GPUs), "serial" (one) or "host" (the CPU, CPU devices)
     std::string tileUpload; // "host" (written into a linear, host-visible atlas: EngineTuning::tileUpload) or "queue"
+    std::string jpegDecode; // "gpu" (JPEG tiles finished by the buffer thread's compute pass: EngineTuning::jpegDecode) or "cpu"
     uint32_t recoveries = 0;     // lost devices the engine recreated since create() (Engine::injectFault)
     bool lost = false;           // the device is lost now and not yet recreated
 };

@@ -6,6 +6,7 @@
 #include <unordered_set>
 
 #include "core/pixels.h"
+#include "slide/jpeg_coefficients.h"
 #include "core/prefault.h"
 #include "gpu/mip_kernel.h"
 #include "core/thread_name.h"
@@ -15,6 +16,9 @@ namespace iris {
 namespace {
 constexpr uint32_t kStagingTiles = BufferThread::kTilesPerTransaction * BufferThread::kMaxTransactions;
 constexpr size_t kTilePixels = size_t(kTileSize) * kTileSize;
+// One tile's sample planes in the JPEG reconstruction's scratch: three components of 256 rows
+// of 64 words (4:4:4 at most; a record is 4:2:0 or grey, which use less).
+constexpr uint32_t kJpegPlaneWords = 3 * 64 * 256;
 
 // Whether every pixel of the staged RGBA tile (padding included) has alpha 255: the AND of all
 // its 8-byte words, whose alpha bytes (3 and 7) must stay 0xFF.
@@ -29,13 +33,21 @@ bool allOpaque(const uint8_t* tile) {
     std::memcpy(bytes, &acc, 8);
     return bytes[3] == 0xFF && bytes[7] == 0xFF;
 }
+// A coefficient record's bytes in use (its header and blocks; the rest of the tile buffer is not
+// read), or the whole buffer when its header is not one.
+size_t jpegRecordBytes(const uint8_t* record) {
+    JpegCoefficients h;
+    uint32_t vw = 0, vh = 0;
+    if (!jpegrecord::header(record, h, vw, vh)) return kTileBytes;
+    return (size_t(jpegrecord::kBlocksWord) + size_t(h.blockCount()) * 32) * 4;
+}
 } // namespace
 
 BufferThread::BufferThread(SharedState& shared, TileCache& cache, gpu::Device& device, gpu::TileAtlas& atlas,
                            gpu::MipPipeline& mips, Handover& handover, UploadCounters& counters, const Log& log,
-                           int perimeter, bool trackOpacity)
+                           int perimeter, bool trackOpacity, EngineTuning::JpegDecode jpegDecode)
     : shared_(shared), cache_(cache), device_(device), atlas_(atlas), mips_(mips), handover_(handover),
-      counters_(counters), log_(log), perimeter_(perimeter), trackOpacity_(trackOpacity) {}
+      counters_(counters), log_(log), perimeter_(perimeter), trackOpacity_(trackOpacity), jpegDecode_(jpegDecode) {}
 
 BufferThread::~BufferThread() {
     stop(); // the uploads in flight finish before the pools, semaphores and staging ring go
@@ -56,6 +68,13 @@ Result BufferThread::init() {
     separateCopy_ = transferFamily_ != computeFamily_ && !hostMips_;
     stagingStride_ = hostMips_ ? (VkDeviceSize(kTileBytes) + gpu::mipkernel::kChainBytes + 255) / 256 * 256
                                : VkDeviceSize(kTileBytes);
+    if (!jpegDecided_) { // once: the loaders are told, and a device loss keeps the same device kind
+        jpegDecided_ = true;
+        jpegOnGpu_ = jpegDecode_ == EngineTuning::JpegDecode::Gpu && !hostMips_ && !atlas_.hostWritten() && !atlas_.swapped();
+        if (jpegDecode_ == EngineTuning::JpegDecode::Gpu && !jpegOnGpu_)
+            log_.warn("JPEG decode: finishing tiles on the GPU needs queue uploads and mips made on the device; "
+                      "decoding on the CPU");
+    }
     const auto makePool = [&](uint32_t family, vk::CommandPool& pool) -> Result {
         const VkCommandPoolCreateInfo pci{.sType = VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO,
                                           .pNext = nullptr,
@@ -95,8 +114,14 @@ Result BufferThread::init() {
         // the exclusive lock.
         std::unique_lock life(stagingLife_);
         const uint32_t tiles = kStagingTiles + (hostWrites_ ? 0 : kPrestageTiles);
+        // Finishing JPEG tiles on the GPU, the compute family reads coefficient records from
+        // staging while the transfer family copies pixels out of it.
+        const std::array<uint32_t, 2> families =
+            jpegOnGpu_ ? std::array<uint32_t, 2>{transferFamily_, computeFamily_} : std::array<uint32_t, 2>{0, 0};
         if (Result r = vk::createMappedBuffer(device_.physical(), dev, VkDeviceSize(tiles) * stagingStride_,
-                                              VK_BUFFER_USAGE_TRANSFER_SRC_BIT, /*preferCached=*/hostMips_, staging_);
+                                              VK_BUFFER_USAGE_TRANSFER_SRC_BIT |
+                                                  (jpegOnGpu_ ? VK_BUFFER_USAGE_STORAGE_BUFFER_BIT : 0),
+                                              /*preferCached=*/hostMips_, staging_, families);
             !r.ok())
             return r;
         std::lock_guard lock(stagingMutex_);
@@ -106,6 +131,27 @@ Result BufferThread::init() {
     }
     if (hostWrites_) mipScratch_.assign(size_t(kTileBytes) + gpu::mipkernel::kChainBytes, 0);
     txns_.resize(kMaxTransactions);
+    if (jpegOnGpu_) {
+        jpeg_ = std::make_unique<gpu::JpegReconstruct>(device_, gpu::JpegReconstruct::Output::Atlas);
+        if (Result r = jpeg_->init(kMaxTransactions); !r.ok()) return r;
+        const VkDeviceSize planes = VkDeviceSize(kJpegPlaneWords) * 4 * kTilesPerTransaction;
+        const VkDeviceSize table = VkDeviceSize(gpu::JpegReconstruct::kDescriptorWords) * 4 * kTilesPerTransaction;
+        if (Result r = vk::createDeviceBuffer(device_.physical(), dev, planes * kMaxTransactions,
+                                              VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, jpegPlanes_, jpegPlanesMemory_);
+            !r.ok())
+            return r;
+        if (Result r = vk::createMappedBuffer(device_.physical(), dev, table * kMaxTransactions,
+                                              VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, false, jpegTables_);
+            !r.ok())
+            return r;
+        jpegSets_.clear();
+        for (uint32_t i = 0; i < kMaxTransactions; ++i) {
+            Expected<VkDescriptorSet> set = jpeg_->makeAtlasSet(staging_.buffer, staging_.size, jpegPlanes_.get(), planes * i,
+                                                                planes, atlas_.mipView(0), jpegTables_.buffer, table * i, table);
+            if (!set) return set.error();
+            jpegSets_.push_back(*set);
+        }
+    }
     const auto alloc = [&](VkCommandPool pool, VkCommandBuffer* out) -> Result {
         const VkCommandBufferAllocateInfo cai{.sType = VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO,
                                               .pNext = nullptr,
@@ -125,7 +171,7 @@ Result BufferThread::init() {
     return {};
 }
 
-void BufferThread::prestage(uint64_t key, const uint8_t* pixels) {
+void BufferThread::prestage(uint64_t key, const uint8_t* pixels, bool coefficients) {
     if (!prestaging_.load(std::memory_order_acquire)) return;
     std::shared_lock life(stagingLife_, std::try_to_lock);
     if (!life.owns_lock() || !staging_.mapped) return; // being made or destroyed: this thread copies it later
@@ -140,16 +186,21 @@ void BufferThread::prestage(uint64_t key, const uint8_t* pixels) {
     const auto copyStart = std::chrono::steady_clock::now();
     uint8_t* dst = static_cast<uint8_t*>(staging_.mapped) + size_t(st) * stagingStride_;
     bool opaque = false;
-    if (trackOpacity_ || atlas_.swapped())
+    if (coefficients) {
+        std::memcpy(dst, pixels, jpegRecordBytes(pixels)); // reconstructed opaque (JPEG has no alpha)
+        opaque = true;
+    } else if (trackOpacity_ || atlas_.swapped()) {
         opaque = copyPixels(pixels, dst, kTilePixels, atlas_.swapped());
-    else
+    } else {
         std::memcpy(dst, pixels, kTileBytes);
+    }
     const auto at = std::chrono::steady_clock::now();
     counters_.prestageNs.fetch_add(uint64_t(std::chrono::duration_cast<std::chrono::nanoseconds>(at - copyStart).count()),
                                    std::memory_order_relaxed);
     counters_.prestageTiles.fetch_add(1, std::memory_order_relaxed);
     std::lock_guard lock(stagingMutex_);
-    if (!prestaged_.try_emplace(key, Prestaged{st, trackOpacity_ && opaque, at}).second) freeStaging_.push_back(st);
+    if (!prestaged_.try_emplace(key, Prestaged{st, trackOpacity_ && opaque, coefficients, at}).second)
+        freeStaging_.push_back(st);
     // This thread's next pass takes it (the loader bumps `wake` once it has published the tile).
 }
 
@@ -218,6 +269,11 @@ void BufferThread::releaseGpu() {
         prestaged_.clear();
         staging_ = {};
     }
+    jpegSets_.clear();
+    jpeg_.reset();
+    jpegTables_ = {};
+    jpegPlanes_ = {};
+    jpegPlanesMemory_ = {};
     mipTimestamps_ = {};
     copyTimeline_ = {};
     timeline_ = {};
@@ -402,6 +458,7 @@ void BufferThread::finish(Transaction& t) {
     t.staging.clear();
     t.opaque.clear();
     t.mipsReady.clear();
+    t.coefficients.clear();
     t.signalValue = 0;
 }
 
@@ -461,6 +518,7 @@ bool BufferThread::submitNew(const Snapshot& snap) {
                 tx.opaque.push_back(trackOpacity_ && allOpaque(base + size_t(st) * stagingStride_));
                 if (hostMips_) makeHostMips(base + size_t(st) * stagingStride_, snap.enhance);
                 tx.mipsReady.push_back(true);
+                tx.coefficients.push_back(false);
                 tx.slots.push_back(slot);
                 tx.staging.push_back(st);
             }
@@ -499,6 +557,7 @@ bool BufferThread::submitNew(const Snapshot& snap) {
             }
             tx.opaque.push_back(trackOpacity_ && opaque);
             tx.mipsReady.push_back(false);
+            tx.coefficients.push_back(false); // no records where the atlas is host-written
             pendingMips_.push_back({slot, t.key, snap.enhance});
             shared_.tileStages.stamp(TileStage::Staged);
             tx.slots.push_back(slot);
@@ -506,8 +565,10 @@ bool BufferThread::submitNew(const Snapshot& snap) {
             continue;
         }
         uint32_t st = kNoStaging;
+        bool coefficients = false;
         if (staged) { // a loader copied it in, swapped and looked at (prestage)
             st = pre->second.staging;
+            coefficients = pre->second.coefficients;
             tx.opaque.push_back(pre->second.opaque);
             const auto waited = std::chrono::steady_clock::now() - pre->second.at;
             counters_.pickupNs.fetch_add(uint64_t(std::chrono::duration_cast<std::chrono::nanoseconds>(waited).count()),
@@ -520,15 +581,35 @@ bool BufferThread::submitNew(const Snapshot& snap) {
                 map.abandon(slot);
                 break;
             }
-            if (!cache_.copyOut(t.key, base + size_t(st) * stagingStride_, &failed)) {
+            if (!cache_.copyOut(t.key, base + size_t(st) * stagingStride_, &failed, &coefficients)) {
                 map.abandon(slot); // evicted from RAM meanwhile; a loader will decode it again
                 std::lock_guard lock(stagingMutex_);
                 freeStaging_.push_back(st);
                 continue;
             }
-            if (atlas_.swapped()) swapRedBlue(base + size_t(st) * stagingStride_, base + size_t(st) * stagingStride_, kTilePixels);
-            tx.opaque.push_back(trackOpacity_ && allOpaque(base + size_t(st) * stagingStride_));
+            if (coefficients) {
+                tx.opaque.push_back(trackOpacity_); // reconstructed opaque (JPEG has no alpha)
+            } else {
+                if (atlas_.swapped())
+                    swapRedBlue(base + size_t(st) * stagingStride_, base + size_t(st) * stagingStride_, kTilePixels);
+                tx.opaque.push_back(trackOpacity_ && allOpaque(base + size_t(st) * stagingStride_));
+            }
         }
+        if (coefficients) {
+            JpegCoefficients h;
+            uint32_t vw = 0, vh = 0;
+            if (!jpegOnGpu_ || !jpegrecord::header(base + size_t(st) * stagingStride_, h, vw, vh)) {
+                // Not a record this thread can finish (it cannot happen: loaders write records
+                // only while it finishes them, and whole): never drawn, decoded again when needed.
+                log_.error("JPEG decode: a tile's coefficient record is unusable; dropping it");
+                map.abandon(slot);
+                tx.opaque.pop_back();
+                std::lock_guard lock(stagingMutex_);
+                freeStaging_.push_back(st);
+                continue;
+            }
+        }
+        tx.coefficients.push_back(coefficients);
         if (hostMips_ && !defer) makeHostMips(base + size_t(st) * stagingStride_, snap.enhance);
         tx.mipsReady.push_back(!defer);
         if (defer) pendingMips_.push_back({slot, t.key, snap.enhance}); // made once the tile is written
@@ -563,6 +644,7 @@ bool BufferThread::submitNew(const Snapshot& snap) {
         tx.staging.clear();
         tx.opaque.clear();
         tx.mipsReady.clear();
+        tx.coefficients.clear();
         return false;
     }
     tx.signalValue = ++nextValue_;
@@ -757,12 +839,18 @@ Result BufferThread::record(Transaction& t) {
     const auto all = [](int s) { return vk::colorRange(0, gpu::kTileMipLevels, uint32_t(s), 1); };
     std::vector<VkImageMemoryBarrier2> b;
     b.reserve(2 * n);
+    // Tiles copied from staging (pixels), and tiles whose coefficient records the GPU finishes
+    // (reconstructsJpeg: their base level is written by the compute pass, not copied).
+    std::vector<int> copied, rebuilt;
+    for (uint32_t i = 0; i < n; ++i) (t.coefficients[i] ? rebuilt : copied).push_back(t.slots[i]);
+    const uint32_t nc = uint32_t(copied.size());
 
-    // The base level of each tile; under the host schedule also its 8 levels, packed after it.
+    // The base level of each copied tile; under the host schedule also its 8 levels, packed after it.
     const uint32_t levels = hostMips_ ? gpu::kTileMipLevels : 1;
     std::vector<VkBufferImageCopy> copies;
-    copies.reserve(size_t(n) * levels);
-    for (uint32_t i = 0; i < n; ++i)
+    copies.reserve(size_t(nc) * levels);
+    for (uint32_t i = 0; i < n; ++i) {
+        if (t.coefficients[i]) continue;
         for (uint32_t m = 0; m < levels; ++m) {
             const uint32_t side = uint32_t(kTileSize) >> m;
             copies.push_back(VkBufferImageCopy{
@@ -775,25 +863,29 @@ Result BufferThread::record(Transaction& t) {
                 .imageExtent = {side, side, 1},
             });
         }
+    }
     // A reclaimed slot's old content is discarded (oldLayout UNDEFINED), which also lets the
     // uploading queue family take it without an ownership transfer back from graphics. Frames
     // that sampled it have completed (the tile map reclaims only unpinned slots, and frames
     // unpin after their fence), so only the stage order below is needed.
     if (separateCopy_) {
-        // Transfer queue: discard + copy the base level, then release it to the compute family.
+        // Transfer queue: discard + copy the base level, then release it to the compute family
+        // (an empty command buffer when every tile is rebuilt: the submission still signals).
         if (Result r = beginCommands(t.copyCmd); !r.ok()) return r;
-        for (int s : t.slots)
-            b.push_back(vk::imageBarrier(img, VK_PIPELINE_STAGE_2_NONE, VK_ACCESS_2_NONE, kCopy,
-                                         VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
-                                         VK_IMAGE_LAYOUT_GENERAL, base(s)));
-        vk::pipelineBarrier(t.copyCmd, b.data(), n);
-        vkCmdCopyBufferToImage(t.copyCmd, staging_.buffer, img, VK_IMAGE_LAYOUT_GENERAL, uint32_t(copies.size()),
-                               copies.data());
-        b.clear();
-        for (int s : t.slots) // release: dst stage/access NONE (the acquire supplies them)
-            b.push_back(ownership(img, kCopy, VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_NONE, VK_ACCESS_2_NONE,
-                                  VK_IMAGE_LAYOUT_GENERAL, T, C, base(s)));
-        vk::pipelineBarrier(t.copyCmd, b.data(), n);
+        if (nc > 0) {
+            for (int s : copied)
+                b.push_back(vk::imageBarrier(img, VK_PIPELINE_STAGE_2_NONE, VK_ACCESS_2_NONE, kCopy,
+                                             VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
+                                             VK_IMAGE_LAYOUT_GENERAL, base(s)));
+            vk::pipelineBarrier(t.copyCmd, b.data(), nc);
+            vkCmdCopyBufferToImage(t.copyCmd, staging_.buffer, img, VK_IMAGE_LAYOUT_GENERAL, uint32_t(copies.size()),
+                                   copies.data());
+            b.clear();
+            for (int s : copied) // release: dst stage/access NONE (the acquire supplies them)
+                b.push_back(ownership(img, kCopy, VK_ACCESS_2_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_2_NONE, VK_ACCESS_2_NONE,
+                                      VK_IMAGE_LAYOUT_GENERAL, T, C, base(s)));
+            vk::pipelineBarrier(t.copyCmd, b.data(), nc);
+        }
         IRIS_VK_TRY(vkEndCommandBuffer(t.copyCmd));
     }
 
@@ -802,13 +894,17 @@ Result BufferThread::record(Transaction& t) {
     if (Result r = beginCommands(cmd); !r.ok()) return r;
     b.clear();
     if (separateCopy_) {
-        for (int s : t.slots) { // acquire from transfer: src stage/access NONE (the release supplied them)
+        for (int s : copied) { // acquire from transfer: src stage/access NONE (the release supplied them)
             b.push_back(ownership(img, VK_PIPELINE_STAGE_2_NONE, VK_ACCESS_2_NONE, kCompute,
                                   VK_ACCESS_2_SHADER_STORAGE_READ_BIT, VK_IMAGE_LAYOUT_GENERAL, T, C, base(s)));
             b.push_back(vk::imageBarrier(img, VK_PIPELINE_STAGE_2_NONE, VK_ACCESS_2_NONE, kCompute,
                                          VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
                                          VK_IMAGE_LAYOUT_GENERAL, mips(s)));
         }
+        for (int s : rebuilt) // the whole slot is this queue's to write: its old content discarded
+            b.push_back(vk::imageBarrier(img, VK_PIPELINE_STAGE_2_NONE, VK_ACCESS_2_NONE, kCompute,
+                                         VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT, VK_IMAGE_LAYOUT_UNDEFINED,
+                                         VK_IMAGE_LAYOUT_GENERAL, all(s)));
         vk::pipelineBarrier(cmd, b.data(), uint32_t(b.size()));
     } else {
         // After the last frames that sampled the slot (on this queue when it also draws; else
@@ -820,16 +916,18 @@ Result BufferThread::record(Transaction& t) {
                                                    : VK_ACCESS_2_TRANSFER_WRITE_BIT | VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
                                          VK_IMAGE_LAYOUT_UNDEFINED, VK_IMAGE_LAYOUT_GENERAL, all(s)));
         vk::pipelineBarrier(cmd, b.data(), n);
-        vkCmdCopyBufferToImage(cmd, staging_.buffer, img, VK_IMAGE_LAYOUT_GENERAL, uint32_t(copies.size()), copies.data());
+        if (!copies.empty())
+            vkCmdCopyBufferToImage(cmd, staging_.buffer, img, VK_IMAGE_LAYOUT_GENERAL, uint32_t(copies.size()), copies.data());
         b.clear();
-        if (!hostMips_) {
-            for (int s : t.slots)
+        if (!hostMips_ && nc > 0) {
+            for (int s : copied)
                 b.push_back(vk::imageBarrier(img, kCopy, VK_ACCESS_2_TRANSFER_WRITE_BIT, kCompute,
                                              VK_ACCESS_2_SHADER_STORAGE_READ_BIT, VK_IMAGE_LAYOUT_GENERAL,
                                              VK_IMAGE_LAYOUT_GENERAL, base(s)));
-            vk::pipelineBarrier(cmd, b.data(), n);
+            vk::pipelineBarrier(cmd, b.data(), nc);
         }
     }
+    if (!rebuilt.empty()) recordReconstruct(t);
     const uint32_t q = uint32_t(&t - txns_.data()) * 2;
     if (mipTimestamps_) {
         vkCmdResetQueryPool(cmd, mipTimestamps_.get(), q, 2);
@@ -854,6 +952,36 @@ Result BufferThread::record(Transaction& t) {
     vk::pipelineBarrier(cmd, b.data(), n);
     IRIS_VK_TRY(vkEndCommandBuffer(cmd));
     return {};
+}
+
+void BufferThread::recordReconstruct(Transaction& t) {
+    const uint32_t index = uint32_t(&t - txns_.data());
+    auto* table = static_cast<uint32_t*>(jpegTables_.mapped) +
+                  size_t(index) * kTilesPerTransaction * gpu::JpegReconstruct::kDescriptorWords;
+    const auto* staging = static_cast<const uint8_t*>(staging_.mapped);
+    gpu::JpegReconstruct::Sizes sizes;
+    for (size_t i = 0; i < t.slots.size(); ++i) {
+        if (!t.coefficients[i]) continue;
+        // The record's header, read back from staging (a few words of it).
+        const uint8_t* record = staging + size_t(t.staging[i]) * stagingStride_;
+        JpegCoefficients h;
+        uint32_t validWidth = 0, validHeight = 0;
+        if (!jpegrecord::header(record, h, validWidth, validHeight)) continue; // checked as it was staged (submitNew)
+        const uint64_t slotWord = uint64_t(t.staging[i]) * stagingStride_ / 4;
+        const gpu::JpegReconstruct::Placement place{.outputWord = uint32_t(t.slots[i]), .outputPitch = 0,
+                                                    .validWidth = validWidth, .validHeight = validHeight};
+        gpu::JpegReconstruct::describe(h, place, sizes.tiles, slotWord + jpegrecord::kQuantWord,
+                                       slotWord + jpegrecord::kBlocksWord, uint64_t(sizes.tiles) * kJpegPlaneWords, table);
+        sizes.maxBlocks = std::max(sizes.maxBlocks, h.blockCount());
+        sizes.maxWidth = std::max(sizes.maxWidth, h.width);
+        sizes.maxHeight = std::max(sizes.maxHeight, h.height);
+        ++sizes.tiles;
+    }
+    (void)vk::flush(device_.device(), jpegTables_); // non-coherent memory only; coherent is what it asks for
+    jpeg_->record(t.cmd, jpegSets_[index], sizes);
+    // Their base levels, written by the second dispatch, read by the mip pass.
+    vk::memoryBarrier(t.cmd, VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_WRITE_BIT,
+                      VK_PIPELINE_STAGE_2_COMPUTE_SHADER_BIT, VK_ACCESS_2_SHADER_STORAGE_READ_BIT);
 }
 
 } // namespace iris

@@ -23,6 +23,7 @@
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
+#include <memory>
 #include <mutex>
 #include <shared_mutex>
 #include <unordered_map>
@@ -34,6 +35,7 @@
 #include "core/log.h"
 #include "core/shared_state.h"
 #include "buffer/handover.h"
+#include "gpu/jpeg_reconstruct.h"
 #include "gpu/mip_pipeline.h"
 #include "gpu/tile_atlas.h"
 #include "gpu/vk_handle.h"
@@ -45,7 +47,7 @@ class BufferThread {
 public:
     BufferThread(SharedState& shared, TileCache& cache, gpu::Device& device, gpu::TileAtlas& atlas,
                  gpu::MipPipeline& mips, Handover& handover, UploadCounters& counters, const Log& log, int perimeter,
-                 bool trackOpacity = false);
+                 bool trackOpacity = false, EngineTuning::JpegDecode jpegDecode = EngineTuning::JpegDecode::Auto);
     ~BufferThread();
     Result init();
     void start();
@@ -72,7 +74,13 @@ public:
     // 6 ms HR-TeFOV at 2774×1750; BENCHMARKS.md, "Tiles staged by the loaders"). Nothing is
     // done when no slot is free beyond those this thread keeps for itself, when the tile is
     // staged already, or while this thread is parked.
-    void prestage(uint64_t key, const uint8_t* pixels);
+    // `coefficients`: the buffer is a coefficient record (only while reconstructsJpeg()).
+    void prestage(uint64_t key, const uint8_t* pixels, bool coefficients = false);
+
+    // Whether this thread finishes JPEG tiles on the GPU (EngineTuning::JpegDecode::Gpu, where
+    // tiles go by queue copies and the mips are made on the device): loaders may then publish
+    // coefficient records. Decided by the first init(), the same after a device loss.
+    bool reconstructsJpeg() const { return jpegOnGpu_; }
 
 private:
     struct Transaction {
@@ -85,6 +93,7 @@ private:
         std::vector<uint32_t> staging;
         std::vector<uint8_t> opaque; // per slot: every pixel's alpha is 255 (only with trackOpacity_)
         std::vector<uint8_t> mipsReady; // per slot: its levels 1..8 go with it (else they wait: completeMips)
+        std::vector<uint8_t> coefficients; // per slot: its staging holds a coefficient record (reconstructsJpeg)
     };
     void run();
     void releaseGpu();
@@ -102,6 +111,9 @@ private:
     bool prefaultAtlas();
     static constexpr uint32_t kPrefaultAhead = 256, kPrefaultBatch = 16;
     Result record(Transaction& t);
+    // reconstructsJpeg: the transaction's coefficient records into their slots' base levels
+    // (two dispatches, then their writes made visible to the mip pass).
+    void recordReconstruct(Transaction& t);
     // The host mip schedule: levels 1..8 of the staged tile at `tile`, packed after it.
     void makeHostMips(uint8_t* tile, bool enhance);
     Result submit(Transaction& t);
@@ -155,12 +167,24 @@ private:
     uint64_t nextValue_ = 0;
     uint64_t submittedValue_ = 0; // the last timeline value a successful submission will signal
     vk::MappedBuffer staging_;
+    // reconstructsJpeg: the pipeline, its per-transaction sample planes (device memory) and tile
+    // tables (host-written), one descriptor set a transaction over its parts of them and the
+    // staging ring (which the compute family then reads as well as the transfer family).
+    const EngineTuning::JpegDecode jpegDecode_;
+    bool jpegOnGpu_ = false;
+    bool jpegDecided_ = false;
+    std::unique_ptr<gpu::JpegReconstruct> jpeg_;
+    vk::Memory jpegPlanesMemory_;
+    vk::Buffer jpegPlanes_;
+    vk::MappedBuffer jpegTables_;
+    std::vector<VkDescriptorSet> jpegSets_; // freed with jpeg_
     // Guards freeStaging_ and prestaged_, which loaders (prestage) share with this thread.
     std::mutex stagingMutex_;
     std::vector<uint32_t> freeStaging_;
     struct Prestaged {
         uint32_t staging;
         bool opaque;
+        bool coefficients; // a coefficient record
         std::chrono::steady_clock::time_point at; // when the loader's copy ended (UploadCounters::pickupNs)
     };
     std::unordered_map<uint64_t, Prestaged> prestaged_; // tile key → its staging slot, filled by a loader

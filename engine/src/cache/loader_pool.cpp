@@ -13,8 +13,9 @@ thread_local PassParts passParts;
 } // namespace
 
 LoaderPool::LoaderPool(SharedState& shared, TileCache& cache, const Log& log, unsigned threads, int perimeter,
-                       Decoded decoded)
-    : shared_(shared), decoded_(std::move(decoded)), cache_(cache), log_(log), perimeter_(perimeter) {
+                       Decoded decoded, bool coefficients)
+    : shared_(shared), decoded_(std::move(decoded)), coefficients_(coefficients), cache_(cache), log_(log),
+      perimeter_(perimeter) {
     if (threads == 0) threads = defaultThreads(std::thread::hardware_concurrency());
     syntheticCap_ = std::max(1u, threads - 1);
     for (unsigned i = 0; i < threads; ++i)
@@ -135,7 +136,13 @@ void LoaderPool::decode(const Snapshot& snap, Plan& plan, const TileRef& t) {
     passParts.acquire = started - asked;
     reads_.fetch_add(1, std::memory_order_relaxed);
     shared_.tileStages.stamp(TileStage::DecodeStart, 1, started);
-    const Result r = source.readTile(t.level, t.tx, t.ty, buf.get());
+    // The GPU finishes the decode where it can (EngineTuning::JpegDecode::Gpu); a tile it does
+    // not take, or one that fails so, is read whole, which also says what is wrong with it.
+    bool coefficients = false;
+    Result r;
+    if (coefficients_ && source.readsCoefficients(t.level))
+        coefficients = source.readTileCoefficients(t.level, t.tx, t.ty, buf.get()).ok();
+    if (!coefficients) r = source.readTile(t.level, t.tx, t.ty, buf.get());
     passParts.decode = StageLog::Clock::now() - started;
     reads_.fetch_sub(1, std::memory_order_relaxed);
     const bool failed = !r.ok();
@@ -167,8 +174,8 @@ void LoaderPool::decode(const Snapshot& snap, Plan& plan, const TileRef& t) {
     shared_.failingTiles.remove(t.key); // read (or failed for good: its own placeholder)
     // Into staging while the tile is still in this core's cache, and beside the other loaders,
     // rather than by the buffer thread alone later (BufferThread::prestage).
-    if (decoded_ && !failed) decoded_(t.key, buf.get());
-    cache_.publish(t.key, std::move(buf), failed);
+    if (decoded_ && !failed) decoded_(t.key, buf.get(), coefficients);
+    cache_.publish(t.key, std::move(buf), failed, coefficients);
     shared_.tileStages.stamp(TileStage::Decoded);
     shared_.bump(); // the buffer thread may now upload it
 }

@@ -35,11 +35,14 @@ namespace iris {
 class LoaderPool {
 public:
     // Called by a loader with each tile it decoded (not a failed one), before publishing it:
-    // the buffer thread's BufferThread::prestage. Must be thread-safe.
-    using Decoded = std::function<void(uint64_t key, const uint8_t* pixels)>;
-    // threads 0: defaultThreads(the hardware threads).
+    // the buffer thread's BufferThread::prestage. `coefficients`: the buffer is a coefficient
+    // record, not pixels. Must be thread-safe.
+    using Decoded = std::function<void(uint64_t key, const uint8_t* pixels, bool coefficients)>;
+    // threads 0: defaultThreads(the hardware threads). `coefficients`: read the tiles of levels
+    // whose source has coefficient records as records (EngineTuning::JpegDecode::Gpu; the
+    // buffer thread finishes them on the GPU), others as pixels.
     LoaderPool(SharedState& shared, TileCache& cache, const Log& log, unsigned threads, int perimeter,
-               Decoded decoded = {});
+               Decoded decoded = {}, bool coefficients = false);
     // Loaders for `hardware` hardware threads: all of them up to 4, else two fewer, which the
     // buffer thread (staging every tile) and the render thread then have to themselves. On
     // the H100's 16 cores, 14 loaders made a new field whole sooner than 16 in 7 of 9 and 8 of
@@ -93,6 +96,7 @@ private:
 
     SharedState& shared_;
     const Decoded decoded_;
+    const bool coefficients_;
     TileCache& cache_;
     const Log& log_;
     const int perimeter_;

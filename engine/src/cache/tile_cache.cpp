@@ -66,7 +66,7 @@ void TileCache::recycleLocked(std::unique_ptr<uint8_t[]> buf) {
     if (freeBuffers_.size() < std::max<size_t>(64, reserveTarget_)) freeBuffers_.push_back(std::move(buf));
 }
 
-void TileCache::publish(uint64_t key, std::unique_ptr<uint8_t[]> pixels, bool failed) {
+void TileCache::publish(uint64_t key, std::unique_ptr<uint8_t[]> pixels, bool failed, bool coefficients) {
     std::lock_guard lock(mutex_);
     auto it = entries_.find(key);
     if (it == entries_.end()) { // dropped meanwhile (slide closed)
@@ -75,6 +75,7 @@ void TileCache::publish(uint64_t key, std::unique_ptr<uint8_t[]> pixels, bool fa
     }
     it->second.pixels = std::move(pixels);
     it->second.failed = failed;
+    it->second.coefficients = coefficients;
     lru_.push_front(key);
     it->second.lru = lru_.begin();
     ++readyCount_;
@@ -91,12 +92,13 @@ void TileCache::abandon(uint64_t key, std::unique_ptr<uint8_t[]> buffer) {
     recycleLocked(std::move(buffer));
 }
 
-bool TileCache::copyOut(uint64_t key, uint8_t* dst, bool* failed) {
+bool TileCache::copyOut(uint64_t key, uint8_t* dst, bool* failed, bool* coefficients) {
     return readOut(
-        key, [&](const uint8_t* src) { std::memcpy(dst, src, kTileBytes); }, failed);
+        key, [&](const uint8_t* src) { std::memcpy(dst, src, kTileBytes); }, failed, coefficients);
 }
 
-bool TileCache::readOut(uint64_t key, const std::function<void(const uint8_t*)>& use, bool* failed) {
+bool TileCache::readOut(uint64_t key, const std::function<void(const uint8_t*)>& use, bool* failed,
+                        bool* coefficients) {
     const uint8_t* src = nullptr;
     {
         std::lock_guard lock(mutex_);
@@ -104,6 +106,7 @@ bool TileCache::readOut(uint64_t key, const std::function<void(const uint8_t*)>&
         if (it == entries_.end() || !it->second.pixels) return false;
         src = it->second.pixels.get();
         if (failed) *failed = it->second.failed;
+        if (coefficients) *coefficients = it->second.coefficients;
         lru_.splice(lru_.begin(), lru_, it->second.lru);
         copying_.push_back(src);
     }

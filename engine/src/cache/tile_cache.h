@@ -32,15 +32,19 @@ public:
     bool replenish(size_t batch);
     size_t reserveTarget() const { return reserveTarget_; }
     // Publishes a decoded (or failed, with placeholder pixels) tile and drops the claim.
-    void publish(uint64_t key, std::unique_ptr<uint8_t[]> pixels, bool failed);
+    // `coefficients`: the buffer holds the tile as a coefficient record (jpegrecord,
+    // EngineTuning::JpegDecode::Gpu), which the buffer thread finishes on the GPU.
+    void publish(uint64_t key, std::unique_ptr<uint8_t[]> pixels, bool failed, bool coefficients = false);
     // Drops a claim without a result (the tile left the buffer region before it was decoded).
     void abandon(uint64_t key, std::unique_ptr<uint8_t[]> buffer);
     // Copies a ready tile into dst; false when not ready. `failed` tells a placeholder. The copy
     // runs without the cache's lock; any number of threads may copy at once.
-    bool copyOut(uint64_t key, uint8_t* dst, bool* failed);
+    // `coefficients` (optional) tells a coefficient record.
+    bool copyOut(uint64_t key, uint8_t* dst, bool* failed, bool* coefficients = nullptr);
     // Calls use(pixels) with a ready tile's kTileBytes, which stay as they are during the call;
     // false (and no call) when not ready. Runs `use` without the cache's lock, like copyOut.
-    bool readOut(uint64_t key, const std::function<void(const uint8_t*)>& use, bool* failed);
+    bool readOut(uint64_t key, const std::function<void(const uint8_t*)>& use, bool* failed,
+                 bool* coefficients = nullptr);
     bool isReady(uint64_t key) const;
     // Forgets every tile whose generation differs from `generation`.
     void dropOtherGenerations(uint32_t generation);
@@ -57,6 +61,7 @@ private:
     struct Entry {
         std::unique_ptr<uint8_t[]> pixels; // null while loading
         bool failed = false;
+        bool coefficients = false; // a coefficient record, not pixels
         std::list<uint64_t>::iterator lru;
     };
     void evictOverBudgetLocked();

@@ -67,6 +67,13 @@ Expected<EngineTuning> tuningFromEnvironment(EngineTuning base) {
                                                   base.tileUpload);
         !r.ok())
         return r;
+    if (Result r = pick<EngineTuning::JpegDecode>("IRIS_JPEG_DECODE",
+                                                  {{"auto", EngineTuning::JpegDecode::Auto},
+                                                   {"cpu", EngineTuning::JpegDecode::Cpu},
+                                                   {"gpu", EngineTuning::JpegDecode::Gpu}},
+                                                  base.jpegDecode);
+        !r.ok())
+        return r;
     if (Result r = pick<EngineTuning::ColorLookup>("IRIS_COLOR_LOOKUP",
                                                    {{"auto", EngineTuning::ColorLookup::Auto},
                                                     {"sampler", EngineTuning::ColorLookup::Sampler},

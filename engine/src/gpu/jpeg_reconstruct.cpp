@@ -5,6 +5,7 @@
 #include <cstring>
 
 #include "gpu/vk_util.h"
+#include <iris_shaders/jpeg_color_atlas_comp.h>
 #include <iris_shaders/jpeg_color_comp.h>
 #include <iris_shaders/jpeg_idct_comp.h>
 
@@ -40,9 +41,14 @@ JpegReconstruct::Sizes JpegReconstruct::measure(std::span<const JpegCoefficients
     return s;
 }
 
+void JpegReconstruct::writeQuant(const JpegCoefficients& t, uint32_t* dst) {
+    for (uint32_t c = 0; c < t.components; ++c)
+        for (int q = 0; q < 64; ++q) dst[c * 64 + q] = t.comp[c].quant[q];
+}
+
 void JpegReconstruct::describe(const JpegCoefficients& t, const Placement& placement, uint32_t index, uint64_t quantWord,
-                               uint64_t coefficientWord, uint64_t planeWord, uint32_t* dst) {
-    uint32_t* d = dst + uint64_t(index) * kDescriptorWords;
+                               uint64_t coefficientWord, uint64_t planeWord, uint32_t* table) {
+    uint32_t* d = table + uint64_t(index) * kDescriptorWords;
     std::memset(d, 0, kDescriptorWords * 4);
     d[0] = t.width;
     d[1] = t.height;
@@ -53,6 +59,8 @@ void JpegReconstruct::describe(const JpegCoefficients& t, const Placement& place
     d[6] = t.blockCount();
     d[7] = placement.outputWord;
     d[8] = placement.outputPitch;
+    d[9] = placement.validWidth ? std::min(placement.validWidth, t.width) : t.width;
+    d[10] = placement.validHeight ? std::min(placement.validHeight, t.height) : t.height;
     uint64_t plane = planeWord;
     for (uint32_t c = 0; c < t.components; ++c) {
         const JpegCoefficients::Component& k = t.comp[c];
@@ -62,7 +70,6 @@ void JpegReconstruct::describe(const JpegCoefficients& t, const Placement& place
         cd[2] = k.firstBlock;
         cd[3] = uint32_t(coefficientWord + uint64_t(k.firstBlock) * 32);
         cd[4] = uint32_t(quantWord + uint64_t(c) * 64);
-        for (int q = 0; q < 64; ++q) dst[quantWord + uint64_t(c) * 64 + q] = k.quant[q];
         cd[5] = uint32_t(plane);
         cd[6] = uint32_t(planePitch(k));
         plane += componentPlaneWords(k);
@@ -80,6 +87,7 @@ void JpegReconstruct::pack(std::span<const JpegCoefficients* const> tiles, std::
         const JpegCoefficients& t = *tiles[i];
         const uint64_t coefficients = next + quantWords(t);
         describe(t, placements[i], uint32_t(i), next, coefficients, plane, dst);
+        writeQuant(t, dst + next);
         std::memcpy(dst + coefficients, t.blocks.data(), t.blocks.size() * sizeof(int16_t));
         next = coefficients + coefficientWords(t);
         plane += planeWords(t);
@@ -91,15 +99,21 @@ Result JpegReconstruct::init(uint32_t maxSets) {
     if (Result r = vk::createShaderModule(dev, jpeg_idct_comp_spv, sizeof(jpeg_idct_comp_spv), *idctModule_.replace(dev));
         !r.ok())
         return r;
-    if (Result r = vk::createShaderModule(dev, jpeg_color_comp_spv, sizeof(jpeg_color_comp_spv), *colorModule_.replace(dev));
+    const bool atlas = output_ == Output::Atlas;
+    if (Result r = atlas ? vk::createShaderModule(dev, jpeg_color_atlas_comp_spv, sizeof(jpeg_color_atlas_comp_spv),
+                                                  *colorModule_.replace(dev))
+                         : vk::createShaderModule(dev, jpeg_color_comp_spv, sizeof(jpeg_color_comp_spv), *colorModule_.replace(dev));
         !r.ok())
         return r;
-    VkDescriptorSetLayoutBinding bindings[3];
-    for (uint32_t b = 0; b < 3; ++b)
-        bindings[b] = {.binding = b, .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, .descriptorCount = 1,
-                       .stageFlags = VK_SHADER_STAGE_COMPUTE_BIT, .pImmutableSamplers = nullptr};
+    VkDescriptorSetLayoutBinding bindings[4];
+    for (uint32_t b = 0; b < 4; ++b)
+        bindings[b] = {.binding = b,
+                       .descriptorType = b == 2 && atlas ? VK_DESCRIPTOR_TYPE_STORAGE_IMAGE : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+                       .descriptorCount = 1,
+                       .stageFlags = VK_SHADER_STAGE_COMPUTE_BIT,
+                       .pImmutableSamplers = nullptr};
     const VkDescriptorSetLayoutCreateInfo dslci{
-        .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO, .pNext = nullptr, .flags = 0, .bindingCount = 3, .pBindings = bindings};
+        .sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO, .pNext = nullptr, .flags = 0, .bindingCount = 4, .pBindings = bindings};
     IRIS_VK_TRY(vkCreateDescriptorSetLayout(dev, &dslci, nullptr, setLayout_.replace(dev)));
     const VkDescriptorSetLayout setLayout = setLayout_.get();
     const VkPushConstantRange push{.stageFlags = VK_SHADER_STAGE_COMPUTE_BIT, .offset = 0, .size = sizeof(uint32_t)};
@@ -117,38 +131,71 @@ Result JpegReconstruct::init(uint32_t maxSets) {
     Expected<VkPipeline> color = vk::createComputePipeline(dev, layout_.get(), colorModule_.get());
     if (!color) return color.error();
     color_ = vk::Pipeline(dev, *color);
-    const VkDescriptorPoolSize ps{.type = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, .descriptorCount = 3 * maxSets};
+    const VkDescriptorPoolSize ps[2] = {{.type = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, .descriptorCount = 4 * maxSets},
+                                        {.type = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE, .descriptorCount = maxSets}};
     const VkDescriptorPoolCreateInfo dpci{.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO,
                                           .pNext = nullptr,
                                           .flags = VK_DESCRIPTOR_POOL_CREATE_FREE_DESCRIPTOR_SET_BIT,
                                           .maxSets = maxSets,
-                                          .poolSizeCount = 1,
-                                          .pPoolSizes = &ps};
+                                          .poolSizeCount = 2,
+                                          .pPoolSizes = ps};
     IRIS_VK_TRY(vkCreateDescriptorPool(dev, &dpci, nullptr, pool_.replace(dev)));
     return {};
 }
 
+namespace {
+Expected<VkDescriptorSet> allocateSet(VkDevice dev, VkDescriptorPool pool, VkDescriptorSetLayout layout) {
+    const VkDescriptorSetAllocateInfo dsai{.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO,
+                                           .pNext = nullptr,
+                                           .descriptorPool = pool,
+                                           .descriptorSetCount = 1,
+                                           .pSetLayouts = &layout};
+    VkDescriptorSet set = VK_NULL_HANDLE;
+    if (Result r = vk::check(vkAllocateDescriptorSets(dev, &dsai, &set), "vkAllocateDescriptorSets"); !r.ok()) return r;
+    return set;
+}
+
+VkWriteDescriptorSet bufferWrite(VkDescriptorSet set, uint32_t binding, const VkDescriptorBufferInfo* info) {
+    return {.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .pNext = nullptr, .dstSet = set, .dstBinding = binding,
+            .dstArrayElement = 0, .descriptorCount = 1, .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+            .pImageInfo = nullptr, .pBufferInfo = info, .pTexelBufferView = nullptr};
+}
+} // namespace
+
 Expected<VkDescriptorSet> JpegReconstruct::makeSet(VkBuffer input, VkDeviceSize inputOffset, VkDeviceSize inputBytes,
                                                    VkBuffer planes, VkDeviceSize planeBytes, VkBuffer output,
                                                    VkDeviceSize outputOffset, VkDeviceSize outputBytes) {
+    if (output_ != Output::Buffer) return Result(Status::InvalidArgument, "makeSet: this pipeline writes the atlas");
     VkDevice dev = device_.device();
-    const VkDescriptorSetLayout setLayout = setLayout_.get();
-    const VkDescriptorSetAllocateInfo dsai{.sType = VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO,
-                                           .pNext = nullptr,
-                                           .descriptorPool = pool_.get(),
-                                           .descriptorSetCount = 1,
-                                           .pSetLayouts = &setLayout};
-    VkDescriptorSet set = VK_NULL_HANDLE;
-    if (Result r = vk::check(vkAllocateDescriptorSets(dev, &dsai, &set), "vkAllocateDescriptorSets"); !r.ok()) return r;
-    const VkDescriptorBufferInfo infos[3] = {{.buffer = input, .offset = inputOffset, .range = inputBytes},
+    Expected<VkDescriptorSet> set = allocateSet(dev, pool_.get(), setLayout_.get());
+    if (!set) return set;
+    const VkDescriptorBufferInfo infos[4] = {{.buffer = input, .offset = inputOffset, .range = inputBytes},
                                              {.buffer = planes, .offset = 0, .range = planeBytes},
-                                             {.buffer = output, .offset = outputOffset, .range = outputBytes}};
-    VkWriteDescriptorSet writes[3];
-    for (uint32_t b = 0; b < 3; ++b)
-        writes[b] = {.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .pNext = nullptr, .dstSet = set, .dstBinding = b,
-                     .dstArrayElement = 0, .descriptorCount = 1, .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
-                     .pImageInfo = nullptr, .pBufferInfo = &infos[b], .pTexelBufferView = nullptr};
-    vkUpdateDescriptorSets(dev, 3, writes, 0, nullptr);
+                                             {.buffer = output, .offset = outputOffset, .range = outputBytes},
+                                             {.buffer = input, .offset = inputOffset, .range = inputBytes}};
+    VkWriteDescriptorSet writes[4];
+    for (uint32_t b = 0; b < 4; ++b) writes[b] = bufferWrite(*set, b, &infos[b]);
+    vkUpdateDescriptorSets(dev, 4, writes, 0, nullptr);
+    return set;
+}
+
+Expected<VkDescriptorSet> JpegReconstruct::makeAtlasSet(VkBuffer input, VkDeviceSize inputBytes, VkBuffer planes,
+                                                        VkDeviceSize planeOffset, VkDeviceSize planeBytes, VkImageView atlasBase,
+                                                        VkBuffer table, VkDeviceSize tableOffset, VkDeviceSize tableBytes) {
+    if (output_ != Output::Atlas) return Result(Status::InvalidArgument, "makeAtlasSet: this pipeline writes a buffer");
+    VkDevice dev = device_.device();
+    Expected<VkDescriptorSet> set = allocateSet(dev, pool_.get(), setLayout_.get());
+    if (!set) return set;
+    const VkDescriptorBufferInfo infos[3] = {{.buffer = input, .offset = 0, .range = inputBytes},
+                                             {.buffer = planes, .offset = planeOffset, .range = planeBytes},
+                                             {.buffer = table, .offset = tableOffset, .range = tableBytes}};
+    const VkDescriptorImageInfo image{.sampler = VK_NULL_HANDLE, .imageView = atlasBase, .imageLayout = VK_IMAGE_LAYOUT_GENERAL};
+    const VkWriteDescriptorSet writes[4] = {
+        bufferWrite(*set, 0, &infos[0]), bufferWrite(*set, 1, &infos[1]), bufferWrite(*set, 3, &infos[2]),
+        {.sType = VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET, .pNext = nullptr, .dstSet = *set, .dstBinding = 2,
+         .dstArrayElement = 0, .descriptorCount = 1, .descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_IMAGE,
+         .pImageInfo = &image, .pBufferInfo = nullptr, .pTexelBufferView = nullptr}};
+    vkUpdateDescriptorSets(dev, 4, writes, 0, nullptr);
     return set;
 }
 

@@ -9,10 +9,13 @@
 // each tile's decode is this part (docs/BENCHMARKS.md, "How much of a decode that would
 // move"): iris-bench times it per field beside the decode floor.
 //
-// The caller owns the three buffers (input: pack()'s words, read-only; planes: scratch of
-// Sizes::planeWords words; output: Sizes::outputWords words of RGBA8, tile i at the output
-// word and pitch given to pack()), and orders its own transfers around record(): the input's
-// writes before it, its reads of the output after (compute-shader writes).
+// Two outputs: RGBA8 words into a buffer (Output::Buffer: iris-bench, engine.jpeg_gpu), or the
+// tile atlas's base level (Output::Atlas: the buffer thread, EngineTuning::gpuDecode), each tile
+// into the layer its descriptor names. The caller owns the buffers (input: the tables and
+// blocks; the tile table: a descriptor per tile, which pack() puts at the input's start; planes:
+// scratch of Sizes::planeWords words; a buffer output: tile i at the word and pitch of its
+// Placement), and orders its own work around record(): the input's writes before it, the
+// output's readers after it (compute-shader writes).
 // Threading: one thread records at a time (the descriptor pool is not synchronised); pack()
 // and measure() are pure functions.
 #pragma once
@@ -38,11 +41,15 @@ public:
         uint32_t maxHeight = 0;
     };
     struct Placement {
-        uint32_t outputWord = 0;  // the tile's first pixel in the output buffer
+        uint32_t outputWord = 0;  // the tile's first pixel in the output buffer; its atlas layer (Output::Atlas)
         uint32_t outputPitch = 0; // words from one of its rows to the next (≥ its width)
+        // Pixels at or beyond these repeat the last valid column and row (padTileEdges); 0: the
+        // tile's own width and height.
+        uint32_t validWidth = 0, validHeight = 0;
     };
+    enum class Output { Buffer, Atlas };
 
-    explicit JpegReconstruct(Device& device) : device_(device) {}
+    explicit JpegReconstruct(Device& device, Output output = Output::Buffer) : device_(device), output_(output) {}
     // `maxSets`: descriptor sets that may exist at once (makeSet).
     Result init(uint32_t maxSets = 4);
 
@@ -57,23 +64,31 @@ public:
     static uint32_t quantWords(const JpegCoefficients& t) { return t.components * 64; }
     static uint64_t coefficientWords(const JpegCoefficients& t) { return uint64_t(t.blockCount()) * 32; }
     static uint64_t planeWords(const JpegCoefficients& t);
-    // Writes tile `index`'s descriptor at dst[index · kDescriptorWords] and its quantisation
-    // tables at dst[quantWord]; its blocks must be at dst[coefficientWord] (readJpegCoefficients
-    // into the caller's memory puts them there) and its planes go at planeWord.
+    // Writes tile `index`'s descriptor at table[index · kDescriptorWords], for tables at
+    // quantWord and blocks at coefficientWord in the input (readJpegCoefficients into the
+    // caller's memory puts them there; writeQuant the tables) and planes from planeWord.
     static void describe(const JpegCoefficients& t, const Placement& placement, uint32_t index, uint64_t quantWord,
-                         uint64_t coefficientWord, uint64_t planeWord, uint32_t* dst);
+                         uint64_t coefficientWord, uint64_t planeWord, uint32_t* table);
+    // Its quantisation tables, 64 words each, at dst.
+    static void writeQuant(const JpegCoefficients& t, uint32_t* dst);
 
-    // A descriptor set over the three buffers (whole ranges from the offsets given); freed by
-    // freeSet or with the pipeline.
+    // Output::Buffer: a descriptor set over the input (its start the tile table), the planes
+    // and the output buffer; freed by freeSet or with the pipeline.
     Expected<VkDescriptorSet> makeSet(VkBuffer input, VkDeviceSize inputOffset, VkDeviceSize inputBytes, VkBuffer planes,
                                       VkDeviceSize planeBytes, VkBuffer output, VkDeviceSize outputOffset,
                                       VkDeviceSize outputBytes);
+    // Output::Atlas: the input, the planes (from planeOffset), the atlas's base-level storage
+    // view (GENERAL layout) and a tile table of its own.
+    Expected<VkDescriptorSet> makeAtlasSet(VkBuffer input, VkDeviceSize inputBytes, VkBuffer planes, VkDeviceSize planeOffset,
+                                           VkDeviceSize planeBytes, VkImageView atlasBase, VkBuffer table,
+                                           VkDeviceSize tableOffset, VkDeviceSize tableBytes);
     void freeSet(VkDescriptorSet set);
     // The two dispatches and the barrier between them.
     void record(VkCommandBuffer cmd, VkDescriptorSet set, const Sizes& sizes);
 
 private:
     Device& device_;
+    const Output output_;
     vk::ShaderModule idctModule_;
     vk::ShaderModule colorModule_;
     vk::DescriptorSetLayout setLayout_;

@@ -132,18 +132,19 @@ Result createTimestampPool(VkPhysicalDevice pd, VkDevice dev, uint32_t family, u
 }
 
 Result createMappedBuffer(VkPhysicalDevice pd, VkDevice dev, VkDeviceSize size, VkBufferUsageFlags usage,
-                          bool preferCached, MappedBuffer& out) {
+                          bool preferCached, MappedBuffer& out, std::array<uint32_t, 2> concurrentFamilies) {
     out = MappedBuffer{};
     MappedBuffer b; // what is made so far goes away with it on failure
+    const bool concurrent = concurrentFamilies[0] != concurrentFamilies[1];
     const VkBufferCreateInfo bci{
         .sType = VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO,
         .pNext = nullptr,
         .flags = 0,
         .size = size,
         .usage = usage,
-        .sharingMode = VK_SHARING_MODE_EXCLUSIVE,
-        .queueFamilyIndexCount = 0,
-        .pQueueFamilyIndices = nullptr,
+        .sharingMode = concurrent ? VK_SHARING_MODE_CONCURRENT : VK_SHARING_MODE_EXCLUSIVE,
+        .queueFamilyIndexCount = concurrent ? 2u : 0u,
+        .pQueueFamilyIndices = concurrent ? concurrentFamilies.data() : nullptr,
     };
     IRIS_VK_TRY(vkCreateBuffer(dev, &bci, nullptr, b.buffer_.replace(dev)));
     b.buffer = b.buffer_.get();

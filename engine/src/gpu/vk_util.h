@@ -1,6 +1,8 @@
 // Small Vulkan helpers: VkResult → Result, synchronization2 barrier builders, memory types.
 #pragma once
 
+#include <array>
+
 #include <span>
 #include <string>
 #include <utility>
@@ -277,13 +279,16 @@ public:
     VkDeviceMemory memory() const { return memory_.get(); }
 
 private:
-    friend Result createMappedBuffer(VkPhysicalDevice, VkDevice, VkDeviceSize, VkBufferUsageFlags, bool, MappedBuffer&);
+    friend Result createMappedBuffer(VkPhysicalDevice, VkDevice, VkDeviceSize, VkBufferUsageFlags, bool, MappedBuffer&,
+                                     std::array<uint32_t, 2>);
     Memory memory_;
     Buffer buffer_; // destroyed before the memory it is bound to
 };
-// Replaces `out` with a new buffer of `size` bytes; on failure `out` is left empty.
+// Replaces `out` with a new buffer of `size` bytes; on failure `out` is left empty. With two
+// distinct `concurrentFamilies`, the buffer is shared by both without ownership transfers
+// (VK_SHARING_MODE_CONCURRENT).
 Result createMappedBuffer(VkPhysicalDevice pd, VkDevice dev, VkDeviceSize size, VkBufferUsageFlags usage,
-                          bool preferCached, MappedBuffer& out);
+                          bool preferCached, MappedBuffer& out, std::array<uint32_t, 2> concurrentFamilies = {0, 0});
 // Makes device writes visible to the host for non-coherent memory.
 [[nodiscard]] Result invalidate(VkDevice dev, const MappedBuffer& b);
 // Makes host writes visible to the device for non-coherent memory.

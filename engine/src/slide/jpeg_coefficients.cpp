@@ -2,6 +2,7 @@
 
 #include <csetjmp>
 #include <cstdio>
+#include <algorithm>
 #include <cstring>
 #include <new>
 #include <string>
@@ -175,5 +176,65 @@ Expected<JpegCoefficients> readJpegCoefficients(const uint8_t* data, size_t size
         return Result(Status::UnsupportedFormat, std::string("the GPU JPEG path does not take ") + err.message);
     return out;
 }
+
+namespace jpegrecord {
+
+Result write(const uint8_t* data, size_t size, int width, int height, JpegColour colour, int validWidth, int validHeight,
+             uint8_t* record) {
+    auto* words = reinterpret_cast<uint32_t*>(record);
+    static_assert(sizeof(int16_t) * 2 == sizeof(uint32_t));
+    Expected<JpegCoefficients> c = readJpegCoefficients(data, size, width, height, colour,
+                                                        reinterpret_cast<int16_t*>(words + kBlocksWord), size_t(kMaxBlocks) * 64);
+    if (!c) {
+        // Too many blocks for a record is a layout the GPU path does not take, not a corrupt tile.
+        if (c.error().status() == Status::CorruptData && c.error().message().find("no room") != std::string::npos)
+            return Result(Status::UnsupportedFormat, "the tile's coefficients do not fit a tile buffer");
+        return c.error();
+    }
+    std::memset(words, 0, size_t(kBlocksWord) * 4);
+    words[0] = kMagic;
+    words[1] = c->width;
+    words[2] = c->height;
+    words[3] = uint32_t(std::clamp(validWidth, 1, width));
+    words[4] = uint32_t(std::clamp(validHeight, 1, height));
+    words[5] = uint32_t(c->transform);
+    words[6] = c->hMax;
+    words[7] = c->vMax;
+    words[8] = c->components;
+    words[9] = c->blockCount();
+    for (uint32_t i = 0; i < c->components; ++i) {
+        words[10 + 3 * i] = c->comp[i].blocksWide;
+        words[11 + 3 * i] = c->comp[i].blocksHigh;
+        words[12 + 3 * i] = c->comp[i].firstBlock;
+        for (int q = 0; q < 64; ++q) words[kQuantWord + 64 * i + q] = c->comp[i].quant[q];
+    }
+    return {};
+}
+
+bool header(const uint8_t* record, JpegCoefficients& out, uint32_t& validWidth, uint32_t& validHeight) {
+    uint32_t w[kHeaderWords];
+    std::memcpy(w, record, sizeof w);
+    if (w[0] != kMagic || w[1] == 0 || w[2] == 0 || w[1] > uint32_t(kTileSize) || w[2] > uint32_t(kTileSize) || (w[8] != 1 && w[8] != 3) ||
+        w[9] > kMaxBlocks || w[5] > 2)
+        return false;
+    out = JpegCoefficients{};
+    out.width = w[1];
+    out.height = w[2];
+    validWidth = w[3];
+    validHeight = w[4];
+    out.transform = JpegCoefficients::Transform(w[5]);
+    out.hMax = w[6];
+    out.vMax = w[7];
+    out.components = w[8];
+    out.blocksTotal = w[9];
+    for (uint32_t i = 0; i < out.components; ++i) {
+        out.comp[i].blocksWide = w[10 + 3 * i];
+        out.comp[i].blocksHigh = w[11 + 3 * i];
+        out.comp[i].firstBlock = w[12 + 3 * i];
+    }
+    return true;
+}
+
+} // namespace jpegrecord
 
 } // namespace iris

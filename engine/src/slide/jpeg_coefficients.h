@@ -20,6 +20,7 @@
 
 #include "iris/types.h"
 #include "slide/jpeg_frame_decode.h"
+#include "slide/slide_source.h" // kTileBytes
 
 namespace iris {
 
@@ -57,5 +58,33 @@ Expected<JpegCoefficients> readJpegCoefficients(const uint8_t* data, size_t size
 // do not fit.
 Expected<JpegCoefficients> readJpegCoefficients(const uint8_t* data, size_t size, int width, int height,
                                                 JpegColour colour, int16_t* dst, size_t capacity);
+
+// The RAM cache's form of a tile whose decode the GPU finishes (EngineTuning::JpegDecode::Gpu):
+// one record in a tile buffer (kTileBytes), 32-bit words, read by the buffer thread and, from
+// staging, by shaders/jpeg_idct.comp:
+//   [0, 32)        header: kMagic, width, height, valid width, valid height, transform, hMax,
+//                  vMax, components, blocks; then per component (at 10 + 3c) blocksWide,
+//                  blocksHigh, first block
+//   [32, 224)      three quantisation tables, 64 words each (unused ones zero)
+//   [224, …)       the blocks, 32 words each (two int16 a word, the lower first)
+// A tile of more than kMaxBlocks blocks has no record (4:2:2 and 4:4:4 256×256 tiles: their
+// coefficients fill more than a tile's pixels) and is decoded on the CPU.
+namespace jpegrecord {
+inline constexpr uint32_t kMagic = 0x4a504743; // "JPGC"
+inline constexpr uint32_t kHeaderWords = 32;
+inline constexpr uint32_t kQuantWord = 32;
+inline constexpr uint32_t kBlocksWord = kQuantWord + 3 * 64;
+inline constexpr uint32_t kMaxBlocks = (uint32_t(kTileBytes) / 4 - kBlocksWord) / 32;
+
+// Reads a JPEG of width × height pixels (a whole file tile) into a record at `record`
+// (kTileBytes); pixels at or beyond validWidth × validHeight will repeat the last valid column
+// and row, as padTileEdges pads a level's edge tile. Errors as readJpegCoefficients, and
+// UnsupportedFormat for a tile of more than kMaxBlocks blocks.
+Result write(const uint8_t* data, size_t size, int width, int height, JpegColour colour, int validWidth, int validHeight,
+             uint8_t* record);
+// The header of a record (no blocks: JpegCoefficients::blocks stays empty); false when `record`
+// holds none (its magic or sizes are wrong).
+bool header(const uint8_t* record, JpegCoefficients& out, uint32_t& validWidth, uint32_t& validHeight);
+} // namespace jpegrecord
 
 } // namespace iris

@@ -38,6 +38,12 @@ public:
     Result readTile(int level, int64_t tx, int64_t ty, uint8_t* dst) override;
     bool keepsPartialTiles(int level) const override { return level >= stored_ || inner_->keepsPartialTiles(level); }
     Expected<Image> readAssociatedImage(const std::string& name) override { return inner_->readAssociatedImage(name); }
+    // Stored levels' records pass through; a synthetic tile is always pixels.
+    bool readsCoefficients(int level) const override { return level < stored_ && inner_->readsCoefficients(level); }
+    Result readTileCoefficients(int level, int64_t tx, int64_t ty, uint8_t* dst) override {
+        if (level >= stored_) return Result(Status::UnsupportedFormat, "a synthetic level");
+        return inner_->readTileCoefficients(level, tx, ty, dst);
+    }
     // Reads in progress stop before their next stored tile (Status::Cancelled), so that a
     // closed slide does not keep the loaders (or the engine's shutdown) for seconds.
     void abandon() override {

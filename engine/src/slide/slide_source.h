@@ -46,6 +46,14 @@ public:
     // placeholder: a tile computed from many stored tiles (PyramidSource) loses only the area
     // of a broken one, not all of it. The error is still reported.
     virtual bool keepsPartialTiles(int /*level*/) const { return false; }
+    // The GPU's share of a JPEG decode (EngineTuning::JpegDecode::Gpu): whether tiles of `level`
+    // may be read as coefficient records (slide/jpeg_coefficients.h, jpegrecord), and the read
+    // itself, into dst (kTileBytes). Any failure — a layout the GPU path does not take, a
+    // corrupt tile — leaves the tile to readTile, which says what is wrong as it always has.
+    virtual bool readsCoefficients(int /*level*/) const { return false; }
+    virtual Result readTileCoefficients(int /*level*/, int64_t /*tx*/, int64_t /*ty*/, uint8_t* /*dst*/) {
+        return Result(Status::UnsupportedFormat, "this source has no coefficient records");
+    }
     virtual Expected<Image> readAssociatedImage(const std::string& name) = 0;
     // The engine has let go of this slide (another was opened, it was closed, the engine is
     // going away). A read that takes long (a synthetic level's tile: many stored tiles) may

@@ -15,6 +15,7 @@
 #include <tiffio.h>
 
 #include "slide/jp2k_decode.h"
+#include "slide/jpeg_coefficients.h"
 #include "slide/jpeg_frame_decode.h"
 #include "slide/openslide_source.h"
 
@@ -467,13 +468,13 @@ void TiffTileSource::release(size_t level, std::unique_ptr<Handle> handle) {
     pool_[level].push_back(std::move(handle));
 }
 
-bool TiffTileSource::decodeJpegTile(Handle& hd, const Level& L, uint32_t tileIndex, uint32_t w, uint32_t h, uint8_t* dst,
-                                    size_t pitch) {
+// A JPEG tile's whole stream for libjpeg: the tables (SOI, DQT, DHT…, no EOI), then the tile's
+// own stream after its SOI; a tile with its own tables reads the same, its tables replacing
+// ours. In this thread's buffer, valid until its next call. False when the tile cannot be read.
+bool TiffTileSource::jpegTileStream(Handle& hd, const Level& L, uint32_t tileIndex, const uint8_t** data, size_t* size) {
     int errorFlag = 0;
     const uint64_t bytes = TIFFGetStrileByteCountWithErr(hd.tif, tileIndex, &errorFlag);
     if (errorFlag || bytes < 4 || bytes > kMaxRawTileBytes || bytes > fileSize_) return false;
-    // The stream libjpeg reads: the tables (SOI, DQT, DHT…, no EOI), then the tile's own stream
-    // after its SOI; a tile with its own tables reads the same, its tables replacing ours.
     thread_local std::vector<uint8_t> stream;
     const size_t head = L.jpegTables.empty() ? 0 : L.jpegTables.size();
     stream.resize(head + size_t(bytes));
@@ -481,12 +482,20 @@ bool TiffTileSource::decodeJpegTile(Handle& hd, const Level& L, uint32_t tileInd
     uint8_t* raw = stream.data() + head;
     if (TIFFReadRawTile(hd.tif, tileIndex, raw, tmsize_t(bytes)) != tmsize_t(bytes) || !hd.lastError.empty()) return false;
     if (raw[0] != 0xFF || raw[1] != 0xD8) return false;
-    const uint8_t* data = stream.data();
-    size_t size = stream.size();
+    *data = stream.data();
+    *size = stream.size();
     if (head > 0) {
         std::memmove(raw, raw + 2, size_t(bytes) - 2); // drop the tile's SOI: the tables' opens the stream
-        size -= 2;
+        *size -= 2;
     }
+    return true;
+}
+
+bool TiffTileSource::decodeJpegTile(Handle& hd, const Level& L, uint32_t tileIndex, uint32_t w, uint32_t h, uint8_t* dst,
+                                    size_t pitch) {
+    const uint8_t* data = nullptr;
+    size_t size = 0;
+    if (!jpegTileStream(hd, L, tileIndex, &data, &size)) return false;
     const JpegColour colour = L.decoder == Decoder::JpegYCbCr ? JpegColour::YCbCr : JpegColour::Rgb;
     if (w == L.tileW && h == L.tileH)
         return decodeJpegFrameRgba(data, size, int(L.tileW), int(L.tileH), colour, dst, pitch).ok();
@@ -612,6 +621,36 @@ Expected<std::shared_ptr<const TiffTileSource::DecodedTile>> TiffTileSource::fil
         lru_.pop_back();
     }
     return out;
+}
+
+bool TiffTileSource::readsCoefficients(int level) const {
+    if (level < 0 || size_t(level) >= levels_.size()) return false;
+    const Level& L = levels_[size_t(level)];
+    return (L.decoder == Decoder::JpegYCbCr || L.decoder == Decoder::JpegRgb) && L.tileW == uint32_t(kTileSize) &&
+           L.tileH == uint32_t(kTileSize);
+}
+
+Result TiffTileSource::readTileCoefficients(int level, int64_t tx, int64_t ty, uint8_t* dst) {
+    if (!readsCoefficients(level)) return Result(Status::UnsupportedFormat, "not a level of 256x256 JPEG tiles");
+    const LevelInfo& li = info().levels[size_t(level)];
+    if (tx < 0 || ty < 0 || tx >= li.tilesX || ty >= li.tilesY) return Result(Status::InvalidArgument, "no such tile");
+    const Level& L = levels_[size_t(level)];
+    // The file's tile grid is the engine's (readsCoefficients): file tile (tx, ty) is this tile.
+    const int w = int(std::min<int64_t>(kTileSize, li.width - tx * kTileSize));
+    const int h = int(std::min<int64_t>(kTileSize, li.height - ty * kTileSize));
+    Result error;
+    std::unique_ptr<Handle> hd = acquire(size_t(level), &error);
+    if (!hd) return error;
+    hd->lastError.clear();
+    const uint8_t* data = nullptr;
+    size_t size = 0;
+    Result r = Result(Status::CorruptData, "the tile's JPEG stream cannot be read");
+    if (jpegTileStream(*hd, L, uint32_t(ty) * L.across + uint32_t(tx), &data, &size))
+        r = jpegrecord::write(data, size, kTileSize, kTileSize,
+                              L.decoder == Decoder::JpegYCbCr ? JpegColour::YCbCr : JpegColour::Rgb, w, h, dst);
+    hd->lastError.clear();
+    release(size_t(level), std::move(hd));
+    return r;
 }
 
 Result TiffTileSource::readTile(int level, int64_t tx, int64_t ty, uint8_t* dst) {

@@ -47,6 +47,9 @@ public:
 
     const SlideInfo& info() const override;
     Result readTile(int level, int64_t tx, int64_t ty, uint8_t* dst) override;
+    // Levels of 256×256 JPEG tiles, whose file tiles are the engine's.
+    bool readsCoefficients(int level) const override;
+    Result readTileCoefficients(int level, int64_t tx, int64_t ty, uint8_t* dst) override;
     Expected<Image> readAssociatedImage(const std::string& name) override;
 
     struct Level;
@@ -64,6 +67,8 @@ private:
     // false when it cannot (the caller then reads it through TIFFRGBAImage).
     bool decodeJpegTile(Handle& hd, const Level& level, uint32_t tileIndex, uint32_t w, uint32_t h, uint8_t* dst,
                         size_t pitch);
+    // The tile's whole JPEG stream (tables, then the tile), in this thread's buffer.
+    bool jpegTileStream(Handle& hd, const Level& level, uint32_t tileIndex, const uint8_t** data, size_t* size);
 
     std::unique_ptr<SlideSource> meta_; // the OpenSlide reader: associated images
     SlideInfo info_;                    // OpenSlide's, plus the ICC profile OpenSlide 3.4 does not read

@@ -21,7 +21,11 @@
 //     OpenJPEG are not instrumented); reading it again gives the same pixels (the decoded
 //     file-tile cache);
 //   * a tile that does not read fails with CorruptData or IoError naming the file;
-//   * an associated image is w × h RGBA of positive size, or an error naming the file.
+//   * an associated image is w × h RGBA of positive size, or an error naming the file;
+//   * a level that offers coefficient records (the GPU's share of the decode) gives, for its
+//     first and last tiles, a record whose header the buffer thread takes (jpegrecord::header:
+//     sizes within a tile, components' blocks adding up, the valid part the level's), or an
+//     error; nothing is written past the tile buffer.
 #include <algorithm>
 #include <cstdint>
 #include <cstring>
@@ -32,6 +36,7 @@
 #include <openslide.h>
 
 #include "fuzz_support.h"
+#include "slide/jpeg_coefficients.h"
 #include "slide/tiff_source.h"
 
 namespace {
@@ -50,6 +55,28 @@ bool namesFile(const Result& r) { return fuzz::contains(r.message(), std::string
 
 void readTiles(SlideSource& src) {
     fuzz::readTileSample(src, kMaxTileReads, [](const Result& r) { return (r.status() == Status::CorruptData || r.status() == Status::IoError) && namesFile(r); });
+}
+
+void readRecords(SlideSource& src) {
+    const SlideInfo& info = src.info();
+    size_t reads = 0;
+    for (int level = int(info.levels.size()) - 1; level >= 0 && reads < 6; --level) {
+        if (!src.readsCoefficients(level)) continue;
+        const LevelInfo& li = info.levels[size_t(level)];
+        const std::pair<int64_t, int64_t> tiles[2] = {{0, 0}, {li.tilesX - 1, li.tilesY - 1}};
+        for (const auto& [tx, ty] : tiles) {
+            std::vector<uint8_t> buf(size_t(kTileBytes) + 4096, 0xA5);
+            const Result r = src.readTileCoefficients(level, tx, ty, buf.data());
+            ++reads;
+            for (size_t i = size_t(kTileBytes); i < buf.size(); ++i) PROMISE(buf[i] == 0xA5);
+            if (!r.ok()) continue;
+            JpegCoefficients h;
+            uint32_t vw = 0, vh = 0;
+            PROMISE(jpegrecord::header(buf.data(), h, vw, vh));
+            PROMISE(int64_t(vw) == std::min<int64_t>(kTileSize, li.width - tx * kTileSize));
+            PROMISE(int64_t(vh) == std::min<int64_t>(kTileSize, li.height - ty * kTileSize));
+        }
+    }
 }
 
 // The size OpenSlide states for an associated image (0 × 0 when it cannot say).
@@ -109,6 +136,7 @@ void readInput(const uint8_t* data, size_t size) {
                      info.iccProfile.size());
     }
     readTiles(src);
+    readRecords(src);
     readImages(src, path);
 }
 

@@ -35,7 +35,7 @@ inline constexpr const char* kTuningEnvironmentHelp =
     "  IRIS_TILE_UPLOAD=auto|queue|host  tiles into the atlas by a queue copy or by\n"
     "                                 host writes (default: host for CPU devices)\n"
     "  IRIS_JPEG_DECODE=auto|cpu|gpu  finish JPEG tiles (inverse DCT, upsampling,\n"
-    "                                 colour) on the GPU (default: cpu)";
+    "                                 colour) on the GPU (default: gpu on GPUs)";
 
 // "  -o, --output FILE       text (default: x)" within 80 columns.
 class HelpFormatter : public CLI::Formatter {

@@ -70,7 +70,13 @@ Result BufferThread::init() {
                                : VkDeviceSize(kTileBytes);
     if (!jpegDecided_) { // once: the loaders are told, and a device loss keeps the same device kind
         jpegDecided_ = true;
-        jpegOnGpu_ = jpegDecode_ == EngineTuning::JpegDecode::Gpu && !hostMips_ && !atlas_.hostWritten() && !atlas_.swapped();
+        // Auto: on GPUs, where it made a new field whole sooner in every alternated pair on the
+        // H200 (BENCHMARKS.md, "The GPU's share of the decode in the engine"); a CPU device's
+        // "GPU" is the cores the entropy decode needs.
+        const bool cpuDevice = device_.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
+        const bool wanted = jpegDecode_ == EngineTuning::JpegDecode::Gpu ||
+                            (jpegDecode_ == EngineTuning::JpegDecode::Auto && !cpuDevice);
+        jpegOnGpu_ = wanted && !hostMips_ && !atlas_.hostWritten() && !atlas_.swapped();
         if (jpegDecode_ == EngineTuning::JpegDecode::Gpu && !jpegOnGpu_)
             log_.warn("JPEG decode: finishing tiles on the GPU needs queue uploads and mips made on the device; "
                       "decoding on the CPU");

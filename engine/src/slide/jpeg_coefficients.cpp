@@ -227,12 +227,23 @@ bool header(const uint8_t* record, JpegCoefficients& out, uint32_t& validWidth, 
     out.vMax = w[7];
     out.components = w[8];
     out.blocksTotal = w[9];
+    // What the shaders index by must hold together: each component's blocks follow the
+    // previous one's, within a 256×256 tile's 32×32 blocks, adding up to the total.
+    if (out.hMax < 1 || out.hMax > 2 || out.vMax < 1 || out.vMax > 2 || validWidth < 1 || validWidth > out.width ||
+        validHeight < 1 || validHeight > out.height)
+        return false;
+    uint32_t next = 0;
     for (uint32_t i = 0; i < out.components; ++i) {
-        out.comp[i].blocksWide = w[10 + 3 * i];
-        out.comp[i].blocksHigh = w[11 + 3 * i];
-        out.comp[i].firstBlock = w[12 + 3 * i];
+        JpegCoefficients::Component& c = out.comp[i];
+        c.blocksWide = w[10 + 3 * i];
+        c.blocksHigh = w[11 + 3 * i];
+        c.firstBlock = w[12 + 3 * i];
+        if (c.firstBlock != next || c.blocksWide == 0 || c.blocksHigh == 0 || c.blocksWide > 32 || c.blocksHigh > 32 ||
+            c.blocksWide * 8 * (i == 0 ? 1 : out.hMax) < out.width || c.blocksHigh * 8 * (i == 0 ? 1 : out.vMax) < out.height)
+            return false;
+        next += c.blocksWide * c.blocksHigh;
     }
-    return true;
+    return next == out.blocksTotal;
 }
 
 } // namespace jpegrecord

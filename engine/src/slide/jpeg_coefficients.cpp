@@ -9,27 +9,13 @@
 
 #include <jpeglib.h>
 
+#include "slide/libjpeg_errors.h"
+
 namespace iris {
 
 namespace {
 
-// As in jpeg_frame_decode.cpp: errors and warnings jump back to the read's setjmp, so a tile
-// libjpeg had to guess at is refused rather than reconstructed from guesses.
-struct ErrorManager {
-    jpeg_error_mgr pub;
-    std::jmp_buf jump;
-    char message[JMSG_LENGTH_MAX];
-};
-
-[[noreturn]] void errorExit(j_common_ptr cinfo) {
-    auto* err = reinterpret_cast<ErrorManager*>(cinfo->err);
-    (*cinfo->err->format_message)(cinfo, err->message);
-    std::longjmp(err->jump, 1);
-}
-
-void emitMessage(j_common_ptr cinfo, int level) {
-    if (level < 0) errorExit(cinfo);
-}
+using ErrorManager = libjpeg::Errors;
 
 enum Outcome { Read = 0, Corrupt = 1, Unsupported = 2 };
 
@@ -164,9 +150,7 @@ Expected<JpegCoefficients> readJpegCoefficients(const uint8_t* data, size_t size
     out.height = uint32_t(height);
     jpeg_decompress_struct cinfo{};
     ErrorManager err{};
-    cinfo.err = jpeg_std_error(&err.pub);
-    err.pub.error_exit = errorExit;
-    err.pub.emit_message = emitMessage;
+    libjpeg::install(cinfo, err);
     Sink sink{&out, dst, capacity};
     const int outcome = read(&cinfo, &err, data, size, width, height, colour, &sink);
     if (outcome == Read) out.components = uint32_t(cinfo.num_components);

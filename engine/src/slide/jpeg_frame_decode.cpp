@@ -6,28 +6,13 @@
 
 #include <jpeglib.h>
 
+#include "slide/libjpeg_errors.h"
+
 namespace iris {
 
 namespace {
 
-// libjpeg reports errors through error_exit, which must not return: it jumps back to the
-// decode's setjmp. Warnings (corrupt entropy data, premature end of data) jump too, so that a
-// frame libjpeg had to guess at is reported, not shown as if it were right.
-struct ErrorManager {
-    jpeg_error_mgr pub;
-    std::jmp_buf jump;
-    char message[JMSG_LENGTH_MAX];
-};
-
-[[noreturn]] void errorExit(j_common_ptr cinfo) {
-    auto* err = reinterpret_cast<ErrorManager*>(cinfo->err);
-    (*cinfo->err->format_message)(cinfo, err->message);
-    std::longjmp(err->jump, 1);
-}
-
-void emitMessage(j_common_ptr cinfo, int level) {
-    if (level < 0) errorExit(cinfo); // a warning: stop
-}
+using ErrorManager = libjpeg::Errors;
 
 // The part of the decode between setjmp and the end, without any C++ object that needs a
 // destructor (longjmp would skip it). Returns 0 on success, else a Status and the reason in
@@ -78,9 +63,7 @@ Result decodeJpegFrameRgba(const uint8_t* data, size_t size, int width, int heig
     }
     jpeg_decompress_struct cinfo{};
     ErrorManager err{};
-    cinfo.err = jpeg_std_error(&err.pub);
-    err.pub.error_exit = errorExit;
-    err.pub.emit_message = emitMessage;
+    libjpeg::install(cinfo, err);
     const int failed = decode(&cinfo, &err, data, size, width, height, colour, dst, pitch);
     jpeg_destroy_decompress(&cinfo);
     if (failed) return Result(Status::CorruptData, std::string("the JPEG data is corrupt (") + err.message + ")");

@@ -19,6 +19,8 @@
 //                  the result's own vector;
 //   records        the RAM cache's coefficient records: their header, the layouts that fit a
 //                  tile buffer, and an edge tile's padding (the valid part's last column and row);
+//   engineFrames   inside the engine: settled frames with JPEG tiles finished on the GPU equal
+//                  those decoded on the CPU, from a TIFF, an SVS and .iris files;
 //   refused        layouts the path does not take (4:1:1, 4:4:0) say UnsupportedFormat; a
 //                  truncated stream, garbage and a stream of other dimensions say CorruptData.
 // The Vulkan validation layer is on (where installed) and must stay silent.
@@ -42,6 +44,7 @@
 using namespace iristest;
 using iris::JpegCoefficients;
 using iris::JpegColour;
+using namespace std::chrono_literals;
 
 namespace {
 
@@ -457,6 +460,67 @@ private slots:
             for (int x = 0; x < 256; ++x)
                 std::memcpy(&cpu[(size_t(y) * 256 + x) * 4], &cpu[(size_t(std::min(y, 99)) * 256 + std::min(x, 199)) * 4], 4);
         QVERIFY(std::memcmp(output_.mapped, cpu.data(), cpu.size()) == 0);
+    }
+
+    // Inside the engine (EngineTuning::jpegDecode): two engines on a GPU's path (queue copies,
+    // wide mips), one decoding JPEG tiles on the CPU and one finishing them on the GPU, show
+    // the same settled frames byte for byte, at 1:1, at level downsamples and between them,
+    // and at a level's corner, from a generic TIFF (the sample), an Aperio SVS and .iris files.
+    void engineFrames() {
+        std::vector<fs::path> slides;
+        if (auto sample = sampleSlidePath(); sample && fs::exists(*sample)) slides.push_back(*sample);
+        if (auto dir = slidesDir("aperio"); dir && fs::exists(*dir / "CMU-1-Small-Region.svs"))
+            slides.push_back(*dir / "CMU-1-Small-Region.svs");
+        if (auto dir = slidesDir("iris"))
+            for (const char* f : {"CMU-1-Small-Region.v1.1.iris", "small.v1.0.iris"})
+                if (fs::exists(*dir / f)) slides.push_back(*dir / f);
+        if (slides.empty()) QSKIP("no slides");
+        constexpr uint32_t kW = 640, kH = 480;
+        TestEngine engines[2];
+        for (int g = 0; g < 2; ++g) {
+            iris::EngineConfig c;
+            c.tuning.tileUpload = iris::EngineTuning::TileUpload::Queue;
+            c.tuning.mipSchedule = iris::EngineTuning::MipSchedule::Wide;
+            c.tuning.jpegDecode = g ? iris::EngineTuning::JpegDecode::Gpu : iris::EngineTuning::JpegDecode::Cpu;
+            c.color.managed = false;
+            engines[g] = createTestEngine(c);
+            QVERIFY2(engines[g], describe(engines[g].error).c_str());
+            QVERIFY(engines[g]->bindOffscreen(kW, kH).ok());
+            QCOMPARE(engines[g]->device().jpegDecode, std::string(g ? "gpu" : "cpu"));
+        }
+        for (const fs::path& slide : slides) {
+            for (TestEngine& e : engines) QVERIFY2(e->open(slide.string()).ok(), slide.c_str());
+            const auto infoOpt = engines[0]->slideInfo();
+            QVERIFY(infoOpt.has_value());
+            const iris::SlideInfo& info = *infoOpt;
+            const double w = double(info.width), h = double(info.height);
+            const double fit = std::max(w / kW, h / kH); // a small slide is not shrunk further
+            const struct {
+                const char* what;
+                iris::View view;
+            } views[] = {
+                {"1:1 centre", viewWithOrigin(std::floor(w / 2 - kW / 2), std::floor(h / 2 - kH / 2), 1, kW, kH)},
+                {"1:1 corner", viewWithOrigin(w - kW / 2.0, h - kH / 2.0, 1, kW, kH)},
+                {"downsample 4", viewWithOrigin(0, 0, std::min(4.0, fit), kW, kH)},
+                {"downsample 2.7", viewWithOrigin(w / 5, h / 7, std::min(2.7, fit), kW, kH)},
+                {"whole slide", viewWithOrigin(0, 0, fit, kW, kH)},
+            };
+            for (const auto& v : views) {
+                std::string why;
+                auto a = renderSettled(*engines[0].engine, v.view, kW, kH, 60s, &why);
+                QVERIFY2(a, (slide.filename().string() + " " + v.what + " (CPU decode): " + why).c_str());
+                auto b = renderSettled(*engines[1].engine, v.view, kW, kH, 60s, &why);
+                QVERIFY2(b, (slide.filename().string() + " " + v.what + " (GPU decode): " + why).c_str());
+                const DiffStats d = compareImages(a->image, b->image, nullptr, 4);
+                if (d.differing)
+                    qWarning("%s", saveFailureArtefacts("jpeg_gpu." + slide.filename().string() + "." + v.what, b->image,
+                                                        a->image, nullptr)
+                                       .c_str());
+                QVERIFY2(d.differing == 0, (slide.filename().string() + " " + v.what + ": " + d.summary()).c_str());
+            }
+            qInfo("%s: frames equal with the GPU's share of the decode", slide.filename().c_str());
+        }
+        for (TestEngine& e : engines) QCOMPARE(e->validationMessageCount(), uint64_t(0));
     }
 
     void refused() {

@@ -5,6 +5,8 @@
 //   ife::parse()                the whole structure, validated;
 //   ife::slideInfo()            what IrisFileSource::open() builds: levels, properties
 //                               (attributes), associated image names, the ICC profile;
+//   ife::readTileCoefficients() the same tile as a coefficient record (the GPU's share of the
+//                               decode): a header the buffer thread takes, or an error
 //   ife::readTile()             IrisFileSource::readTile(): tileStream + JPEG decode into a
 //                               256×256 RGBA buffer + edge padding, for a bounded number of
 //                               tiles, and requests outside the grid;
@@ -30,6 +32,7 @@
 
 #include "fuzz_signals.h"
 #include "slide/iris_file.h"
+#include "slide/jpeg_coefficients.h"
 #include "slide/jpeg_decode.h"
 
 namespace {
@@ -172,6 +175,16 @@ void readTiles(const uint8_t* data, const ife::Layout& L, const SlideInfo& info)
                 if (r.status() == Status::CorruptData) g_decodeFailed = true;
                 PROMISE(guardIntact());
                 if (verbose() && !r.ok()) std::fprintf(stderr, "  %s\n", r.message().c_str());
+                // The same tile as a coefficient record (the GPU's share of the decode): a record
+                // the buffer thread takes, with the level's valid part, or an error.
+                if (ife::readTileCoefficients(ife::Bytes{data, -1, kName}, L, level, tx, ty, tile).ok()) {
+                    JpegCoefficients h;
+                    uint32_t vw = 0, vh = 0;
+                    PROMISE(jpegrecord::header(tile, h, vw, vh));
+                    PROMISE(int64_t(vw) == std::min<int64_t>(kTileSize, li.width - tx * kTileSize));
+                    PROMISE(int64_t(vh) == std::min<int64_t>(kTileSize, li.height - ty * kTileSize));
+                }
+                PROMISE(guardIntact());
             }
         }
     }

@@ -17,6 +17,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "slide/jpeg_coefficients.h"
 #include "slide/jpeg_decode.h"
 
 namespace iris {
@@ -985,6 +986,24 @@ Result readTile(const Bytes& bytes, const Layout& layout, int level, int64_t tx,
     return {};
 }
 
+Result readTileCoefficients(const Bytes& bytes, const Layout& layout, int level, int64_t tx, int64_t ty, uint8_t* dst) {
+    if (level < 0 || size_t(level) >= layout.layers.size()) return Result(Status::InvalidArgument, "no such level");
+    if (layout.encoding == kEncodingAvif) return Result(Status::UnsupportedFormat, "AVIF tiles");
+    const size_t layer = layout.layers.size() - 1 - size_t(level);
+    const Layer& l = layout.layers[layer];
+    if (tx < 0 || ty < 0 || tx >= l.xTiles || ty >= l.yTiles) return Result(Status::InvalidArgument, "no such tile");
+    const Expected<TileStream> stream = tileStream(bytes, layout, layer, uint32_t(tx), uint32_t(ty));
+    if (!stream) return stream.error();
+    if (stream->size == 0) return Result(Status::UnsupportedFormat, "a tile with no data"); // readTile: transparent
+    thread_local std::vector<uint8_t> scratch;
+    const Expected<const uint8_t*> data = bytes.at(stream->offset, stream->size, scratch);
+    if (!data) return data.error();
+    const int w = int(std::min<int64_t>(kTileSize, l.width - tx * kTileSize));
+    const int h = int(std::min<int64_t>(kTileSize, l.height - ty * kTileSize));
+    // As readTile's decode: the colour space the stream's markers give (TurboJPEG's guess).
+    return jpegrecord::write(*data, stream->size, kTileSize, kTileSize, JpegColour::Auto, w, h, dst);
+}
+
 Expected<Image> readAssociatedImage(const uint8_t* data, const Layout& layout, const std::string& name,
                                     const std::string& image, uint64_t maxPixels) {
     return readAssociatedImage(Bytes{data, -1, name}, layout, image, maxPixels);
@@ -1024,6 +1043,14 @@ Expected<Image> readAssociatedImage(const Bytes& file, const Layout& layout, con
 
 Result IrisFileSource::readTile(int level, int64_t tx, int64_t ty, uint8_t* dst) {
     return ife::readTile(bytes_, layout_, level, tx, ty, dst);
+}
+
+bool IrisFileSource::readsCoefficients(int level) const {
+    return layout_.encoding != ife::kEncodingAvif && level >= 0 && size_t(level) < layout_.layers.size();
+}
+
+Result IrisFileSource::readTileCoefficients(int level, int64_t tx, int64_t ty, uint8_t* dst) {
+    return ife::readTileCoefficients(bytes_, layout_, level, tx, ty, dst);
 }
 
 Expected<Image> IrisFileSource::readAssociatedImage(const std::string& name) {

@@ -217,6 +217,9 @@ SlideInfo slideInfo(const ByteSource& source, const Layout& layout, const std::s
 Result readTile(const uint8_t* data, const Layout& layout, const std::string& name, int level, int64_t tx, int64_t ty,
                 uint8_t* dst);
 Result readTile(const Bytes& bytes, const Layout& layout, int level, int64_t tx, int64_t ty, uint8_t* dst);
+// SlideSource::readTileCoefficients: the same tile's JPEG stream read as a coefficient record
+// (jpegrecord) into dst (kTileBytes); UnsupportedFormat for a tile with no data or of AVIF.
+Result readTileCoefficients(const Bytes& bytes, const Layout& layout, int level, int64_t tx, int64_t ty, uint8_t* dst);
 // SlideSource::readAssociatedImage; an image of more than maxPixels pixels is refused
 // (CorruptData) before any memory is allocated for its pixels.
 Expected<Image> readAssociatedImage(const uint8_t* data, const Layout& layout, const std::string& name,
@@ -238,6 +241,9 @@ public:
 
     const SlideInfo& info() const override { return info_; }
     Result readTile(int level, int64_t tx, int64_t ty, uint8_t* dst) override;
+    // Every level of JPEG tiles (the engine's grid is the file's).
+    bool readsCoefficients(int level) const override;
+    Result readTileCoefficients(int level, int64_t tx, int64_t ty, uint8_t* dst) override;
     Expected<Image> readAssociatedImage(const std::string& name) override;
 
     const ife::Layout& layout() const { return layout_; }

@@ -96,6 +96,26 @@ int read(jpeg_decompress_struct* cinfo, ErrorManager* err, const uint8_t* data, 
         out->hMax = uint32_t(h);
         out->vMax = uint32_t(v);
     }
+    if (sink->dst) {
+        // Blocks a component has (libjpeg's width_in_blocks × height_in_blocks, from the frame
+        // header): a stream whose blocks will not fit the caller's room is refused before the
+        // entropy decode, so that the caller's fallback does not pay for two decodes.
+        int hMax = 1, vMax = 1;
+        for (int ci = 0; ci < n; ++ci) {
+            hMax = std::max(hMax, c[ci].h_samp_factor);
+            vMax = std::max(vMax, c[ci].v_samp_factor);
+        }
+        size_t predicted = 0;
+        for (int ci = 0; ci < n; ++ci) {
+            const size_t wide = (size_t(cinfo->image_width) * c[ci].h_samp_factor + size_t(hMax) * 8 - 1) / (size_t(hMax) * 8);
+            const size_t high = (size_t(cinfo->image_height) * c[ci].v_samp_factor + size_t(vMax) * 8 - 1) / (size_t(vMax) * 8);
+            predicted += wide * high;
+        }
+        if (predicted * 64 > sink->capacity) {
+            std::snprintf(err->message, sizeof err->message, "no room for %zu blocks", predicted);
+            return Unsupported;
+        }
+    }
     jvirt_barray_ptr* arrays = jpeg_read_coefficients(cinfo);
     size_t total = 0;
     for (int ci = 0; ci < n; ++ci) {

@@ -54,8 +54,8 @@ struct JpegCoefficients {
 Expected<JpegCoefficients> readJpegCoefficients(const uint8_t* data, size_t size, int width, int height,
                                                 JpegColour colour);
 // The same, with the blocks written to `dst` (room for `capacity` values) rather than to the
-// result's vector: a caller that packs tiles for the GPU saves a copy. CorruptData when they
-// do not fit.
+// result's vector: a caller that packs tiles for the GPU saves a copy. UnsupportedFormat when
+// the frame header says they will not fit (before the entropy decode).
 Expected<JpegCoefficients> readJpegCoefficients(const uint8_t* data, size_t size, int width, int height,
                                                 JpegColour colour, int16_t* dst, size_t capacity);
 

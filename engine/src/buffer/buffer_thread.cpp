@@ -47,7 +47,25 @@ BufferThread::BufferThread(SharedState& shared, TileCache& cache, gpu::Device& d
                            gpu::MipPipeline& mips, Handover& handover, UploadCounters& counters, const Log& log,
                            int perimeter, bool trackOpacity, EngineTuning::JpegDecode jpegDecode)
     : shared_(shared), cache_(cache), device_(device), atlas_(atlas), mips_(mips), handover_(handover),
-      counters_(counters), log_(log), perimeter_(perimeter), trackOpacity_(trackOpacity), jpegDecode_(jpegDecode) {}
+      counters_(counters), log_(log), perimeter_(perimeter), trackOpacity_(trackOpacity),
+      jpegOnGpu_(finishesJpeg(jpegDecode, device, atlas, mips)) {
+    if (jpegDecode == EngineTuning::JpegDecode::Gpu && !jpegOnGpu_)
+        log_.warn("JPEG decode: finishing tiles on the GPU needs queue uploads and mips made on the device; "
+                  "decoding on the CPU");
+}
+
+// Decided once, from what the engine made before this thread (a device loss rebuilds the same
+// atlas and mip schedule on the same physical device): the loaders are told at their start.
+// Auto: on GPUs, where it made a new field whole sooner in every alternated pair on the H200
+// (BENCHMARKS.md, "The GPU's share of the decode in the engine"); a CPU device's "GPU" is the
+// cores the entropy decode needs.
+bool BufferThread::finishesJpeg(EngineTuning::JpegDecode requested, const gpu::Device& device,
+                                const gpu::TileAtlas& atlas, const gpu::MipPipeline& mips) {
+    const bool cpuDevice = device.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
+    const bool wanted = requested == EngineTuning::JpegDecode::Gpu ||
+                        (requested == EngineTuning::JpegDecode::Auto && !cpuDevice);
+    return wanted && mips.schedule() != gpu::MipPipeline::Schedule::Host && !atlas.hostWritten() && !atlas.swapped();
+}
 
 BufferThread::~BufferThread() {
     stop(); // the uploads in flight finish before the pools, semaphores and staging ring go
@@ -68,19 +86,6 @@ Result BufferThread::init() {
     separateCopy_ = transferFamily_ != computeFamily_ && !hostMips_;
     stagingStride_ = hostMips_ ? (VkDeviceSize(kTileBytes) + gpu::mipkernel::kChainBytes + 255) / 256 * 256
                                : VkDeviceSize(kTileBytes);
-    if (!jpegDecided_) { // once: the loaders are told, and a device loss keeps the same device kind
-        jpegDecided_ = true;
-        // Auto: on GPUs, where it made a new field whole sooner in every alternated pair on the
-        // H200 (BENCHMARKS.md, "The GPU's share of the decode in the engine"); a CPU device's
-        // "GPU" is the cores the entropy decode needs.
-        const bool cpuDevice = device_.properties().deviceType == VK_PHYSICAL_DEVICE_TYPE_CPU;
-        const bool wanted = jpegDecode_ == EngineTuning::JpegDecode::Gpu ||
-                            (jpegDecode_ == EngineTuning::JpegDecode::Auto && !cpuDevice);
-        jpegOnGpu_ = wanted && !hostMips_ && !atlas_.hostWritten() && !atlas_.swapped();
-        if (jpegDecode_ == EngineTuning::JpegDecode::Gpu && !jpegOnGpu_)
-            log_.warn("JPEG decode: finishing tiles on the GPU needs queue uploads and mips made on the device; "
-                      "decoding on the CPU");
-    }
     const auto makePool = [&](uint32_t family, vk::CommandPool& pool) -> Result {
         const VkCommandPoolCreateInfo pci{.sType = VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO,
                                           .pNext = nullptr,
@@ -465,6 +470,7 @@ void BufferThread::finish(Transaction& t) {
     t.opaque.clear();
     t.mipsReady.clear();
     t.coefficients.clear();
+    t.headers.clear();
     t.signalValue = 0;
 }
 
@@ -525,6 +531,7 @@ bool BufferThread::submitNew(const Snapshot& snap) {
                 if (hostMips_) makeHostMips(base + size_t(st) * stagingStride_, snap.enhance);
                 tx.mipsReady.push_back(true);
                 tx.coefficients.push_back(false);
+                tx.headers.emplace_back();
                 tx.slots.push_back(slot);
                 tx.staging.push_back(st);
             }
@@ -564,6 +571,7 @@ bool BufferThread::submitNew(const Snapshot& snap) {
             tx.opaque.push_back(trackOpacity_ && opaque);
             tx.mipsReady.push_back(false);
             tx.coefficients.push_back(false); // no records where the atlas is host-written
+            tx.headers.emplace_back();
             pendingMips_.push_back({slot, t.key, snap.enhance});
             shared_.tileStages.stamp(TileStage::Staged);
             tx.slots.push_back(slot);
@@ -601,10 +609,10 @@ bool BufferThread::submitNew(const Snapshot& snap) {
                 tx.opaque.push_back(trackOpacity_ && allOpaque(base + size_t(st) * stagingStride_));
             }
         }
+        RecordHeader header;
         if (coefficients) {
-            JpegCoefficients h;
-            uint32_t vw = 0, vh = 0;
-            if (!jpegOnGpu_ || !jpegrecord::header(base + size_t(st) * stagingStride_, h, vw, vh)) {
+            if (!jpegOnGpu_ || !jpegrecord::header(base + size_t(st) * stagingStride_, header.coefficients,
+                                                   header.validWidth, header.validHeight)) {
                 // Not a record this thread can finish (it cannot happen: loaders write records
                 // only while it finishes them, and whole): never drawn, decoded again when needed.
                 log_.error("JPEG decode: a tile's coefficient record is unusable; dropping it");
@@ -616,6 +624,7 @@ bool BufferThread::submitNew(const Snapshot& snap) {
             }
         }
         tx.coefficients.push_back(coefficients);
+        tx.headers.push_back(std::move(header));
         if (hostMips_ && !defer) makeHostMips(base + size_t(st) * stagingStride_, snap.enhance);
         tx.mipsReady.push_back(!defer);
         if (defer) pendingMips_.push_back({slot, t.key, snap.enhance}); // made once the tile is written
@@ -651,6 +660,7 @@ bool BufferThread::submitNew(const Snapshot& snap) {
         tx.opaque.clear();
         tx.mipsReady.clear();
         tx.coefficients.clear();
+        tx.headers.clear();
         return false;
     }
     tx.signalValue = ++nextValue_;
@@ -964,15 +974,11 @@ void BufferThread::recordReconstruct(Transaction& t) {
     const uint32_t index = uint32_t(&t - txns_.data());
     auto* table = static_cast<uint32_t*>(jpegTables_.mapped) +
                   size_t(index) * kTilesPerTransaction * gpu::JpegReconstruct::kDescriptorWords;
-    const auto* staging = static_cast<const uint8_t*>(staging_.mapped);
     gpu::JpegReconstruct::Sizes sizes;
     for (size_t i = 0; i < t.slots.size(); ++i) {
         if (!t.coefficients[i]) continue;
-        // The record's header, read back from staging (a few words of it).
-        const uint8_t* record = staging + size_t(t.staging[i]) * stagingStride_;
-        JpegCoefficients h;
-        uint32_t validWidth = 0, validHeight = 0;
-        if (!jpegrecord::header(record, h, validWidth, validHeight)) continue; // checked as it was staged (submitNew)
+        const JpegCoefficients& h = t.headers[i].coefficients; // read as the tile was staged (submitNew)
+        const uint32_t validWidth = t.headers[i].validWidth, validHeight = t.headers[i].validHeight;
         const uint64_t slotWord = uint64_t(t.staging[i]) * stagingStride_ / 4;
         const gpu::JpegReconstruct::Placement place{.outputWord = uint32_t(t.slots[i]), .outputPitch = 0,
                                                     .validWidth = validWidth, .validHeight = validHeight};

@@ -40,6 +40,7 @@
 #include "gpu/tile_atlas.h"
 #include "gpu/vk_handle.h"
 #include "gpu/vk_util.h"
+#include "slide/jpeg_coefficients.h"
 
 namespace iris {
 
@@ -79,10 +80,15 @@ public:
 
     // Whether this thread finishes JPEG tiles on the GPU (EngineTuning::JpegDecode::Gpu, where
     // tiles go by queue copies and the mips are made on the device): loaders may then publish
-    // coefficient records. Decided by the first init(), the same after a device loss.
+    // coefficient records. Decided at construction, the same after a device loss.
     bool reconstructsJpeg() const { return jpegOnGpu_; }
 
 private:
+    // A coefficient record's header, read once as its tile is staged (jpegrecord::header).
+    struct RecordHeader {
+        JpegCoefficients coefficients; // without blocks
+        uint32_t validWidth = 0, validHeight = 0;
+    };
     struct Transaction {
         VkCommandBuffer copyCmd = VK_NULL_HANDLE; // transfer queue (only when its family differs); freed with copyPool_
         VkCommandBuffer cmd = VK_NULL_HANDLE;     // compute queue; freed with pool_
@@ -94,6 +100,7 @@ private:
         std::vector<uint8_t> opaque; // per slot: every pixel's alpha is 255 (only with trackOpacity_)
         std::vector<uint8_t> mipsReady; // per slot: its levels 1..8 go with it (else they wait: completeMips)
         std::vector<uint8_t> coefficients; // per slot: its staging holds a coefficient record (reconstructsJpeg)
+        std::vector<RecordHeader> headers; // per slot: that record's header (empty for pixels)
     };
     void run();
     void releaseGpu();
@@ -170,9 +177,9 @@ private:
     // reconstructsJpeg: the pipeline, its per-transaction sample planes (device memory) and tile
     // tables (host-written), one descriptor set a transaction over its parts of them and the
     // staging ring (which the compute family then reads as well as the transfer family).
-    const EngineTuning::JpegDecode jpegDecode_;
-    bool jpegOnGpu_ = false;
-    bool jpegDecided_ = false;
+    const bool jpegOnGpu_;
+    static bool finishesJpeg(EngineTuning::JpegDecode requested, const gpu::Device& device, const gpu::TileAtlas& atlas,
+                             const gpu::MipPipeline& mips);
     std::unique_ptr<gpu::JpegReconstruct> jpeg_;
     vk::Memory jpegPlanesMemory_;
     vk::Buffer jpegPlanes_;

@@ -137,7 +137,7 @@ int read(jpeg_decompress_struct* cinfo, ErrorManager* err, const uint8_t* data, 
     int16_t* dst = blocksFor(sink, total * 64);
     if (!dst) {
         std::snprintf(err->message, sizeof err->message, "no room for %zu blocks", total);
-        return Corrupt;
+        return sink->dst ? Unsupported : Corrupt; // the caller's room is too small; or no memory
     }
     for (int ci = 0; ci < n; ++ci) {
         const JDIMENSION wide = c[ci].width_in_blocks;
@@ -189,12 +189,7 @@ Result write(const uint8_t* data, size_t size, int width, int height, JpegColour
     static_assert(sizeof(int16_t) * 2 == sizeof(uint32_t));
     Expected<JpegCoefficients> c = readJpegCoefficients(data, size, width, height, colour,
                                                         reinterpret_cast<int16_t*>(words + kBlocksWord), size_t(kMaxBlocks) * 64);
-    if (!c) {
-        // Too many blocks for a record is a layout the GPU path does not take, not a corrupt tile.
-        if (c.error().status() == Status::CorruptData && c.error().message().find("no room") != std::string::npos)
-            return Result(Status::UnsupportedFormat, "the tile's coefficients do not fit a tile buffer");
-        return c.error();
-    }
+    if (!c) return c.error(); // too many blocks for a record: UnsupportedFormat, a layout the path does not take
     std::memset(words, 0, size_t(kBlocksWord) * 4);
     words[0] = kMagic;
     words[1] = c->width;

@@ -410,14 +410,18 @@ bool BufferThread::pollCompleted() {
             shared_.setError(vk::check(vr, "vkGetSemaphoreCounterValue"));
         return false;
     }
-    bool any = false;
-    for (Transaction& t : txns_) {
-        if (!t.signalValue || t.signalValue > done) continue;
-        finish(t);
-        any = true;
-    }
-    if (any) shared_.bump(); // the render thread has new tiles to draw
-    return any;
+    // In submission order (the ring's slots are reused out of order): a frame drawn while these
+    // are handed over sees an earlier transaction's tiles — a field's LR tiles, requested
+    // first — before a later one's, never the reverse.
+    Transaction* completed[kMaxTransactions];
+    size_t count = 0;
+    for (Transaction& t : txns_)
+        if (t.signalValue && t.signalValue <= done) completed[count++] = &t;
+    std::sort(completed, completed + count,
+              [](const Transaction* a, const Transaction* b) { return a->signalValue < b->signalValue; });
+    for (size_t i = 0; i < count; ++i) finish(*completed[i]);
+    if (count) shared_.bump(); // the render thread has new tiles to draw
+    return count > 0;
 }
 
 // A transaction's tiles are in the atlas (its upload has completed, or it was written from the

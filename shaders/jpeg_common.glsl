@@ -10,10 +10,13 @@
 //   8 output pitch (words from one row to the next; buffer output)
 //   9, 10 the valid width and height: pixels beyond them repeat the last valid column and
 //     row (a level's edge tile, as the CPU path pads it)
+//   11 the word of its packed blocks' table in the input (their values count from it)
 //   then per component c (at 16 + 8c): blocksWide, blocksHigh, first block (of the tile's),
-//   coefficient word (of its first block, in the input), quantisation word (its 64 values,
+//   table word (its first block's entry, in the input), quantisation word (its 64 values,
 //   in the input), plane word, plane pitch (words), unused.
-// Coefficients: 32 words a block, two int16 a word (the lower half first), natural order.
+// Coefficients, packed (slide/jpeg_coefficients.h, jpegblocks): a table of three words a block
+// (the 64-bit mask of its non-zero coefficients, natural order, lower word first; the word,
+// from the table's start, of its values), then the values, two int16 a word (lower half first).
 // Quantisation tables: 64 words each, natural order. Planes (the scratch buffer): each
 // component's samples after the inverse DCT, one byte a sample, four to a word, rows of
 // blocksWide·8 samples.

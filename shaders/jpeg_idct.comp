@@ -94,16 +94,28 @@ void main() {
     }
     const uint cw = JPEG_COMP_WORD(c);
     const uint local = live ? block - jpegDesc(tile, cw + 2u) : 0u;
-    const uint coefWord = live ? jpegDesc(tile, cw + 3u) + local * 32u : 0u;
     const uint quantWord = live ? jpegDesc(tile, cw + 4u) : 0u;
 
     // Pass 1: column `lane`, dequantised.
     if (live) {
+        // The block's entry in the packed table: which coefficients are non-zero, and where
+        // its values start; coefficient k is value number popcount(mask below k).
+        const uint entry = jpegDesc(tile, cw + 3u) + local * 3u;
+        const uint maskLo = jpegIn.words[entry], maskHi = jpegIn.words[entry + 1u];
+        const uint values = jpegDesc(tile, 11u) + jpegIn.words[entry + 2u];
+        const uint countLo = bitCount(maskLo);
         int v[8];
         bool acZero = true;
         for (uint r = 0u; r < 8u; ++r) {
             const uint k = r * 8u + lane;
-            const int coef = bitfieldExtract(int(jpegIn.words[coefWord + (k >> 1)]), int(k & 1u) * 16, 16);
+            const bool lo = k < 32u;
+            const uint bit = lo ? k : k - 32u;
+            const uint mask = lo ? maskLo : maskHi;
+            int coef = 0;
+            if ((mask & (1u << bit)) != 0u) {
+                const uint index = (lo ? 0u : countLo) + bitCount(mask & ((1u << bit) - 1u));
+                coef = bitfieldExtract(int(jpegIn.words[values + (index >> 1)]), int(index & 1u) * 16, 16);
+            }
             v[r] = coef * int(jpegIn.words[quantWord + k]);
             if (r > 0u && v[r] != 0) acZero = false;
         }

@@ -29,7 +29,9 @@
 #include "gpu/jpeg_reconstruct.h"
 #include "gpu/vk_util.h"
 #include "slide/jpeg_coefficients.h"
+#include "slide/iris_file.h"
 #include "slide/jpeg_frame_decode.h"
+#include "slide/tiff_source.h"
 
 #include <QtTest>
 
@@ -82,8 +84,35 @@ std::vector<uint8_t> testPicture(int w, int h, uint32_t seed) {
     return rgb;
 }
 
+// A picture like stained tissue at low power: smooth gradients and slow waves, whose blocks are
+// mostly zero coefficients.
+std::vector<uint8_t> smoothPicture(int w, int h) {
+    std::vector<uint8_t> rgb(size_t(w) * h * 3);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            for (int c = 0; c < 3; ++c)
+                rgb[(size_t(y) * w + x) * 3 + size_t(c)] =
+                    uint8_t(std::clamp(int(150 + 50 * std::sin(x * 0.05 + c) * std::cos(y * 0.04) + (x + y) / 8), 0, 255));
+    return rgb;
+}
+
+// Uniform noise: every coefficient of every block non-zero at q100.
+std::vector<uint8_t> noisePicture(int w, int h, uint32_t seed) {
+    std::vector<uint8_t> rgb(size_t(w) * h * 3);
+    std::mt19937 rng(seed);
+    for (uint8_t& v : rgb) v = uint8_t(rng());
+    return rgb;
+}
+
+Stream encodePicture(const std::vector<uint8_t>& rgb, int w, int h, int subsamp, int quality, bool progressive = false,
+                     const char* what = "picture");
+
 Stream encode(int w, int h, int subsamp, int quality, bool progressive, uint32_t seed) {
-    const std::vector<uint8_t> rgb = testPicture(w, h, seed);
+    return encodePicture(testPicture(w, h, seed), w, h, subsamp, quality, progressive, "");
+}
+
+Stream encodePicture(const std::vector<uint8_t>& rgb, int w, int h, int subsamp, int quality, bool progressive,
+                     const char* what) {
     tjhandle tj = tjInitCompress();
     unsigned char* out = nullptr;
     unsigned long size = 0;
@@ -95,7 +124,7 @@ Stream encode(int w, int h, int subsamp, int quality, bool progressive, uint32_t
     if (tj) tjDestroy(tj);
     static const char* kNames[] = {"444", "422", "420", "gray", "440", "411"};
     s.name = std::string(kNames[subsamp]) + " q" + std::to_string(quality) + (progressive ? " progressive " : " ") +
-             std::to_string(w) + "x" + std::to_string(h);
+             std::to_string(w) + "x" + std::to_string(h) + (*what ? std::string(" ") + what : std::string());
     s.width = w;
     s.height = h;
     return s;
@@ -380,36 +409,83 @@ private slots:
                 if (n < 0) return;
                 compared += n;
             }
-            qInfo("%s: %d JPEG tiles equal libjpeg-turbo's decode (%zu read)", path.filename().c_str(), compared,
-                  tiles.size());
+            // What packing does to real tiles' blocks (jpegblocks).
+            uint64_t packed = 0, dense = 0;
+            for (const Stream& t : tiles)
+                if (auto c = iris::readJpegCoefficients(t.bytes.data(), t.bytes.size(), t.width, t.height, t.colour)) {
+                    packed += iris::jpegblocks::packedWords(c->blocks.data(), c->blockCount());
+                    dense += uint64_t(c->blockCount()) * 32;
+                }
+            qInfo("%s: %d JPEG tiles equal libjpeg-turbo's decode (%zu read); blocks packed to %.0f%% of their size",
+                  path.filename().c_str(), compared, tiles.size(), dense ? 100.0 * double(packed) / double(dense) : 0.0);
             total += compared;
         }
         QVERIFY2(total > 0, "no slide had a JPEG tile the GPU path takes");
     }
 
-    // The overload that reads into the caller's memory (iris-bench's split floor) gives the same
-    // coefficients, and refuses a room too small for them (UnsupportedFormat, from the header).
+    // The overload that reads into the caller's memory (records, iris-bench's split floor)
+    // packs the same coefficients (jpegblocks: the format unpacked here by its definition), and
+    // refuses a room too small for them: from the frame header when even the table would not
+    // fit, after the entropy decode otherwise (both UnsupportedFormat).
     void intoCallerMemory() {
         const Stream s = encode(256, 256, TJSAMP_420, 90, false, 11);
         auto own = iris::readJpegCoefficients(s.bytes.data(), s.bytes.size(), 256, 256, JpegColour::Auto);
         QVERIFY2(own.ok(), describe(own.error()).c_str());
-        QCOMPARE(own->blockCount(), 1024u + 2 * 256u);
-        std::vector<int16_t> room(size_t(own->blockCount()) * 64, 0x7777);
+        const uint32_t blocks = own->blockCount();
+        QCOMPARE(blocks, 1024u + 2 * 256u);
+        const uint64_t words = iris::jpegblocks::packedWords(own->blocks.data(), blocks);
+        std::vector<uint32_t> room(words, 0x77777777u);
         auto into = iris::readJpegCoefficients(s.bytes.data(), s.bytes.size(), 256, 256, JpegColour::Auto, room.data(),
                                                room.size());
         QVERIFY2(into.ok(), describe(into.error()).c_str());
         QVERIFY(into->blocks.empty());
-        QCOMPARE(into->blockCount(), own->blockCount());
-        QVERIFY(room == own->blocks);
+        QCOMPARE(into->blockCount(), blocks);
+        QCOMPARE(into->packedWords, words);
+        QVERIFY(iris::jpegblocks::valid(room.data(), blocks, words));
+        // Unpacked: the table's mask and word, then the values in natural order.
+        size_t nonZero = 0;
+        for (uint32_t b = 0; b < blocks; ++b) {
+            const uint64_t mask = room[3 * b] | uint64_t(room[3 * b + 1]) << 32;
+            uint32_t index = 0;
+            for (int k = 0; k < 64; ++k) {
+                int16_t v = 0;
+                if (mask >> k & 1) {
+                    const uint32_t word = room[room[3 * b + 2] + index / 2];
+                    v = int16_t(uint16_t(index & 1 ? word >> 16 : word & 0xffff));
+                    QVERIFY(v != 0);
+                    ++index;
+                    ++nonZero;
+                }
+                QCOMPARE(v, own->blocks[size_t(b) * 64 + size_t(k)]);
+            }
+        }
+        // Packed smaller than dense (this picture's noise and checkers are its worst; real tiles
+        // pack to a fraction, as slideTiles reports).
+        QVERIFY2(words < uint64_t(blocks) * 32, QByteArray::number(qulonglong(words)));
+        QVERIFY(nonZero > blocks); // and yet not empty
+        std::vector<uint32_t> packed(words);
+        QCOMPARE(iris::jpegblocks::pack(own->blocks.data(), blocks, packed.data(), packed.size()), words);
+        QVERIFY(packed == room);
+        QCOMPARE(iris::jpegblocks::pack(own->blocks.data(), blocks, packed.data(), packed.size() - 1), uint64_t(0));
+        // A room one word short: refused once the values are known.
         auto small = iris::readJpegCoefficients(s.bytes.data(), s.bytes.size(), 256, 256, JpegColour::Auto, room.data(),
                                                 room.size() - 1);
-        // Refused from the frame header, before the entropy decode: a layout this room does not take.
         QVERIFY(!small && small.error().status() == iris::Status::UnsupportedFormat);
+        // Room for less than the table: refused from the frame header.
+        auto tiny = iris::readJpegCoefficients(s.bytes.data(), s.bytes.size(), 256, 256, JpegColour::Auto, room.data(),
+                                               uint64_t(blocks) * 3 - 1);
+        QVERIFY(!tiny && tiny.error().status() == iris::Status::UnsupportedFormat);
+        QVERIFY2(std::string(tiny.error().message()).find("no room for") != std::string::npos, tiny.error().message().c_str());
+        // A table that points a block's values past the packed words is not valid.
+        room[3 * 5 + 2] = uint32_t(words) + 1;
+        QVERIFY(!iris::jpegblocks::valid(room.data(), blocks, words));
     }
 
     // The RAM cache's coefficient records (jpegrecord, EngineTuning::JpegDecode::Gpu): what the
-    // header says, which layouts fit a tile buffer, and a record reconstructed with a valid part
-    // smaller than the tile equals libjpeg-turbo's decode padded as padTileEdges pads it.
+    // header says; every layout fits a tile buffer when its blocks are mostly zero (4:4:4 and
+    // 4:2:2 as well as 4:2:0 and grey) and none does when they are not (noise at q100); and
+    // records reconstructed with a valid part smaller than the tile equal libjpeg-turbo's
+    // decode padded as padTileEdges pads it.
     void records() {
         namespace rec = iris::jpegrecord;
         std::vector<uint8_t> record(iris::kTileBytes);
@@ -425,20 +501,45 @@ private slots:
         QCOMPARE(h.blockCount(), 1536u);
         QVERIFY(h.hMax == 2 && h.vMax == 2);
         QVERIFY(h.transform == JpegCoefficients::Transform::YCbCr);
-        const Stream grey = encode(256, 256, TJSAMP_GRAY, 90, false, 22);
-        QVERIFY(rec::write(grey.bytes.data(), grey.bytes.size(), 256, 256, JpegColour::Auto, 256, 256, record.data()).ok());
-        for (int subsamp : {int(TJSAMP_422), int(TJSAMP_444)}) {
-            const Stream big = encode(256, 256, subsamp, 90, false, 23);
-            const iris::Result r =
-                rec::write(big.bytes.data(), big.bytes.size(), 256, 256, JpegColour::Auto, 256, 256, record.data());
-            QVERIFY2(r.status() == iris::Status::UnsupportedFormat, big.name.c_str());
+        QCOMPARE(rec::usedBytes(record.data()), size_t(rec::kBlocksWord + h.packedWords) * 4);
+        QVERIFY(rec::usedBytes(record.data()) < iris::kTileBytes / 2);
+        // A record whose table points outside it is not one.
+        {
+            std::vector<uint8_t> broken = record;
+            uint32_t entry = 0;
+            std::memcpy(&entry, &broken[rec::kBlocksWord * 4 + 8], 4);
+            entry = uint32_t(h.packedWords) + 1;
+            std::memcpy(&broken[rec::kBlocksWord * 4 + 8], &entry, 4);
+            QVERIFY(!rec::header(broken.data(), h, vw, vh));
+            QCOMPARE(rec::usedBytes(broken.data()), rec::usedBytes(record.data())); // not checked: a copy's size
         }
         std::vector<uint8_t> notRecord(iris::kTileBytes, 0x43);
         QVERIFY(!rec::header(notRecord.data(), h, vw, vh));
+        QCOMPARE(rec::usedBytes(notRecord.data()), size_t(iris::kTileBytes));
+
+        // Which records fit: exactly those whose packed blocks fit after the header and tables.
+        const auto fits = [](const Stream& st) {
+            auto dense = iris::readJpegCoefficients(st.bytes.data(), st.bytes.size(), st.width, st.height, JpegColour::Auto);
+            return dense && rec::kBlocksWord + iris::jpegblocks::packedWords(dense->blocks.data(), dense->blockCount()) <= rec::kWords;
+        };
+        std::vector<Stream> taken;
+        taken.push_back(s420);
+        for (int subsamp : {int(TJSAMP_422), int(TJSAMP_444), int(TJSAMP_GRAY)}) {
+            const Stream smooth = encodePicture(smoothPicture(256, 256), 256, 256, subsamp, 90, false, "smooth");
+            QVERIFY2(fits(smooth), smooth.name.c_str());
+            taken.push_back(smooth);
+            const Stream busy = encode(256, 256, subsamp, 90, false, 23);
+            const iris::Result r =
+                rec::write(busy.bytes.data(), busy.bytes.size(), 256, 256, JpegColour::Auto, 256, 256, record.data());
+            QVERIFY2(r.ok() == fits(busy), busy.name.c_str());
+            if (!r.ok()) QVERIFY2(r.status() == iris::Status::UnsupportedFormat, busy.name.c_str());
+        }
+        const Stream noise = encodePicture(noisePicture(256, 256, 24), 256, 256, TJSAMP_444, 100, false, "noise");
+        QVERIFY(!fits(noise));
+        const iris::Result r = rec::write(noise.bytes.data(), noise.bytes.size(), 256, 256, JpegColour::Auto, 256, 256, record.data());
+        QVERIFY2(r.status() == iris::Status::UnsupportedFormat, describe(r).c_str());
 
         // The padded reconstruction, through the buffer path with the record's own layout.
-        QVERIFY(rec::write(s420.bytes.data(), s420.bytes.size(), 256, 256, JpegColour::Auto, 200, 100, record.data()).ok());
-        QVERIFY(rec::header(record.data(), h, vw, vh));
         const uint64_t inputWords = iris::gpu::JpegReconstruct::kDescriptorWords + iris::kTileBytes / 4;
         QVERIFY(ensure(input_, inputWords * 4, false) && ensure(output_, uint64_t(iris::kTileBytes), true));
         if (planesBytes_ < 3 * 64 * 256 * 4) {
@@ -447,20 +548,27 @@ private slots:
                                                  VK_BUFFER_USAGE_STORAGE_BUFFER_BIT, planes_, planesMemory_)
                         .ok());
         }
-        auto* words = static_cast<uint32_t*>(input_.mapped);
-        const uint32_t at = iris::gpu::JpegReconstruct::kDescriptorWords;
-        std::memcpy(words + at, record.data(), record.size());
-        iris::gpu::JpegReconstruct::describe(h, {.outputWord = 0, .outputPitch = 256, .validWidth = vw, .validHeight = vh}, 0,
-                                             at + rec::kQuantWord, at + rec::kBlocksWord, 0, words);
-        iris::gpu::JpegReconstruct::Sizes sizes{.tiles = 1, .inputWords = inputWords, .planeWords = 3 * 64 * 256,
-                                                .maxBlocks = h.blockCount(), .maxWidth = 256, .maxHeight = 256};
-        QVERIFY(dispatch(sizes, inputWords, uint64_t(iris::kTileBytes) / 4));
-        std::vector<uint8_t> cpu(iris::kTileBytes);
-        QVERIFY(iris::decodeJpegFrameRgba(s420.bytes.data(), s420.bytes.size(), 256, 256, JpegColour::Auto, cpu.data(), 1024).ok());
-        for (int y = 0; y < 256; ++y)
-            for (int x = 0; x < 256; ++x)
-                std::memcpy(&cpu[(size_t(y) * 256 + x) * 4], &cpu[(size_t(std::min(y, 99)) * 256 + std::min(x, 199)) * 4], 4);
-        QVERIFY(std::memcmp(output_.mapped, cpu.data(), cpu.size()) == 0);
+        for (const Stream& st : taken) {
+            QVERIFY2(rec::write(st.bytes.data(), st.bytes.size(), 256, 256, JpegColour::Auto, 200, 100, record.data()).ok(),
+                     st.name.c_str());
+            QVERIFY(rec::header(record.data(), h, vw, vh));
+            auto* words = static_cast<uint32_t*>(input_.mapped);
+            const uint32_t at = iris::gpu::JpegReconstruct::kDescriptorWords;
+            std::memset(words + at, 0x5a, iris::kTileBytes); // only the bytes in use are copied
+            std::memcpy(words + at, record.data(), rec::usedBytes(record.data()));
+            iris::gpu::JpegReconstruct::describe(h, {.outputWord = 0, .outputPitch = 256, .validWidth = vw, .validHeight = vh},
+                                                 0, at + rec::kQuantWord, at + rec::kBlocksWord, 0, words);
+            iris::gpu::JpegReconstruct::Sizes sizes{.tiles = 1, .inputWords = inputWords, .planeWords = 3 * 64 * 256,
+                                                    .maxBlocks = h.blockCount(), .maxWidth = 256, .maxHeight = 256};
+            QVERIFY(dispatch(sizes, inputWords, uint64_t(iris::kTileBytes) / 4));
+            std::vector<uint8_t> cpu(iris::kTileBytes);
+            QVERIFY(iris::decodeJpegFrameRgba(st.bytes.data(), st.bytes.size(), 256, 256, JpegColour::Auto, cpu.data(), 1024)
+                        .ok());
+            for (int y = 0; y < 256; ++y)
+                for (int x = 0; x < 256; ++x)
+                    std::memcpy(&cpu[(size_t(y) * 256 + x) * 4], &cpu[(size_t(std::min(y, 99)) * 256 + std::min(x, 199)) * 4], 4);
+            QVERIFY2(std::memcmp(output_.mapped, cpu.data(), cpu.size()) == 0, st.name.c_str());
+        }
     }
 
     // Inside the engine (EngineTuning::jpegDecode): two engines on a GPU's path (queue copies,
@@ -490,6 +598,23 @@ private slots:
             QCOMPARE(engines[g]->device().jpegDecode, std::string(g ? "gpu" : "cpu"));
         }
         for (const fs::path& slide : slides) {
+            // The GPU engine's loaders read these slides' base tiles as records (so its frames
+            // below are the GPU's reconstruction, the .iris files' 4:2:2 tiles included), but
+            // for the SVS, whose 240×240 tiles are not the engine's grid (decoded on the CPU).
+            if (slide.extension() != ".svs") {
+                auto source = slide.extension() == ".iris" ? iris::IrisFileSource::open(slide.string())
+                                                           : iris::TiffTileSource::tryOpen(slide.string());
+                QVERIFY2(source, slide.c_str());
+                QVERIFY2((*source)->readsCoefficients(0), slide.c_str());
+                const iris::LevelInfo& base = (*source)->info().levels[0];
+                std::vector<uint8_t> record(iris::kTileBytes);
+                int64_t read = 0, recorded = 0;
+                for (int64_t ty = 0; ty < base.tilesY; ty += std::max<int64_t>(1, base.tilesY / 4))
+                    for (int64_t tx = 0; tx < base.tilesX; tx += std::max<int64_t>(1, base.tilesX / 4), ++read)
+                        recorded += (*source)->readTileCoefficients(0, tx, ty, record.data()).ok();
+                QVERIFY2(read > 0 && recorded == read, (slide.string() + ": " + std::to_string(recorded) + " of " +
+                                                        std::to_string(read) + " tiles read as records").c_str());
+            }
             for (TestEngine& e : engines) QVERIFY2(e->open(slide.string()).ok(), slide.c_str());
             const auto infoOpt = engines[0]->slideInfo();
             QVERIFY(infoOpt.has_value());

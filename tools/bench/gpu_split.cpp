@@ -17,7 +17,8 @@ constexpr uint64_t kTilePixels = 256 * 256;
 // A 256×256 tile's most: three components of 32×32 blocks (4:4:4), 32 words a block; their
 // quantisation tables; their planes (rows of 64 words, 256 rows each).
 constexpr uint64_t kMaxBlocks = 3 * 32 * 32;
-constexpr uint64_t kRoomWords = 3 * 64 + kMaxBlocks * 32;
+// Packed blocks' most: every coefficient non-zero (a table entry and 32 words of values each).
+constexpr uint64_t kRoomWords = 3 * 64 + kMaxBlocks * (iris::jpegblocks::kTableWords + 32);
 constexpr uint64_t kPlaneRoomWords = 3 * 64 * 256;
 constexpr uint64_t kDescriptorWords = JpegReconstruct::kDescriptorWords;
 } // namespace
@@ -145,9 +146,9 @@ bool GpuSplit::entropyDecode(uint32_t index, const TileStream& s, int width, int
     if (index >= m.room || width > 256 || height > 256) return false;
     auto* words = static_cast<uint32_t*>(m.input.mapped);
     const uint64_t at = m.roomWord(index);
-    // Its blocks after room for three quantisation tables; the tables go just before them.
+    // Its packed blocks after room for three quantisation tables; the tables go just before them.
     auto c = iris::readJpegCoefficients(s.data, s.size, width, height, ycbcr ? iris::JpegColour::YCbCr : iris::JpegColour::Rgb,
-                                        reinterpret_cast<int16_t*>(words + at + 3 * 64), kMaxBlocks * 64);
+                                        words + at + 3 * 64, kRoomWords - 3 * 64);
     if (!c) return false;
     const JpegReconstruct::Placement place{.outputWord = uint32_t(uint64_t(index) * kTilePixels), .outputPitch = uint32_t(width)};
     JpegReconstruct::describe(*c, place, index, at, at + 3 * 64, uint64_t(index) * kPlaneRoomWords, words);
@@ -191,7 +192,7 @@ bool GpuSplit::reconstruct(uint32_t count, double& gpuMs, double& computeMs, std
     for (uint32_t i = 0; i < count; ++i) {
         const uint64_t at = m.roomWord(i) * 4;
         // Three tables' room before the blocks, whatever the component count.
-        const uint64_t used = 3 * 64 + JpegReconstruct::coefficientWords(m.headers[i]);
+        const uint64_t used = 3 * 64 + JpegReconstruct::blockWords(m.headers[i]);
         regions.push_back({.srcOffset = at, .dstOffset = at, .size = used * 4});
     }
     vkCmdCopyBuffer(m.cmd, m.input.buffer, m.deviceInput.get(), uint32_t(regions.size()), regions.data());

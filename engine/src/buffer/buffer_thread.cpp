@@ -17,7 +17,7 @@ namespace {
 constexpr uint32_t kStagingTiles = BufferThread::kTilesPerTransaction * BufferThread::kMaxTransactions;
 constexpr size_t kTilePixels = size_t(kTileSize) * kTileSize;
 // One tile's sample planes in the JPEG reconstruction's scratch: three components of 256 rows
-// of 64 words (4:4:4 at most; a record is 4:2:0 or grey, which use less).
+// of 64 words (4:4:4 at most).
 constexpr uint32_t kJpegPlaneWords = 3 * 64 * 256;
 
 // Whether every pixel of the staged RGBA tile (padding included) has alpha 255: the AND of all
@@ -32,14 +32,6 @@ bool allOpaque(const uint8_t* tile) {
     uint8_t bytes[8];
     std::memcpy(bytes, &acc, 8);
     return bytes[3] == 0xFF && bytes[7] == 0xFF;
-}
-// A coefficient record's bytes in use (its header and blocks; the rest of the tile buffer is not
-// read), or the whole buffer when its header is not one.
-size_t jpegRecordBytes(const uint8_t* record) {
-    JpegCoefficients h;
-    uint32_t vw = 0, vh = 0;
-    if (!jpegrecord::header(record, h, vw, vh)) return kTileBytes;
-    return (size_t(jpegrecord::kBlocksWord) + size_t(h.blockCount()) * 32) * 4;
 }
 } // namespace
 
@@ -198,7 +190,7 @@ void BufferThread::prestage(uint64_t key, const uint8_t* pixels, bool coefficien
     uint8_t* dst = static_cast<uint8_t*>(staging_.mapped) + size_t(st) * stagingStride_;
     bool opaque = false;
     if (coefficients) {
-        std::memcpy(dst, pixels, jpegRecordBytes(pixels)); // reconstructed opaque (JPEG has no alpha)
+        std::memcpy(dst, pixels, jpegrecord::usedBytes(pixels)); // reconstructed opaque (JPEG has no alpha)
         opaque = true;
     } else if (trackOpacity_ || atlas_.swapped()) {
         opaque = copyPixels(pixels, dst, kTilePixels, atlas_.swapped());
@@ -415,10 +407,12 @@ bool BufferThread::pollCompleted() {
     // first — before a later one's, never the reverse.
     Transaction* completed[kMaxTransactions];
     size_t count = 0;
-    for (Transaction& t : txns_)
-        if (t.signalValue && t.signalValue <= done) completed[count++] = &t;
-    std::sort(completed, completed + count,
-              [](const Transaction* a, const Transaction* b) { return a->signalValue < b->signalValue; });
+    for (Transaction& t : txns_) {
+        if (!t.signalValue || t.signalValue > done) continue;
+        size_t i = count++; // insertion by signal value (eight at most)
+        for (; i > 0 && completed[i - 1]->signalValue > t.signalValue; --i) completed[i] = completed[i - 1];
+        completed[i] = &t;
+    }
     for (size_t i = 0; i < count; ++i) finish(*completed[i]);
     if (count) shared_.bump(); // the render thread has new tiles to draw
     return count > 0;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstring>
 
+#include "slide/jpeg_coefficients.h"
 #include "slide/slide_source.h"
 #include "view/view_model.h"
 
@@ -93,8 +94,12 @@ void TileCache::abandon(uint64_t key, std::unique_ptr<uint8_t[]> buffer) {
 }
 
 bool TileCache::copyOut(uint64_t key, uint8_t* dst, bool* failed, bool* coefficients) {
-    return readOut(
-        key, [&](const uint8_t* src) { std::memcpy(dst, src, kTileBytes); }, failed, coefficients);
+    bool record = false;
+    const bool found = readOut(
+        key, [&](const uint8_t* src) { std::memcpy(dst, src, record ? jpegrecord::usedBytes(src) : kTileBytes); }, failed,
+        &record);
+    if (coefficients) *coefficients = record;
+    return found;
 }
 
 bool TileCache::readOut(uint64_t key, const std::function<void(const uint8_t*)>& use, bool* failed,

@@ -37,8 +37,9 @@ public:
     void publish(uint64_t key, std::unique_ptr<uint8_t[]> pixels, bool failed, bool coefficients = false);
     // Drops a claim without a result (the tile left the buffer region before it was decoded).
     void abandon(uint64_t key, std::unique_ptr<uint8_t[]> buffer);
-    // Copies a ready tile into dst; false when not ready. `failed` tells a placeholder. The copy
-    // runs without the cache's lock; any number of threads may copy at once.
+    // Copies a ready tile into dst (of a coefficient record, the bytes in use); false when not
+    // ready. `failed` tells a placeholder. The copy runs without the cache's lock; any number
+    // of threads may copy at once.
     // `coefficients` (optional) tells a coefficient record.
     bool copyOut(uint64_t key, uint8_t* dst, bool* failed, bool* coefficients = nullptr);
     // Calls use(pixels) with a ready tile's kTileBytes, which stay as they are during the call;

@@ -1,7 +1,6 @@
 #include "gpu/jpeg_reconstruct.h"
 
 #include <algorithm>
-#include <bit>
 #include <cstring>
 
 #include "gpu/vk_util.h"
@@ -21,6 +20,10 @@ uint64_t planePitch(const JpegCoefficients::Component& c) { return uint64_t(c.bl
 uint64_t componentPlaneWords(const JpegCoefficients::Component& c) { return planePitch(c) * c.blocksHigh * 8; }
 } // namespace
 
+uint64_t JpegReconstruct::blockWords(const JpegCoefficients& t) {
+    return t.blocks.empty() ? t.packedWords : jpegblocks::packedWords(t.blocks.data(), t.blockCount());
+}
+
 uint64_t JpegReconstruct::planeWords(const JpegCoefficients& t) {
     uint64_t words = 0;
     for (uint32_t c = 0; c < t.components; ++c) words += componentPlaneWords(t.comp[c]);
@@ -32,7 +35,7 @@ JpegReconstruct::Sizes JpegReconstruct::measure(std::span<const JpegCoefficients
     s.tiles = uint32_t(tiles.size());
     s.inputWords = uint64_t(tiles.size()) * kDescriptorWords;
     for (const JpegCoefficients* t : tiles) {
-        s.inputWords += quantWords(*t) + coefficientWords(*t);
+        s.inputWords += quantWords(*t) + blockWords(*t);
         s.planeWords += planeWords(*t);
         s.maxBlocks = std::max(s.maxBlocks, t->blockCount());
         s.maxWidth = std::max(s.maxWidth, t->width);
@@ -47,7 +50,7 @@ void JpegReconstruct::writeQuant(const JpegCoefficients& t, uint32_t* dst) {
 }
 
 void JpegReconstruct::describe(const JpegCoefficients& t, const Placement& placement, uint32_t index, uint64_t quantWord,
-                               uint64_t coefficientWord, uint64_t planeWord, uint32_t* table) {
+                               uint64_t blocksWord, uint64_t planeWord, uint32_t* table) {
     uint32_t* d = table + uint64_t(index) * kDescriptorWords;
     std::memset(d, 0, kDescriptorWords * 4);
     d[0] = t.width;
@@ -61,6 +64,7 @@ void JpegReconstruct::describe(const JpegCoefficients& t, const Placement& place
     d[8] = placement.outputPitch;
     d[9] = placement.validWidth ? std::min(placement.validWidth, t.width) : t.width;
     d[10] = placement.validHeight ? std::min(placement.validHeight, t.height) : t.height;
+    d[11] = uint32_t(blocksWord); // the packed blocks' table: their values' words count from it
     uint64_t plane = planeWord;
     for (uint32_t c = 0; c < t.components; ++c) {
         const JpegCoefficients::Component& k = t.comp[c];
@@ -68,7 +72,7 @@ void JpegReconstruct::describe(const JpegCoefficients& t, const Placement& place
         cd[0] = k.blocksWide;
         cd[1] = k.blocksHigh;
         cd[2] = k.firstBlock;
-        cd[3] = uint32_t(coefficientWord + uint64_t(k.firstBlock) * 32);
+        cd[3] = uint32_t(blocksWord + uint64_t(k.firstBlock) * jpegblocks::kTableWords);
         cd[4] = uint32_t(quantWord + uint64_t(c) * 64);
         cd[5] = uint32_t(plane);
         cd[6] = uint32_t(planePitch(k));
@@ -80,16 +84,14 @@ void JpegReconstruct::pack(std::span<const JpegCoefficients* const> tiles, std::
                            uint32_t* dst) {
     uint64_t next = uint64_t(tiles.size()) * kDescriptorWords; // the first word after the descriptors
     uint64_t plane = 0;
-    // The coefficients, two int16 a word: the vector's own bytes on a little-endian host (the
-    // lower half first).
-    static_assert(std::endian::native == std::endian::little);
     for (size_t i = 0; i < tiles.size(); ++i) {
         const JpegCoefficients& t = *tiles[i];
-        const uint64_t coefficients = next + quantWords(t);
-        describe(t, placements[i], uint32_t(i), next, coefficients, plane, dst);
+        const uint64_t blocks = next + quantWords(t);
+        describe(t, placements[i], uint32_t(i), next, blocks, plane, dst);
         writeQuant(t, dst + next);
-        std::memcpy(dst + coefficients, t.blocks.data(), t.blocks.size() * sizeof(int16_t));
-        next = coefficients + coefficientWords(t);
+        const uint64_t words = blockWords(t);
+        jpegblocks::pack(t.blocks.data(), t.blockCount(), dst + blocks, words);
+        next = blocks + words;
         plane += planeWords(t);
     }
 }

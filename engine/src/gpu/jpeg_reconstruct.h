@@ -55,20 +55,22 @@ public:
 
     static Sizes measure(std::span<const JpegCoefficients* const> tiles);
     // Writes measure(tiles).inputWords words to `dst`: the descriptors, then each tile's
-    // tables and blocks.
+    // tables and packed blocks (the tiles' dense blocks, packed here).
     static void pack(std::span<const JpegCoefficients* const> tiles, std::span<const Placement> placements, uint32_t* dst);
 
     // The pieces of pack() for a caller that lays the input out itself (fixed room per tile,
     // filled by several threads at once): words of one tile's quantisation tables, of its
-    // blocks, and of its planes (a 256×256 tile's most: 3·64, 3072·32 and 3·64·256).
+    // packed blocks (slide/jpeg_coefficients.h, jpegblocks; counted from its dense blocks, or
+    // packedWords when they were read packed), and of its planes (a 256×256 tile's most: 3·64
+    // and 3·64·256).
     static uint32_t quantWords(const JpegCoefficients& t) { return t.components * 64; }
-    static uint64_t coefficientWords(const JpegCoefficients& t) { return uint64_t(t.blockCount()) * 32; }
+    static uint64_t blockWords(const JpegCoefficients& t);
     static uint64_t planeWords(const JpegCoefficients& t);
     // Writes tile `index`'s descriptor at table[index · kDescriptorWords], for tables at
-    // quantWord and blocks at coefficientWord in the input (readJpegCoefficients into the
+    // quantWord and packed blocks at blocksWord in the input (readJpegCoefficients into the
     // caller's memory puts them there; writeQuant the tables) and planes from planeWord.
     static void describe(const JpegCoefficients& t, const Placement& placement, uint32_t index, uint64_t quantWord,
-                         uint64_t coefficientWord, uint64_t planeWord, uint32_t* table);
+                         uint64_t blocksWord, uint64_t planeWord, uint32_t* table);
     // Its quantisation tables, 64 words each, at dst.
     static void writeQuant(const JpegCoefficients& t, uint32_t* dst);
 

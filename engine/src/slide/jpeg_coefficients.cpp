@@ -3,6 +3,7 @@
 #include <csetjmp>
 #include <cstdio>
 #include <algorithm>
+#include <bit>
 #include <cstring>
 #include <new>
 #include <string>
@@ -10,6 +11,10 @@
 #include <jpeglib.h>
 
 #include "slide/libjpeg_errors.h"
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 namespace iris {
 
@@ -19,25 +24,65 @@ using ErrorManager = libjpeg::Errors;
 
 enum Outcome { Read = 0, Corrupt = 1, Unsupported = 2 };
 
-// Where the blocks go: the result's vector (dst null), or the caller's memory.
-struct Sink {
-    JpegCoefficients* out;
-    int16_t* dst;
-    size_t capacity;
-};
+// The mask of a block's non-zero coefficients (bit k: natural-order coefficient k).
+inline uint64_t nonZeroMask(const int16_t* c) {
+#if defined(__SSE2__)
+    // Sixteen coefficients at a time: compare with zero, narrow to bytes, take the byte signs.
+    const __m128i zero = _mm_setzero_si128();
+    uint64_t mask = 0;
+    for (int i = 0; i < 4; ++i) {
+        const __m128i a = _mm_cmpeq_epi16(_mm_loadu_si128(reinterpret_cast<const __m128i*>(c + 16 * i)), zero);
+        const __m128i b = _mm_cmpeq_epi16(_mm_loadu_si128(reinterpret_cast<const __m128i*>(c + 16 * i + 8)), zero);
+        const uint32_t zeros = uint32_t(_mm_movemask_epi8(_mm_packs_epi16(a, b)));
+        mask |= uint64_t(~zeros & 0xffffu) << (16 * i);
+    }
+    return mask;
+#else
+    uint64_t mask = 0;
+    for (int k = 0; k < 64; ++k) mask |= uint64_t(c[k] != 0) << k;
+    return mask;
+#endif
+}
 
-int16_t* blocksFor(Sink* sink, size_t values) {
-    if (sink->dst) return values <= sink->capacity ? sink->dst : nullptr;
+// Packs one block (jpegblocks): its table entry at `entry`, its values at `table + cursor`,
+// `cursor` moved past them; false when they do not fit `capacity` words from `table`.
+inline bool packBlock(const int16_t* c, uint32_t* entry, uint32_t* table, uint64_t& cursor, uint64_t capacity) {
+    uint64_t mask = nonZeroMask(c);
+    const uint32_t n = uint32_t(std::popcount(mask));
+    const uint64_t words = (n + 1) / 2;
+    if (cursor + words > capacity) return false;
+    entry[0] = uint32_t(mask);
+    entry[1] = uint32_t(mask >> 32);
+    entry[2] = uint32_t(cursor);
+    uint32_t* out = table + cursor;
+    for (uint32_t i = 0; mask; ++i, mask &= mask - 1) {
+        const uint32_t v = uint16_t(c[std::countr_zero(mask)]);
+        if (i & 1) out[i >> 1] |= v << 16;
+        else out[i >> 1] = v;
+    }
+    cursor += words;
+    return true;
+}
+
+// The result's vector sized for `values` coefficients, or null when there is no memory for it.
+int16_t* denseBlocks(JpegCoefficients* out, size_t values) {
     try {
-        sink->out->blocks.resize(values);
+        out->blocks.resize(values);
     } catch (const std::bad_alloc&) {
         return nullptr;
     }
-    return sink->out->blocks.data();
+    return out->blocks.data();
 }
 
+// Where the blocks go: the result's vector (dst null), or packed into the caller's memory.
+struct Sink {
+    JpegCoefficients* out;
+    uint32_t* dst;
+    uint64_t capacity; // words
+};
+
 // The part between setjmp and the end: no C++ object with a destructor lives in this frame
-// (longjmp would skip it). The blocks' vector is the caller's; blocksFor sizes it and turns a
+// (longjmp would skip it). The blocks' vector is the caller's; denseBlocks sizes it and turns a
 // failed allocation into a null pointer, so no exception crosses the jump either.
 int read(jpeg_decompress_struct* cinfo, ErrorManager* err, const uint8_t* data, size_t size, int width, int height,
          JpegColour colour, Sink* sink) {
@@ -98,21 +143,22 @@ int read(jpeg_decompress_struct* cinfo, ErrorManager* err, const uint8_t* data, 
     }
     if (sink->dst) {
         // Blocks a component has (libjpeg's width_in_blocks × height_in_blocks, from the frame
-        // header): a stream whose blocks will not fit the caller's room is refused before the
-        // entropy decode, so that the caller's fallback does not pay for two decodes.
+        // header): a stream whose blocks' table alone will not fit the caller's room is
+        // refused before the entropy decode, so that the caller's fallback does not pay for
+        // two decodes.
         int hMax = 1, vMax = 1;
         for (int ci = 0; ci < n; ++ci) {
             hMax = std::max(hMax, c[ci].h_samp_factor);
             vMax = std::max(vMax, c[ci].v_samp_factor);
         }
-        size_t predicted = 0;
+        uint64_t predicted = 0;
         for (int ci = 0; ci < n; ++ci) {
-            const size_t wide = (size_t(cinfo->image_width) * c[ci].h_samp_factor + size_t(hMax) * 8 - 1) / (size_t(hMax) * 8);
-            const size_t high = (size_t(cinfo->image_height) * c[ci].v_samp_factor + size_t(vMax) * 8 - 1) / (size_t(vMax) * 8);
+            const uint64_t wide = (uint64_t(cinfo->image_width) * c[ci].h_samp_factor + uint64_t(hMax) * 8 - 1) / (uint64_t(hMax) * 8);
+            const uint64_t high = (uint64_t(cinfo->image_height) * c[ci].v_samp_factor + uint64_t(vMax) * 8 - 1) / (uint64_t(vMax) * 8);
             predicted += wide * high;
         }
-        if (predicted * 64 > sink->capacity) {
-            std::snprintf(err->message, sizeof err->message, "no room for %zu blocks", predicted);
+        if (predicted * jpegblocks::kTableWords > sink->capacity) {
+            std::snprintf(err->message, sizeof err->message, "no room for %llu blocks", static_cast<unsigned long long>(predicted));
             return Unsupported;
         }
     }
@@ -134,19 +180,44 @@ int read(jpeg_decompress_struct* cinfo, ErrorManager* err, const uint8_t* data, 
         return Corrupt;
     }
     out->blocksTotal = uint32_t(total);
-    int16_t* dst = blocksFor(sink, total * 64);
-    if (!dst) {
-        std::snprintf(err->message, sizeof err->message, "no room for %zu blocks", total);
-        return sink->dst ? Unsupported : Corrupt; // the caller's room is too small; or no memory
-    }
-    for (int ci = 0; ci < n; ++ci) {
-        const JDIMENSION wide = c[ci].width_in_blocks;
-        for (JDIMENSION row = 0; row < c[ci].height_in_blocks; ++row) {
-            JBLOCKARRAY line = (*cinfo->mem->access_virt_barray)(reinterpret_cast<j_common_ptr>(cinfo), arrays[ci],
-                                                                 row, 1, FALSE);
-            static_assert(sizeof(JCOEF) == sizeof(int16_t));
-            std::memcpy(dst, line[0], size_t(wide) * sizeof(JBLOCK));
-            dst += size_t(wide) * 64;
+    if (sink->dst) {
+        // Packed straight from libjpeg's rows: the table first, each block's values after it.
+        uint64_t cursor = total * jpegblocks::kTableWords;
+        if (cursor > sink->capacity || sink->capacity > 0xffffffffu) {
+            std::snprintf(err->message, sizeof err->message, "no room for %zu blocks", total);
+            return Unsupported;
+        }
+        uint32_t* entry = sink->dst;
+        for (int ci = 0; ci < n; ++ci) {
+            for (JDIMENSION row = 0; row < c[ci].height_in_blocks; ++row) {
+                JBLOCKARRAY line = (*cinfo->mem->access_virt_barray)(reinterpret_cast<j_common_ptr>(cinfo), arrays[ci],
+                                                                     row, 1, FALSE);
+                static_assert(sizeof(JCOEF) == sizeof(int16_t));
+                for (JDIMENSION bx = 0; bx < c[ci].width_in_blocks; ++bx, entry += jpegblocks::kTableWords) {
+                    if (!packBlock(line[0][bx], entry, sink->dst, cursor, sink->capacity)) {
+                        std::snprintf(err->message, sizeof err->message,
+                                      "coefficients beyond the room's %llu words (too few of them zero)",
+                                      static_cast<unsigned long long>(sink->capacity));
+                        return Unsupported;
+                    }
+                }
+            }
+        }
+        out->packedWords = cursor;
+    } else {
+        int16_t* dst = denseBlocks(out, total * 64);
+        if (!dst) {
+            std::snprintf(err->message, sizeof err->message, "no memory for %zu blocks", total);
+            return Corrupt;
+        }
+        for (int ci = 0; ci < n; ++ci) {
+            const JDIMENSION wide = c[ci].width_in_blocks;
+            for (JDIMENSION row = 0; row < c[ci].height_in_blocks; ++row) {
+                JBLOCKARRAY line = (*cinfo->mem->access_virt_barray)(reinterpret_cast<j_common_ptr>(cinfo), arrays[ci],
+                                                                     row, 1, FALSE);
+                std::memcpy(dst, line[0], size_t(wide) * sizeof(JBLOCK));
+                dst += size_t(wide) * 64;
+            }
         }
     }
     jpeg_finish_decompress(cinfo);
@@ -161,7 +232,7 @@ Expected<JpegCoefficients> readJpegCoefficients(const uint8_t* data, size_t size
 }
 
 Expected<JpegCoefficients> readJpegCoefficients(const uint8_t* data, size_t size, int width, int height,
-                                                JpegColour colour, int16_t* dst, size_t capacity) {
+                                                JpegColour colour, uint32_t* dst, uint64_t capacity) {
     if (!data || size == 0) return Result(Status::CorruptData, "the JPEG stream is empty");
     if (size > 0xffffffffu) return Result(Status::CorruptData, "the JPEG stream is too large");
     if (width <= 0 || height <= 0) return Result(Status::InvalidArgument, "bad size for the JPEG read");
@@ -181,15 +252,43 @@ Expected<JpegCoefficients> readJpegCoefficients(const uint8_t* data, size_t size
     return out;
 }
 
+namespace jpegblocks {
+
+uint64_t packedWords(const int16_t* blocks, uint32_t count) {
+    uint64_t words = uint64_t(count) * kTableWords;
+    for (uint32_t b = 0; b < count; ++b) words += (uint32_t(std::popcount(nonZeroMask(blocks + size_t(b) * 64))) + 1) / 2;
+    return words;
+}
+
+uint64_t pack(const int16_t* blocks, uint32_t count, uint32_t* dst, uint64_t capacity) {
+    uint64_t cursor = uint64_t(count) * kTableWords;
+    if (cursor > capacity || capacity > 0xffffffffu) return 0;
+    for (uint32_t b = 0; b < count; ++b)
+        if (!packBlock(blocks + size_t(b) * 64, dst + size_t(b) * kTableWords, dst, cursor, capacity)) return 0;
+    return cursor;
+}
+
+bool valid(const uint32_t* packed, uint32_t count, uint64_t words) {
+    const uint64_t first = uint64_t(count) * kTableWords;
+    if (first > words) return false;
+    for (uint32_t b = 0; b < count; ++b) {
+        const uint32_t* e = packed + size_t(b) * kTableWords;
+        const uint64_t n = uint64_t(std::popcount(e[0])) + uint64_t(std::popcount(e[1]));
+        if (e[2] < first || e[2] + (n + 1) / 2 > words) return false;
+    }
+    return true;
+}
+
+} // namespace jpegblocks
+
 namespace jpegrecord {
 
 Result write(const uint8_t* data, size_t size, int width, int height, JpegColour colour, int validWidth, int validHeight,
              uint8_t* record) {
     auto* words = reinterpret_cast<uint32_t*>(record);
-    static_assert(sizeof(int16_t) * 2 == sizeof(uint32_t));
-    Expected<JpegCoefficients> c = readJpegCoefficients(data, size, width, height, colour,
-                                                        reinterpret_cast<int16_t*>(words + kBlocksWord), size_t(kMaxBlocks) * 64);
-    if (!c) return c.error(); // too many blocks for a record: UnsupportedFormat, a layout the path does not take
+    Expected<JpegCoefficients> c =
+        readJpegCoefficients(data, size, width, height, colour, words + kBlocksWord, uint64_t(kWords - kBlocksWord));
+    if (!c) return c.error(); // too many coefficients for a record: UnsupportedFormat, a layout the path does not take
     std::memset(words, 0, size_t(kBlocksWord) * 4);
     words[0] = kMagic;
     words[1] = c->width;
@@ -207,6 +306,7 @@ Result write(const uint8_t* data, size_t size, int width, int height, JpegColour
         words[12 + 3 * i] = c->comp[i].firstBlock;
         for (int q = 0; q < 64; ++q) words[kQuantWord + 64 * i + q] = c->comp[i].quant[q];
     }
+    words[kUsedWord] = uint32_t(kBlocksWord + c->packedWords);
     return {};
 }
 
@@ -214,7 +314,7 @@ bool header(const uint8_t* record, JpegCoefficients& out, uint32_t& validWidth, 
     uint32_t w[kHeaderWords];
     std::memcpy(w, record, sizeof w);
     if (w[0] != kMagic || w[1] == 0 || w[2] == 0 || w[1] > uint32_t(kTileSize) || w[2] > uint32_t(kTileSize) || (w[8] != 1 && w[8] != 3) ||
-        w[9] > kMaxBlocks || w[5] > 2)
+        w[9] > 3 * 32 * 32 || w[5] > 2 || w[kUsedWord] > kWords || w[kUsedWord] < kBlocksWord + uint64_t(w[9]) * jpegblocks::kTableWords)
         return false;
     out = JpegCoefficients{};
     out.width = w[1];
@@ -242,7 +342,9 @@ bool header(const uint8_t* record, JpegCoefficients& out, uint32_t& validWidth, 
             return false;
         next += c.blocksWide * c.blocksHigh;
     }
-    return next == out.blocksTotal;
+    if (next != out.blocksTotal) return false;
+    out.packedWords = w[kUsedWord] - kBlocksWord;
+    return jpegblocks::valid(reinterpret_cast<const uint32_t*>(record) + kBlocksWord, out.blocksTotal, out.packedWords);
 }
 
 } // namespace jpegrecord

@@ -11,6 +11,8 @@
 //   9, 10 the valid width and height: pixels beyond them repeat the last valid column and
 //     row (a level's edge tile, as the CPU path pads it)
 //   11 the word of its packed blocks' table in the input (their values count from it)
+//   12 the word after its packed blocks: a value's word is clamped below it, so a table that
+//     points elsewhere (never written so; not checked per tile) reads nothing outside them
 //   then per component c (at 16 + 8c): blocksWide, blocksHigh, first block (of the tile's),
 //   table word (its first block's entry, in the input), quantisation word (its 64 values,
 //   in the input), plane word, plane pitch (words), unused.

@@ -103,6 +103,7 @@ void main() {
         const uint entry = jpegDesc(tile, cw + 3u) + local * 3u;
         const uint maskLo = jpegIn.words[entry], maskHi = jpegIn.words[entry + 1u];
         const uint values = jpegDesc(tile, 11u) + jpegIn.words[entry + 2u];
+        const uint last = jpegDesc(tile, 12u) - 1u;
         const uint countLo = bitCount(maskLo);
         int v[8];
         bool acZero = true;
@@ -114,7 +115,7 @@ void main() {
             int coef = 0;
             if ((mask & (1u << bit)) != 0u) {
                 const uint index = (lo ? 0u : countLo) + bitCount(mask & ((1u << bit) - 1u));
-                coef = bitfieldExtract(int(jpegIn.words[values + (index >> 1)]), int(index & 1u) * 16, 16);
+                coef = bitfieldExtract(int(jpegIn.words[min(values + (index >> 1), last)]), int(index & 1u) * 16, 16);
             }
             v[r] = coef * int(jpegIn.words[quantWord + k]);
             if (r > 0u && v[r] != 0) acZero = false;

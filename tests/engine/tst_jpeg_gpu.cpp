@@ -503,15 +503,21 @@ private slots:
         QVERIFY(h.transform == JpegCoefficients::Transform::YCbCr);
         QCOMPARE(rec::usedBytes(record.data()), size_t(rec::kBlocksWord + h.packedWords) * 4);
         QVERIFY(rec::usedBytes(record.data()) < iris::kTileBytes / 2);
-        // A record whose table points outside it is not one.
+        const auto table = [](const std::vector<uint8_t>& r) { return reinterpret_cast<const uint32_t*>(r.data()) + rec::kBlocksWord; };
+        QVERIFY(iris::jpegblocks::valid(table(record), h.blockCount(), h.packedWords));
+        // A table that points a block's values outside the record: not valid, though its header
+        // reads (the buffer thread does not walk tables; the shader clamps what it reads).
         {
             std::vector<uint8_t> broken = record;
-            uint32_t entry = 0;
-            std::memcpy(&entry, &broken[rec::kBlocksWord * 4 + 8], 4);
-            entry = uint32_t(h.packedWords) + 1;
-            std::memcpy(&broken[rec::kBlocksWord * 4 + 8], &entry, 4);
+            const uint32_t outside = uint32_t(h.packedWords) + 1;
+            std::memcpy(&broken[rec::kBlocksWord * 4 + 8], &outside, 4);
+            QVERIFY(rec::header(broken.data(), h, vw, vh));
+            QVERIFY(!iris::jpegblocks::valid(table(broken), h.blockCount(), h.packedWords));
+            QCOMPARE(rec::usedBytes(broken.data()), rec::usedBytes(record.data()));
+            // Used words fewer than the table: not a record.
+            const uint32_t tooFew = rec::kBlocksWord + 3 * h.blockCount() - 1;
+            std::memcpy(&broken[rec::kUsedWord * 4], &tooFew, 4);
             QVERIFY(!rec::header(broken.data(), h, vw, vh));
-            QCOMPARE(rec::usedBytes(broken.data()), rec::usedBytes(record.data())); // not checked: a copy's size
         }
         std::vector<uint8_t> notRecord(iris::kTileBytes, 0x43);
         QVERIFY(!rec::header(notRecord.data(), h, vw, vh));

@@ -6,7 +6,8 @@
 //   ife::slideInfo()            what IrisFileSource::open() builds: levels, properties
 //                               (attributes), associated image names, the ICC profile;
 //   ife::readTileCoefficients() the same tile as a coefficient record (the GPU's share of the
-//                               decode): a header the buffer thread takes, or an error
+//                               decode): a header the buffer thread takes and packed blocks
+//                               whose values lie within it, or an error
 //   ife::readTile()             IrisFileSource::readTile(): tileStream + JPEG decode into a
 //                               256×256 RGBA buffer + edge padding, for a bounded number of
 //                               tiles, and requests outside the grid;
@@ -181,6 +182,7 @@ void readTiles(const uint8_t* data, const ife::Layout& L, const SlideInfo& info)
                     JpegCoefficients h;
                     uint32_t vw = 0, vh = 0;
                     PROMISE(jpegrecord::header(tile, h, vw, vh));
+                    PROMISE(jpegblocks::valid(reinterpret_cast<const uint32_t*>(tile) + jpegrecord::kBlocksWord, h.blockCount(), h.packedWords));
                     PROMISE(int64_t(vw) == std::min<int64_t>(kTileSize, li.width - tx * kTileSize));
                     PROMISE(int64_t(vh) == std::min<int64_t>(kTileSize, li.height - ty * kTileSize));
                 }

@@ -24,8 +24,9 @@
 //   * an associated image is w × h RGBA of positive size, or an error naming the file;
 //   * a level that offers coefficient records (the GPU's share of the decode) gives, for its
 //     first and last tiles, a record whose header the buffer thread takes (jpegrecord::header:
-//     sizes within a tile, components' blocks adding up, the valid part the level's), or an
-//     error; nothing is written past the tile buffer.
+//     sizes within a tile, components' blocks adding up, the valid part the level's) and whose
+//     packed blocks' values all lie within it (jpegblocks::valid), or an error; nothing is
+//     written past the tile buffer.
 #include <algorithm>
 #include <cstdint>
 #include <cstring>
@@ -73,6 +74,7 @@ void readRecords(SlideSource& src) {
             JpegCoefficients h;
             uint32_t vw = 0, vh = 0;
             PROMISE(jpegrecord::header(buf.data(), h, vw, vh));
+            PROMISE(jpegblocks::valid(reinterpret_cast<const uint32_t*>(buf.data()) + jpegrecord::kBlocksWord, h.blockCount(), h.packedWords));
             PROMISE(int64_t(vw) == std::min<int64_t>(kTileSize, li.width - tx * kTileSize));
             PROMISE(int64_t(vh) == std::min<int64_t>(kTileSize, li.height - ty * kTileSize));
         }

@@ -65,6 +65,7 @@ void JpegReconstruct::describe(const JpegCoefficients& t, const Placement& place
     d[9] = placement.validWidth ? std::min(placement.validWidth, t.width) : t.width;
     d[10] = placement.validHeight ? std::min(placement.validHeight, t.height) : t.height;
     d[11] = uint32_t(blocksWord); // the packed blocks' table: their values' words count from it
+    d[12] = uint32_t(blocksWord + blockWords(t)); // the word after them: no value is read from there on
     uint64_t plane = planeWord;
     for (uint32_t c = 0; c < t.components; ++c) {
         const JpegCoefficients::Component& k = t.comp[c];

@@ -344,7 +344,7 @@ bool header(const uint8_t* record, JpegCoefficients& out, uint32_t& validWidth, 
     }
     if (next != out.blocksTotal) return false;
     out.packedWords = w[kUsedWord] - kBlocksWord;
-    return jpegblocks::valid(reinterpret_cast<const uint32_t*>(record) + kBlocksWord, out.blocksTotal, out.packedWords);
+    return true;
 }
 
 } // namespace jpegrecord

@@ -68,7 +68,7 @@ uint64_t packedWords(const int16_t* blocks, uint32_t count);
 // when they do not fit.
 uint64_t pack(const int16_t* blocks, uint32_t count, uint32_t* dst, uint64_t capacity);
 // Whether `words` words at `packed` hold `count` packed blocks whose values all lie within them
-// (what the shader indexes by; a record's check).
+// (what jpegrecord::write and readJpegCoefficients write; the tests and fuzzers check it).
 bool valid(const uint32_t* packed, uint32_t count, uint64_t words);
 } // namespace jpegblocks
 
@@ -109,8 +109,9 @@ inline constexpr uint32_t kWords = uint32_t(kTileBytes) / 4;
 Result write(const uint8_t* data, size_t size, int width, int height, JpegColour colour, int validWidth, int validHeight,
              uint8_t* record);
 // The header of a record (no blocks: JpegCoefficients::blocks stays empty; packedWords is
-// set); false when `record` holds none: its magic or sizes are wrong, or its packed blocks
-// index outside the record.
+// set); false when `record` holds none: its magic or sizes are wrong. The blocks' table is not
+// walked (the buffer thread reads a header a tile; jpegblocks::valid does that): whatever it
+// says, the shader reads no word outside the record's packed blocks.
 bool header(const uint8_t* record, JpegCoefficients& out, uint32_t& validWidth, uint32_t& validHeight);
 // The bytes of a record in use (its header, tables and packed blocks: what a copy of it needs),
 // read from its header without checking it; kTileBytes when that is not a record's. (Inline:

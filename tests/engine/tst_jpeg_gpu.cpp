@@ -15,12 +15,15 @@
 //   slideTiles     every JPEG tile (up to 200 a level) of the test slides (Aperio SVS, YCbCr
 //                  and RGB JPEG, generic TIFF) and of the built-in sample slide, read raw with
 //                  the directory's JPEGTables as the TIFF reader reads them, in batches of 32;
-//   intoCallerMemory  the coefficients read into the caller's memory equal those read into
-//                  the result's own vector;
-//   records        the RAM cache's coefficient records: their header, the layouts that fit a
-//                  tile buffer, and an edge tile's padding (the valid part's last column and row);
+//   intoCallerMemory  the coefficients read packed into the caller's memory (jpegblocks),
+//                  unpacked by the format's definition, equal those read into the result's
+//                  own vector; rooms too small are refused;
+//   records        the RAM cache's coefficient records: their header, which tiles fit a tile
+//                  buffer (every layout when mostly zero; noise does not), and 4:2:0, 4:2:2,
+//                  4:4:4 and grey records reconstructed with an edge tile's padding;
 //   engineFrames   inside the engine: settled frames with JPEG tiles finished on the GPU equal
-//                  those decoded on the CPU, from a TIFF, an SVS and .iris files;
+//                  those decoded on the CPU, from a TIFF, an SVS and .iris files (whose tiles
+//                  are checked to be read as records);
 //   refused        layouts the path does not take (4:1:1, 4:4:0) say UnsupportedFormat; a
 //                  truncated stream, garbage and a stream of other dimensions say CorruptData.
 // The Vulkan validation layer is on (where installed) and must stay silent.

@@ -89,12 +89,12 @@ struct EngineTuning {
     enum class TileUpload { Auto, Queue, Host };
     TileUpload tileUpload = TileUpload::Auto;
     // Where a JPEG tile's decode ends (issue 20). Cpu: the loaders decode whole tiles. Gpu: for
-    // levels of 256×256 JPEG tiles of the direct TIFF reader (Aperio SVS, generic TIFF), the
-    // loaders only entropy-decode each tile, the RAM cache keeps its coefficients, and the
-    // buffer thread's compute pass finishes it into the atlas (dequantisation, inverse DCT,
-    // upsampling, colour conversion: libjpeg-turbo's bytes, docs/ARCHITECTURE.md); tiles whose
-    // coefficients do not fit a tile buffer (4:2:2, 4:4:4) and all other sources decode as with
-    // Cpu. Gpu needs tiles uploaded by queue copies and mips made on the device (else Cpu, with
+    // levels of 256×256 JPEG tiles of the direct TIFF reader (Aperio SVS, generic TIFF) and of
+    // .iris files, the loaders only entropy-decode each tile, the RAM cache keeps its
+    // coefficients (packed), and the buffer thread's compute pass finishes it into the atlas
+    // (dequantisation, inverse DCT, upsampling, colour conversion: libjpeg-turbo's bytes,
+    // docs/ARCHITECTURE.md); tiles whose coefficients do not fit a tile buffer even packed
+    // (near-lossless streams, noise) and all other sources decode as with Cpu. Gpu needs tiles uploaded by queue copies and mips made on the device (else Cpu, with
     // a log line). Auto: Gpu on GPUs where it can, Cpu on CPU devices (docs/BENCHMARKS.md,
     // "The GPU's share of the decode in the engine").
     enum class JpegDecode { Auto, Cpu, Gpu };

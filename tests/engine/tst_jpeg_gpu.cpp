@@ -578,6 +578,38 @@ private slots:
                     std::memcpy(&cpu[(size_t(y) * 256 + x) * 4], &cpu[(size_t(std::min(y, 99)) * 256 + std::min(x, 199)) * 4], 4);
             QVERIFY2(std::memcmp(output_.mapped, cpu.data(), cpu.size()) == 0, st.name.c_str());
         }
+
+        // A table that points blocks' values outside the record: its header still reads (the
+        // buffer thread does not walk tables), and the shader reads nothing past the record's
+        // packed blocks. The words after them are filled with two different patterns; the two
+        // reconstructions must be equal (a shader reading the pattern would make them differ).
+        {
+            QVERIFY(rec::write(s420.bytes.data(), s420.bytes.size(), 256, 256, JpegColour::Auto, 256, 256, record.data()).ok());
+            QVERIFY(rec::header(record.data(), h, vw, vh));
+            const size_t used = rec::usedBytes(record.data());
+            std::vector<uint8_t> broken = record;
+            for (const uint32_t b : {0u, 700u, h.blockCount() - 1}) {
+                const uint32_t outside = uint32_t(h.packedWords) + 64 + b;
+                std::memcpy(&broken[(rec::kBlocksWord + 3 * size_t(b) + 2) * 4], &outside, 4);
+            }
+            QVERIFY(rec::header(broken.data(), h, vw, vh));
+            QVERIFY(!iris::jpegblocks::valid(table(broken), h.blockCount(), h.packedWords));
+            std::vector<uint8_t> outputs[2];
+            for (int pass = 0; pass < 2; ++pass) {
+                auto* words = static_cast<uint32_t*>(input_.mapped);
+                const uint32_t at = iris::gpu::JpegReconstruct::kDescriptorWords;
+                std::memset(words + at, pass ? 0x7f : 0x01, iris::kTileBytes);
+                std::memcpy(words + at, broken.data(), used);
+                iris::gpu::JpegReconstruct::describe(h, {.outputWord = 0, .outputPitch = 256}, 0, at + rec::kQuantWord,
+                                                     at + rec::kBlocksWord, 0, words);
+                iris::gpu::JpegReconstruct::Sizes sizes{.tiles = 1, .inputWords = inputWords, .planeWords = 3 * 64 * 256,
+                                                        .maxBlocks = h.blockCount(), .maxWidth = 256, .maxHeight = 256};
+                QVERIFY(dispatch(sizes, inputWords, uint64_t(iris::kTileBytes) / 4));
+                const auto* out = static_cast<const uint8_t*>(output_.mapped);
+                outputs[pass].assign(out, out + iris::kTileBytes);
+            }
+            QVERIFY2(outputs[0] == outputs[1], "the shader read past the record's packed blocks");
+        }
     }
 
     // Inside the engine (EngineTuning::jpegDecode): two engines on a GPU's path (queue copies,

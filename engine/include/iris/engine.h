@@ -94,9 +94,10 @@ struct EngineTuning {
     // coefficients (packed), and the buffer thread's compute pass finishes it into the atlas
     // (dequantisation, inverse DCT, upsampling, colour conversion: libjpeg-turbo's bytes,
     // docs/ARCHITECTURE.md); tiles whose coefficients do not fit a tile buffer even packed
-    // (near-lossless streams, noise) and all other sources decode as with Cpu. Gpu needs tiles uploaded by queue copies and mips made on the device (else Cpu, with
-    // a log line). Auto: Gpu on GPUs where it can, Cpu on CPU devices (docs/BENCHMARKS.md,
-    // "The GPU's share of the decode in the engine").
+    // (near-lossless streams, noise) and all other sources decode as with Cpu. Gpu needs tiles
+    // uploaded by queue copies and mips made on the device (else Cpu, with a log line). Auto:
+    // Gpu on GPUs where it can, Cpu on CPU devices (docs/BENCHMARKS.md, "The GPU's share of the
+    // decode in the engine").
     enum class JpegDecode { Auto, Cpu, Gpu };
     JpegDecode jpegDecode = JpegDecode::Auto;
     // Fault injection for tests: a device allocation of the tile atlas larger than this many

@@ -467,7 +467,6 @@ void BufferThread::finish(Transaction& t) {
     t.staging.clear();
     t.opaque.clear();
     t.mipsReady.clear();
-    t.coefficients.clear();
     t.headers.clear();
     t.signalValue = 0;
 }
@@ -528,7 +527,6 @@ bool BufferThread::submitNew(const Snapshot& snap) {
                 tx.opaque.push_back(trackOpacity_ && allOpaque(base + size_t(st) * stagingStride_));
                 if (hostMips_) makeHostMips(base + size_t(st) * stagingStride_, snap.enhance);
                 tx.mipsReady.push_back(true);
-                tx.coefficients.push_back(false);
                 tx.headers.emplace_back();
                 tx.slots.push_back(slot);
                 tx.staging.push_back(st);
@@ -568,8 +566,7 @@ bool BufferThread::submitNew(const Snapshot& snap) {
             }
             tx.opaque.push_back(trackOpacity_ && opaque);
             tx.mipsReady.push_back(false);
-            tx.coefficients.push_back(false); // no records where the atlas is host-written
-            tx.headers.emplace_back();
+            tx.headers.emplace_back(); // no records where the atlas is host-written
             pendingMips_.push_back({slot, t.key, snap.enhance});
             shared_.tileStages.stamp(TileStage::Staged);
             tx.slots.push_back(slot);
@@ -621,7 +618,6 @@ bool BufferThread::submitNew(const Snapshot& snap) {
                 continue;
             }
         }
-        tx.coefficients.push_back(coefficients);
         tx.headers.push_back(std::move(header));
         if (hostMips_ && !defer) makeHostMips(base + size_t(st) * stagingStride_, snap.enhance);
         tx.mipsReady.push_back(!defer);
@@ -657,7 +653,6 @@ bool BufferThread::submitNew(const Snapshot& snap) {
         tx.staging.clear();
         tx.opaque.clear();
         tx.mipsReady.clear();
-        tx.coefficients.clear();
         tx.headers.clear();
         return false;
     }
@@ -856,7 +851,7 @@ Result BufferThread::record(Transaction& t) {
     // Tiles copied from staging (pixels), and tiles whose coefficient records the GPU finishes
     // (reconstructsJpeg: their base level is written by the compute pass, not copied).
     std::vector<int> copied, rebuilt;
-    for (uint32_t i = 0; i < n; ++i) (t.coefficients[i] ? rebuilt : copied).push_back(t.slots[i]);
+    for (uint32_t i = 0; i < n; ++i) (t.headers[i].isRecord() ? rebuilt : copied).push_back(t.slots[i]);
     const uint32_t nc = uint32_t(copied.size());
 
     // The base level of each copied tile; under the host schedule also its 8 levels, packed after it.
@@ -864,7 +859,7 @@ Result BufferThread::record(Transaction& t) {
     std::vector<VkBufferImageCopy> copies;
     copies.reserve(size_t(nc) * levels);
     for (uint32_t i = 0; i < n; ++i) {
-        if (t.coefficients[i]) continue;
+        if (t.headers[i].isRecord()) continue;
         for (uint32_t m = 0; m < levels; ++m) {
             const uint32_t side = uint32_t(kTileSize) >> m;
             copies.push_back(VkBufferImageCopy{
@@ -974,7 +969,7 @@ void BufferThread::recordReconstruct(Transaction& t) {
                   size_t(index) * kTilesPerTransaction * gpu::JpegReconstruct::kDescriptorWords;
     gpu::JpegReconstruct::Sizes sizes;
     for (size_t i = 0; i < t.slots.size(); ++i) {
-        if (!t.coefficients[i]) continue;
+        if (!t.headers[i].isRecord()) continue;
         const JpegCoefficients& h = t.headers[i].coefficients; // read as the tile was staged (submitNew)
         const uint32_t validWidth = t.headers[i].validWidth, validHeight = t.headers[i].validHeight;
         const uint64_t slotWord = uint64_t(t.staging[i]) * stagingStride_ / 4;

@@ -84,10 +84,12 @@ public:
     bool reconstructsJpeg() const { return jpegOnGpu_; }
 
 private:
-    // A coefficient record's header, read once as its tile is staged (jpegrecord::header).
+    // A coefficient record's header, read once as its tile is staged (jpegrecord::header); a
+    // default one (no components) stands for a tile staged as pixels.
     struct RecordHeader {
         JpegCoefficients coefficients; // without blocks
         uint32_t validWidth = 0, validHeight = 0;
+        bool isRecord() const { return coefficients.components != 0; }
     };
     struct Transaction {
         VkCommandBuffer copyCmd = VK_NULL_HANDLE; // transfer queue (only when its family differs); freed with copyPool_
@@ -99,8 +101,7 @@ private:
         std::vector<uint32_t> staging;
         std::vector<uint8_t> opaque; // per slot: every pixel's alpha is 255 (only with trackOpacity_)
         std::vector<uint8_t> mipsReady; // per slot: its levels 1..8 go with it (else they wait: completeMips)
-        std::vector<uint8_t> coefficients; // per slot: its staging holds a coefficient record (reconstructsJpeg)
-        std::vector<RecordHeader> headers; // per slot: that record's header (empty for pixels)
+        std::vector<RecordHeader> headers; // per slot: its staged record's header (reconstructsJpeg), or none for pixels
     };
     void run();
     void releaseGpu();

@@ -951,22 +951,41 @@ Result readTile(const uint8_t* data, const Layout& layout, const std::string& na
     return readTile(Bytes{data, -1, name}, layout, level, tx, ty, dst);
 }
 
+namespace {
+// Tile (tx, ty) of engine level `level`: its layer (the level's grid is the layer's: makeInfo),
+// its stream and its valid size; what readTile and readTileCoefficients both start from.
+struct LevelTile {
+    size_t layer = 0;
+    TileStream stream;
+    int width = 0, height = 0;
+};
+Expected<LevelTile> levelTile(const Bytes& bytes, const Layout& layout, int level, int64_t tx, int64_t ty) {
+    if (level < 0 || size_t(level) >= layout.layers.size()) return Result(Status::InvalidArgument, "no such level");
+    LevelTile t;
+    t.layer = layout.layers.size() - 1 - size_t(level);
+    const Layer& l = layout.layers[t.layer];
+    if (tx < 0 || ty < 0 || tx >= l.xTiles || ty >= l.yTiles) return Result(Status::InvalidArgument, "no such tile");
+    const Expected<TileStream> stream = tileStream(bytes, layout, t.layer, uint32_t(tx), uint32_t(ty));
+    if (!stream) return stream.error();
+    t.stream = *stream;
+    t.width = int(std::min<int64_t>(kTileSize, l.width - tx * kTileSize));
+    t.height = int(std::min<int64_t>(kTileSize, l.height - ty * kTileSize));
+    return t;
+}
+} // namespace
+
 Result readTile(const Bytes& bytes, const Layout& layout, int level, int64_t tx, int64_t ty, uint8_t* dst) {
     const std::string& name = bytes.name;
-    if (level < 0 || size_t(level) >= layout.layers.size()) return Result(Status::InvalidArgument, "no such level");
-    const size_t layer = layout.layers.size() - 1 - size_t(level);
-    const Layer& l = layout.layers[layer]; // its tile grid is the engine level's (makeInfo)
-    if (tx < 0 || ty < 0 || tx >= l.xTiles || ty >= l.yTiles) return Result(Status::InvalidArgument, "no such tile");
-    const Expected<TileStream> stream = tileStream(bytes, layout, layer, uint32_t(tx), uint32_t(ty));
-    if (!stream) return stream.error();
-    const TileStream s = *stream;
+    const Expected<LevelTile> tile = levelTile(bytes, layout, level, tx, ty);
+    if (!tile) return tile.error();
+    const TileStream s = tile->stream;
     if (s.size == 0) {
         std::memset(dst, 0, kTileBytes); // no data: transparent (premultiplied zero)
         return {};
     }
     auto where = [&] {
         return "tile (" + num(uint64_t(tx)) + ", " + num(uint64_t(ty)) + ") of level " + num(uint64_t(level)) +
-               " (layer " + num(layer) + ", " + num(s.size) + " bytes at byte " + num(s.offset) + ") of '" + name +
+               " (layer " + num(tile->layer) + ", " + num(s.size) + " bytes at byte " + num(s.offset) + ") of '" + name +
                "'";
     };
     if (layout.encoding == kEncodingAvif) {
@@ -980,28 +999,22 @@ Result readTile(const Bytes& bytes, const Layout& layout, int level, int64_t tx,
     if (Result r = decodeJpegRgba(*data, s.size, kTileSize, kTileSize, dst, size_t(kTileSize) * 4); !r.ok()) {
         return Result(r.status(), "Cannot decode " + where() + ": " + r.message());
     }
-    const int w = int(std::min<int64_t>(kTileSize, l.width - tx * kTileSize));
-    const int h = int(std::min<int64_t>(kTileSize, l.height - ty * kTileSize));
-    if (w < kTileSize || h < kTileSize) padTileEdges(dst, w, h);
+    if (tile->width < kTileSize || tile->height < kTileSize) padTileEdges(dst, tile->width, tile->height);
     return {};
 }
 
 Result readTileCoefficients(const Bytes& bytes, const Layout& layout, int level, int64_t tx, int64_t ty, uint8_t* dst) {
-    if (level < 0 || size_t(level) >= layout.layers.size()) return Result(Status::InvalidArgument, "no such level");
-    if (layout.encoding == kEncodingAvif) return Result(Status::UnsupportedFormat, "AVIF tiles");
-    const size_t layer = layout.layers.size() - 1 - size_t(level);
-    const Layer& l = layout.layers[layer];
-    if (tx < 0 || ty < 0 || tx >= l.xTiles || ty >= l.yTiles) return Result(Status::InvalidArgument, "no such tile");
-    const Expected<TileStream> stream = tileStream(bytes, layout, layer, uint32_t(tx), uint32_t(ty));
-    if (!stream) return stream.error();
-    if (stream->size == 0) return Result(Status::UnsupportedFormat, "a tile with no data"); // readTile: transparent
+    if (level >= 0 && size_t(level) < layout.layers.size() && layout.encoding == kEncodingAvif)
+        return Result(Status::UnsupportedFormat, "AVIF tiles");
+    const Expected<LevelTile> tile = levelTile(bytes, layout, level, tx, ty);
+    if (!tile) return tile.error();
+    if (tile->stream.size == 0) return Result(Status::UnsupportedFormat, "a tile with no data"); // readTile: transparent
     thread_local std::vector<uint8_t> scratch;
-    const Expected<const uint8_t*> data = bytes.at(stream->offset, stream->size, scratch);
+    const Expected<const uint8_t*> data = bytes.at(tile->stream.offset, tile->stream.size, scratch);
     if (!data) return data.error();
-    const int w = int(std::min<int64_t>(kTileSize, l.width - tx * kTileSize));
-    const int h = int(std::min<int64_t>(kTileSize, l.height - ty * kTileSize));
     // As readTile's decode: the colour space the stream's markers give (TurboJPEG's guess).
-    return jpegrecord::write(*data, stream->size, kTileSize, kTileSize, JpegColour::Auto, w, h, dst);
+    return jpegrecord::write(*data, tile->stream.size, kTileSize, kTileSize, JpegColour::Auto, tile->width, tile->height,
+                             dst);
 }
 
 Expected<Image> readAssociatedImage(const uint8_t* data, const Layout& layout, const std::string& name,

@@ -185,6 +185,55 @@ private slots:
         CHECKED(checkStillUsable());
     }
 
+    // TIFFs that crash OpenSlide 3.4.1 while it opens them (tests/fuzz/README.md): a SIGFPE,
+    // GLib aborts on a 16 GiB tile buffer and on tile byte counts of gigabytes. They are
+    // refused before OpenSlide sees them, by the format table and by an engine that reads with
+    // OpenSlide alone, with a clear error; each engine then still renders the good slide.
+    void hostileTiffs_data() {
+        QTest::addColumn<QString>("file");
+        QTest::addColumn<bool>("openSlideOnly");
+        for (const char* f : {"openslide-aperio-empty-tile-divides-by-zero.fuzz", "openslide-jp2k-tile-16gib-at-open.fuzz",
+                              "openslide-tile-bytecount-3gb.fuzz", "openslide-absurd-malloc-at-open.fuzz"}) {
+            QTest::newRow((std::string(f) + " (auto)").c_str()) << QString(f) << false;
+            QTest::newRow((std::string(f) + " (OpenSlide)").c_str()) << QString(f) << true;
+        }
+    }
+    void hostileTiffs() {
+        QFETCH(QString, file);
+        QFETCH(bool, openSlideOnly);
+        const std::filesystem::path in = std::filesystem::path(IRIS_TIFF_REGRESSIONS) / file.toStdString();
+        QVERIFY2(std::filesystem::exists(in), in.c_str());
+        // Copied under a slide's extension: OpenSlide finds TIFF vendors by their contents.
+        const auto out = testOutDir() / (in.stem().string() + ".svs");
+        std::filesystem::copy_file(in, out, std::filesystem::copy_options::overwrite_existing);
+        if (!openSlideOnly) {
+            CHECKED(expectOpenFails(out, {iris::Status::UnsupportedFormat, iris::Status::CorruptData}));
+            CHECKED(checkStillUsable());
+            return;
+        }
+        iris::EngineConfig cfg;
+        cfg.source = iris::SourcePreference::OpenSlide;
+        TestEngine os = createTestEngine(cfg);
+        QVERIFY2(os, describe(os.error).c_str());
+        QVERIFY(os->bindOffscreen(kW, kH).ok());
+        const iris::Result r = os->open(out.string());
+        QVERIFY2(!r.ok(), "OpenSlide's reader accepted it");
+        QVERIFY2(r.status() == iris::Status::UnsupportedFormat || r.status() == iris::Status::CorruptData,
+                 describe(r).c_str());
+        QVERIFY2(r.message().find(out.filename().string()) != std::string::npos, describe(r).c_str());
+        qInfo("%s (OpenSlide) → %s", out.filename().string().c_str(), describe(r).c_str());
+        auto good = goodSlide();
+        if (!good) good = sampleSlidePath();
+        QVERIFY(good.has_value());
+        const iris::Result g = os->open(good->string());
+        QVERIFY2(g.ok(), describe(g).c_str());
+        std::string err;
+        QVERIFY2(renderView(*os.engine, viewWithOrigin(0, 0, 1.0, kW, kH), kW, kH, 30s, &err).has_value(),
+                 err.c_str());
+        const std::string why = os.finish();
+        QVERIFY2(why.empty(), why.c_str());
+    }
+
     void truncatedCopy() {
         auto good = goodSlide();
         if (!good) QSKIP("no test data");

@@ -22,6 +22,10 @@ inline constexpr int kTileBytes = kTileSize * kTileSize * 4; // RGBA8
 // RGBA. Scanners' are a few megapixels; a file stating more is refused before anything is
 // allocated for it.
 inline constexpr uint64_t kMaxAssociatedPixels = uint64_t(1) << 26;
+// The longest side a slide file's own tile (a TIFF tile, before the engine's grid) may have.
+// Scanners write 240 to 4096; OpenSlide 3.4.1 allocates a decoded tile whole (4 bytes a pixel,
+// GLib aborting the process when that fails), so a file stating more is refused at open.
+inline constexpr uint32_t kMaxFileTileSide = 16384;
 
 // One tile of the engine's grid.
 struct TileAddress {

@@ -25,7 +25,6 @@ namespace {
 
 constexpr uint16_t kAperioJp2kYCbCr = 33003;
 constexpr uint16_t kAperioJp2kRgb = 33005;
-constexpr uint32_t kMaxFileTileSide = 16384;                 // px, either side of a file tile
 constexpr uint64_t kMaxFileTilePixels = uint64_t(1) << 24;   // 16 Mpx: 64 MiB decoded
 constexpr uint64_t kMaxRawTileBytes = uint64_t(64) << 20;    // a compressed tile
 constexpr size_t kCacheBudgetBytes = size_t(32) << 20;       // decoded file tiles kept

@@ -500,7 +500,8 @@ std::vector<uint8_t> tiffIccProfile(const fs::path& path) {
 
 bool writeOneLevelTiff(const fs::path& path, uint32_t width, uint32_t height,
                        const std::vector<std::pair<uint32_t, uint32_t>>& broken, std::string* error,
-                       const std::vector<uint8_t>& icc) {
+                       const std::vector<uint8_t>& icc, const std::string& software,
+                       const std::string& description) {
     const auto fail = [&](const std::string& why) {
         if (error) *error = path.string() + ": " + why;
         return false;
@@ -518,6 +519,8 @@ bool writeOneLevelTiff(const fs::path& path, uint32_t width, uint32_t height,
     TIFFSetField(tif, TIFFTAG_PLANARCONFIG, PLANARCONFIG_CONTIG);
     TIFFSetField(tif, TIFFTAG_COMPRESSION, COMPRESSION_ADOBE_DEFLATE);
     if (!icc.empty()) TIFFSetField(tif, TIFFTAG_ICCPROFILE, uint32_t(icc.size()), icc.data());
+    if (!software.empty()) TIFFSetField(tif, TIFFTAG_SOFTWARE, software.c_str());
+    if (!description.empty()) TIFFSetField(tif, TIFFTAG_IMAGEDESCRIPTION, description.c_str());
     std::vector<uint8_t> tile(size_t(kTile) * kTile * 3);
     // Not a zlib stream: the header check fails (a reserved compression method).
     const std::vector<uint8_t> garbage(1024, 0x5a);

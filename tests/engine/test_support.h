@@ -240,10 +240,12 @@ std::vector<uint8_t> tiffIccProfile(const fs::path& path);
 // Writes a one-directory tiled TIFF (256×256 tiles, 8-bit RGB, deflate) of width × height
 // whose pixel (x, y) is syntheticPixel's RGB. The tiles listed in `broken` (tile column, row)
 // hold bytes that do not inflate: a slide whose reads fail on exactly those tiles. A non-empty
-// `icc` is embedded as the slide's ICC profile (TIFF tag 34675).
+// `icc` is embedded as the slide's ICC profile (TIFF tag 34675). A non-empty `software` and
+// `description` become the Software and ImageDescription tags (which OpenSlide reads vendors by).
 bool writeOneLevelTiff(const fs::path& path, uint32_t width, uint32_t height,
                        const std::vector<std::pair<uint32_t, uint32_t>>& broken, std::string* error,
-                       const std::vector<uint8_t>& icc = {});
+                       const std::vector<uint8_t>& icc = {}, const std::string& software = {},
+                       const std::string& description = {});
 
 // Converts OpenSlide's premultiplied ARGB (native-endian uint32) to straight-alpha RGBA.
 void argbPremultipliedToRgba(const uint32_t* src, uint8_t* dst, std::size_t n);

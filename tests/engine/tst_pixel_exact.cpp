@@ -53,9 +53,27 @@ std::pair<int64_t, int64_t> originFor(const QString& position, int64_t lw, int64
     return {0, 0};
 }
 
+// A slide of a vendor that only the OpenSlide reader reads: a one-level tiled TIFF tagged as
+// Trestle's (Software "MedScan", which OpenSlide 3.4.1 reads as vendor "trestle"). The TIFF tile
+// reader passes it on by its vendor alone, and the format table's last reader opens it.
+// Written once per run; empty when it cannot be.
+std::optional<std::filesystem::path> trestleSlide() {
+    static const std::optional<std::filesystem::path> path = []() -> std::optional<std::filesystem::path> {
+        const auto p = testOutDir() / "pixel-exact-trestle.tif";
+        std::string err;
+        if (!writeOneLevelTiff(p, 1300, 700, {}, &err, {}, "MedScan", "Trestle test slide;OverlapsXY= 0 0")) {
+            qWarning("%s", err.c_str());
+            return std::nullopt;
+        }
+        return p;
+    }();
+    return path;
+}
+
 std::vector<std::filesystem::path> slidesToTest() {
     std::vector<std::filesystem::path> out;
     if (auto s = sampleSlidePath()) out.push_back(*s);
+    if (auto s = trestleSlide()) out.push_back(*s);
     for (const char* sub : {"aperio", "generic-tiff"}) {
         if (auto dir = slidesDir(sub)) {
             for (auto& f : filesUnder(*dir, false)) out.push_back(f);

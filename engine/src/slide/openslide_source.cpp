@@ -136,6 +136,11 @@ Result checkTiffForOpenSlide(const std::string& path, const std::string& name) {
 
 } // namespace
 
+std::string OpenSlideSource::vendorOf(const std::string& path) {
+    const char* vendor = openslide_detect_vendor(path.c_str());
+    return vendor ? vendor : "";
+}
+
 Expected<std::unique_ptr<SlideSource>> OpenSlideSource::open(const std::string& path) {
     const std::string name = std::filesystem::path(path).filename().string();
     // TIFF-based formats (Aperio, generic TIFF, Hamamatsu NDPI, Philips, Ventana, Leica, Trestle)

@@ -14,6 +14,9 @@ class OpenSlideSource final : public SlideSource {
 public:
     static bool detect(const std::string& path);
     static Expected<std::unique_ptr<SlideSource>> open(const std::string& path);
+    // The vendor OpenSlide names for the file ("aperio", "hamamatsu", …) from its TIFF tags or
+    // its name alone (openslide_detect_vendor: no level is opened), or "" for none.
+    static std::string vendorOf(const std::string& path);
     ~OpenSlideSource() override;
 
     const SlideInfo& info() const override { return info_; }

@@ -100,6 +100,39 @@ struct Codestream {
     std::unique_ptr<opj_image_t, ImageDeleter> image;
 };
 
+// Most J2K tiles one codestream may have. Scanners write one per TIFF tile or DICOM frame;
+// OpenJPEG allocates a coding-parameter record (kilobytes) per tile as it reads the header.
+constexpr uint64_t kMaxCodestreamTiles = 4096;
+
+uint32_t be32(const uint8_t* p) {
+    return uint32_t(p[0]) << 24 | uint32_t(p[1]) << 16 | uint32_t(p[2]) << 8 | p[3];
+}
+
+// The image size and tiling that the SIZ marker (which follows SOC first thing in every J2K
+// codestream) states, checked before OpenJPEG reads the header: it allocates for the tiles
+// stated there (a 128-px-wide tile that claimed 6488192 rows in 128-row tiles took OpenJPEG
+// seconds and hundreds of megabytes to refuse; found by tests/fuzz), whereas the image must be
+// exactly the width × height tile that both OpenSlide and this decoder take. A codestream
+// without SOC and SIZ is left for OpenJPEG to refuse.
+Result checkSiz(const uint8_t* data, size_t size, int width, int height) {
+    if (!data || size < 4 + 38 || data[0] != 0xFF || data[1] != 0x4F || data[2] != 0xFF || data[3] != 0x51) return {};
+    const uint8_t* siz = data + 4 + 4; // past SOC, the SIZ marker, Lsiz and Rsiz
+    const uint32_t x1 = be32(siz), y1 = be32(siz + 4);
+    const uint32_t tileW = be32(siz + 16), tileH = be32(siz + 20), tileX0 = be32(siz + 24), tileY0 = be32(siz + 28);
+    if (x1 != uint32_t(width) || y1 != uint32_t(height)) {
+        return Result(Status::CorruptData, "JPEG 2000 tile is " + std::to_string(x1) + "x" + std::to_string(y1) +
+                                               ", expected " + std::to_string(width) + "x" + std::to_string(height));
+    }
+    if (tileW == 0 || tileH == 0 || tileX0 >= x1 || tileY0 >= y1) return {}; // OpenJPEG's to refuse
+    const uint64_t tiles = ((uint64_t(x1) - tileX0 + tileW - 1) / tileW) * ((uint64_t(y1) - tileY0 + tileH - 1) / tileH);
+    if (tiles > kMaxCodestreamTiles) {
+        return Result(Status::CorruptData, "JPEG 2000 tile is divided into " + std::to_string(tiles) +
+                                               " codestream tiles (at most " + std::to_string(kMaxCodestreamTiles) +
+                                               " are read)");
+    }
+    return {};
+}
+
 Result readHeader(const uint8_t* data, size_t size, Codestream& cs) {
     if (!data || size == 0) return Result(Status::CorruptData, "empty JPEG 2000 tile");
     cs.stream.reset(opj_stream_create(size, OPJ_TRUE));
@@ -134,6 +167,7 @@ Result readHeader(const uint8_t* data, size_t size, Codestream& cs) {
 
 Result checkJp2kForOpenSlide(const uint8_t* data, size_t size, int width, int height) {
     if (width <= 0 || height <= 0) return Result(Status::InvalidArgument, "bad JPEG 2000 tile size");
+    if (Result r = checkSiz(data, size, width, height); !r.ok()) return r;
     Codestream cs;
     if (Result r = readHeader(data, size, cs); !r.ok()) return r;
     const opj_image_t& image = *cs.image;
@@ -161,6 +195,7 @@ Result decodeJp2kRgba(const uint8_t* data, size_t size, int width, int height, J
                       size_t pitch) {
     if (!data || size == 0) return Result(Status::CorruptData, "empty JPEG 2000 tile");
     if (width <= 0 || height <= 0) return Result(Status::InvalidArgument, "bad JPEG 2000 tile size");
+    if (Result r = checkSiz(data, size, width, height); !r.ok()) return r;
     Codestream cs;
     if (Result r = readHeader(data, size, cs); !r.ok()) return r;
     opj_image_t* const image = cs.image.get();

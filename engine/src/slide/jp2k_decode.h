@@ -32,7 +32,13 @@ Result decodeJp2kRgba(const uint8_t* data, size_t size, int width, int height, J
 // another size than its subsampling implies is read past its end, and one larger than the tile
 // divides by zero. This reader clamps such indices itself, but OpenSlide decodes the first tile
 // of an Aperio JPEG 2000 slide when the file is opened (found by tests/fuzz). Reads the header
-// only. CorruptData saying which component is at fault when OpenSlide would read past it.
+// only. CorruptData saying which component is at fault when OpenSlide would read past it, or
+// that the image is not width × height (which OpenSlide refuses, but only after OpenJPEG has
+// read the header).
+//
+// Both check the codestream's SIZ marker before OpenJPEG sees it: an image of another size
+// than the tile, or one divided into more than 4096 codestream tiles (OpenJPEG allocates per
+// tile as it reads the header), is refused without calling it.
 Result checkJp2kForOpenSlide(const uint8_t* data, size_t size, int width, int height);
 
 } // namespace iris

@@ -498,16 +498,13 @@ std::vector<uint8_t> tiffIccProfile(const fs::path& path) {
     return out;
 }
 
-bool writeOneLevelTiff(const fs::path& path, uint32_t width, uint32_t height,
-                       const std::vector<std::pair<uint32_t, uint32_t>>& broken, std::string* error,
-                       const std::vector<uint8_t>& icc, const std::string& software,
-                       const std::string& description) {
-    const auto fail = [&](const std::string& why) {
-        if (error) *error = path.string() + ": " + why;
-        return false;
-    };
-    TIFF* tif = TIFFOpen(path.c_str(), "w8"); // BigTIFF: no 4 GiB question to ask
-    if (!tif) return fail("TIFFOpen failed");
+namespace {
+
+// One tiled directory (256×256 tiles, 8-bit RGB, deflate) of width × height whose pixel (x, y)
+// is syntheticPixel(x · step, y · step)'s RGB; the tiles in `broken` hold bytes that do not
+// inflate. False with *why set when libtiff fails.
+bool writeTiledDirectory(TIFF* tif, uint32_t width, uint32_t height, uint32_t step,
+                         const std::vector<std::pair<uint32_t, uint32_t>>& broken, std::string* why) {
     constexpr uint32_t kTile = 256;
     TIFFSetField(tif, TIFFTAG_IMAGEWIDTH, width);
     TIFFSetField(tif, TIFFTAG_IMAGELENGTH, height);
@@ -518,9 +515,6 @@ bool writeOneLevelTiff(const fs::path& path, uint32_t width, uint32_t height,
     TIFFSetField(tif, TIFFTAG_PHOTOMETRIC, PHOTOMETRIC_RGB);
     TIFFSetField(tif, TIFFTAG_PLANARCONFIG, PLANARCONFIG_CONTIG);
     TIFFSetField(tif, TIFFTAG_COMPRESSION, COMPRESSION_ADOBE_DEFLATE);
-    if (!icc.empty()) TIFFSetField(tif, TIFFTAG_ICCPROFILE, uint32_t(icc.size()), icc.data());
-    if (!software.empty()) TIFFSetField(tif, TIFFTAG_SOFTWARE, software.c_str());
-    if (!description.empty()) TIFFSetField(tif, TIFFTAG_IMAGEDESCRIPTION, description.c_str());
     std::vector<uint8_t> tile(size_t(kTile) * kTile * 3);
     // Not a zlib stream: the header check fails (a reserved compression method).
     const std::vector<uint8_t> garbage(1024, 0x5a);
@@ -529,30 +523,69 @@ bool writeOneLevelTiff(const fs::path& path, uint32_t width, uint32_t height,
             const uint32_t index = TIFFComputeTile(tif, tx * kTile, ty * kTile, 0, 0);
             if (std::find(broken.begin(), broken.end(), std::make_pair(tx, ty)) != broken.end()) {
                 if (TIFFWriteRawTile(tif, index, const_cast<uint8_t*>(garbage.data()), tmsize_t(garbage.size())) < 0) {
-                    TIFFClose(tif);
-                    return fail("TIFFWriteRawTile failed");
+                    *why = "TIFFWriteRawTile failed";
+                    return false;
                 }
                 continue;
             }
             for (uint32_t y = 0; y < kTile; ++y) {
                 for (uint32_t x = 0; x < kTile; ++x) {
                     uint8_t p[4];
-                    syntheticPixel(int64_t(tx * kTile + x), int64_t(ty * kTile + y), p);
+                    syntheticPixel(int64_t(tx * kTile + x) * step, int64_t(ty * kTile + y) * step, p);
                     std::memcpy(&tile[(size_t(y) * kTile + x) * 3], p, 3);
                 }
             }
             if (TIFFWriteEncodedTile(tif, index, tile.data(), tmsize_t(tile.size())) < 0) {
-                TIFFClose(tif);
-                return fail("TIFFWriteEncodedTile failed");
+                *why = "TIFFWriteEncodedTile failed";
+                return false;
             }
         }
     }
     if (!TIFFWriteDirectory(tif)) {
-        TIFFClose(tif);
-        return fail("TIFFWriteDirectory failed");
+        *why = "TIFFWriteDirectory failed";
+        return false;
+    }
+    return true;
+}
+
+} // namespace
+
+bool writeOneLevelTiff(const fs::path& path, uint32_t width, uint32_t height,
+                       const std::vector<std::pair<uint32_t, uint32_t>>& broken, std::string* error,
+                       const std::vector<uint8_t>& icc, const std::string& software,
+                       const std::string& description) {
+    TIFF* tif = TIFFOpen(path.c_str(), "w8"); // BigTIFF: no 4 GiB question to ask
+    if (!tif) {
+        if (error) *error = path.string() + ": TIFFOpen failed";
+        return false;
+    }
+    if (!icc.empty()) TIFFSetField(tif, TIFFTAG_ICCPROFILE, uint32_t(icc.size()), icc.data());
+    if (!software.empty()) TIFFSetField(tif, TIFFTAG_SOFTWARE, software.c_str());
+    if (!description.empty()) TIFFSetField(tif, TIFFTAG_IMAGEDESCRIPTION, description.c_str());
+    std::string why;
+    const bool ok = writeTiledDirectory(tif, width, height, 1, broken, &why);
+    TIFFClose(tif);
+    if (!ok && error) *error = path.string() + ": " + why;
+    return ok;
+}
+
+bool writeTiffPyramid(const fs::path& path, uint32_t width, uint32_t height, const std::vector<uint32_t>& downsamples,
+                      std::string* error) {
+    TIFF* tif = TIFFOpen(path.c_str(), "w");
+    if (!tif) {
+        if (error) *error = path.string() + ": TIFFOpen failed";
+        return false;
+    }
+    std::string why;
+    bool ok = true;
+    for (size_t i = 0; ok && i < downsamples.size(); ++i) {
+        const uint32_t d = downsamples[i];
+        if (i > 0) TIFFSetField(tif, TIFFTAG_SUBFILETYPE, FILETYPE_REDUCEDIMAGE);
+        ok = writeTiledDirectory(tif, width / d, height / d, d, {}, &why);
     }
     TIFFClose(tif);
-    return true;
+    if (!ok && error) *error = path.string() + ": " + why;
+    return ok;
 }
 
 void argbPremultipliedToRgba(const uint32_t* src, uint8_t* dst, std::size_t n) {

@@ -191,6 +191,44 @@ private slots:
         }
     }
 
+    // The OpenSlide reader leaves out a level that is not coarser than the one before it (here
+    // a second full-size directory) and must still read every level it keeps by OpenSlide's own
+    // index of it: the 4× level drawn 1:1 is its directory's pixels (lossless, so exactly
+    // syntheticPixel at 4× the level coordinates), not the left-out level's.
+    void openSlideReaderLeavesOutALevel() {
+        const auto path = testOutDir() / "pixel-exact-duplicate-level.tiff";
+        std::string err;
+        QVERIFY2(writeTiffPyramid(path, 2048, 1536, {1, 1, 4}, &err), err.c_str());
+        iris::EngineConfig cfg;
+        cfg.color.managed = false;
+        cfg.source = iris::SourcePreference::OpenSlide;
+        TestEngine os = createTestEngine(cfg);
+        QVERIFY2(os, describe(os.error).c_str());
+        constexpr uint32_t w = 333, h = 257;
+        QVERIFY(os->bindOffscreen(w, h).ok());
+        const iris::Result r = os->open(path.string());
+        QVERIFY2(r.ok(), describe(r).c_str());
+        const auto info = os->slideInfo();
+        QVERIFY(info.has_value());
+        QCOMPARE(int(info->levels.size()), 2);
+        QCOMPARE(info->levels[1].width, int64_t(512));
+        QCOMPARE(info->levels[1].downsample, 4.0);
+        const int64_t kx = 100, ky = 70; // the frame's top-left level pixel; the frame stays inside the level
+        auto frame = renderView(*os.engine, viewWithOrigin(double(kx) * 4, double(ky) * 4, 4.0, w, h), w, h, 30s, &err);
+        QVERIFY2(frame.has_value(), err.c_str());
+        iris::Image expected = makeImage(w, h);
+        for (uint32_t j = 0; j < h; ++j)
+            for (uint32_t i = 0; i < w; ++i) syntheticPixel((kx + i) * 4, (ky + j) * 4, pixel(expected, i, j));
+        const DiffStats st = compareImages(frame->image, expected);
+        if (st.differing) {
+            QFAIL((st.summary() + "; " +
+                   saveFailureArtefacts("pixel_exact.duplicate-level", frame->image, expected, nullptr))
+                      .c_str());
+        }
+        const std::string why = os.finish();
+        QVERIFY2(why.empty(), why.c_str());
+    }
+
     // setBackground() at run time: the area outside the slide follows it (×255, rounded),
     // including EngineConfig's default 0.96 → 245. The view does not change, so the new
     // colour must show up without a view change (polled: no call promises which frame).

@@ -174,6 +174,7 @@ Expected<std::unique_ptr<SlideSource>> OpenSlideSource::open(const std::string& 
         openslide_close(osr);
         return Result(Status::CorruptData, "Cannot open '" + name + "': the slide has no pyramid levels");
     }
+    std::vector<int32_t> osLevels; // OpenSlide's index of each level kept
     for (int32_t l = 0; l < levels; ++l) {
         LevelInfo li;
         openslide_get_level_dimensions(osr, l, &li.width, &li.height);
@@ -186,11 +187,13 @@ Expected<std::unique_ptr<SlideSource>> OpenSlideSource::open(const std::string& 
                               std::to_string(li.width) + "x" + std::to_string(li.height));
         }
         if (l > 0 && li.downsample <= info.levels.back().downsample) {
-            // Levels must get coarser; a slide that says otherwise is unusable as a pyramid.
+            // Levels must get coarser: one that is not is left out, and the levels after it
+            // keep their own OpenSlide index for reading (osLevels_).
             continue;
         }
         fillTileGrid(li);
         info.levels.push_back(li);
+        osLevels.push_back(l);
     }
     info.width = info.levels[0].width;
     info.height = info.levels[0].height;
@@ -223,7 +226,7 @@ Expected<std::unique_ptr<SlideSource>> OpenSlideSource::open(const std::string& 
         for (; *names; ++names) info.associatedImages.emplace_back(*names);
     }
     fillLevelPhysics(info);
-    return std::unique_ptr<SlideSource>(new OpenSlideSource(osr, std::move(info), std::move(pinned)));
+    return std::unique_ptr<SlideSource>(new OpenSlideSource(osr, std::move(info), std::move(osLevels), std::move(pinned)));
 }
 
 OpenSlideSource::~OpenSlideSource() {
@@ -249,7 +252,7 @@ Result OpenSlideSource::readTile(int level, int64_t tx, int64_t ty, uint8_t* dst
     const int64_t y0 = std::llround(double(ty * kTileSize) * li.downsample);
     thread_local std::vector<uint32_t> argb;
     argb.resize(size_t(w) * size_t(h));
-    openslide_read_region(osr_, argb.data(), x0, y0, level, w, h);
+    openslide_read_region(osr_, argb.data(), x0, y0, osLevels_[size_t(level)], w, h);
     if (Result r = checkError("Reading a tile"); !r.ok()) return r;
     for (int y = 0; y < h; ++y) {
         argbToRgbaPremultiplied(argb.data() + size_t(y) * size_t(w), dst + size_t(y) * kTileSize * 4, size_t(w));

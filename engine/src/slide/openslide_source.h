@@ -3,6 +3,7 @@
 #pragma once
 
 #include <mutex>
+#include <vector>
 
 #include "slide/slide_source.h"
 
@@ -24,8 +25,8 @@ public:
     Expected<Image> readAssociatedImage(const std::string& name) override;
 
 private:
-    OpenSlideSource(openslide_t* osr, SlideInfo info, std::unique_ptr<PinnedFile> pinned)
-        : pinned_(std::move(pinned)), osr_(osr), info_(std::move(info)) {}
+    OpenSlideSource(openslide_t* osr, SlideInfo info, std::vector<int32_t> osLevels, std::unique_ptr<PinnedFile> pinned)
+        : pinned_(std::move(pinned)), osr_(osr), info_(std::move(info)), osLevels_(std::move(osLevels)) {}
     Result checkError(const char* what) const;
 
     // A TIFF-based slide as opened (OpenSlide opens more handles by name as threads read);
@@ -38,6 +39,9 @@ private:
     // a race); a host reads these images once per slide, so serialising them costs nothing.
     mutable std::mutex associatedMutex_;
     SlideInfo info_;
+    // OpenSlide's index of each of info_.levels: a level that is not coarser than the one
+    // before it is left out of info_, so the two numberings can differ.
+    std::vector<int32_t> osLevels_;
 };
 
 } // namespace iris

@@ -569,7 +569,7 @@ bool writeOneLevelTiff(const fs::path& path, uint32_t width, uint32_t height,
     return ok;
 }
 
-bool writeTiffPyramid(const fs::path& path, uint32_t width, uint32_t height, const std::vector<uint32_t>& downsamples,
+bool writeTiffPyramid(const fs::path& path, uint32_t width, uint32_t height, const std::vector<TiffLevel>& levels,
                       std::string* error) {
     TIFF* tif = TIFFOpen(path.c_str(), "w");
     if (!tif) {
@@ -578,10 +578,13 @@ bool writeTiffPyramid(const fs::path& path, uint32_t width, uint32_t height, con
     }
     std::string why;
     bool ok = true;
-    for (size_t i = 0; ok && i < downsamples.size(); ++i) {
-        const uint32_t d = downsamples[i];
+    for (size_t i = 0; ok && i < levels.size(); ++i) {
+        const TiffLevel& l = levels[i];
         if (i > 0) TIFFSetField(tif, TIFFTAG_SUBFILETYPE, FILETYPE_REDUCEDIMAGE);
-        ok = writeTiledDirectory(tif, width / d, height / d, d, {}, &why);
+        if (!l.description.empty()) TIFFSetField(tif, TIFFTAG_IMAGEDESCRIPTION, l.description.c_str());
+        if (!l.xmlPacket.empty())
+            TIFFSetField(tif, TIFFTAG_XMLPACKET, uint32_t(l.xmlPacket.size()), l.xmlPacket.data());
+        ok = writeTiledDirectory(tif, width / l.downsample, height / l.downsample, l.downsample, {}, &why);
     }
     TIFFClose(tif);
     if (!ok && error) *error = path.string() + ": " + why;

@@ -247,10 +247,16 @@ bool writeOneLevelTiff(const fs::path& path, uint32_t width, uint32_t height,
                        const std::vector<uint8_t>& icc = {}, const std::string& software = {},
                        const std::string& description = {});
 
-// Writes a generic tiled TIFF pyramid (256×256 tiles, 8-bit RGB, deflate): one directory per
-// entry of `downsamples`, (width / d) × (height / d) pixels with pixel (x, y) syntheticPixel's
-// RGB at (x · d, y · d), the directories after the first marked reduced-resolution images.
-bool writeTiffPyramid(const fs::path& path, uint32_t width, uint32_t height, const std::vector<uint32_t>& downsamples,
+// Writes a tiled TIFF pyramid (256×256 tiles, 8-bit RGB, deflate): one directory per level,
+// (width / d) × (height / d) pixels with pixel (x, y) syntheticPixel's RGB at (x · d, y · d),
+// the directories after the first marked reduced-resolution images, each with the
+// ImageDescription and XMLPacket given (none when empty: the tags vendors are told by).
+struct TiffLevel {
+    uint32_t downsample = 1;
+    std::string description;
+    std::string xmlPacket;
+};
+bool writeTiffPyramid(const fs::path& path, uint32_t width, uint32_t height, const std::vector<TiffLevel>& levels,
                       std::string* error);
 
 // Converts OpenSlide's premultiplied ARGB (native-endian uint32) to straight-alpha RGBA.

@@ -198,7 +198,7 @@ private slots:
     void openSlideReaderLeavesOutALevel() {
         const auto path = testOutDir() / "pixel-exact-duplicate-level.tiff";
         std::string err;
-        QVERIFY2(writeTiffPyramid(path, 2048, 1536, {1, 1, 4}, &err), err.c_str());
+        QVERIFY2(writeTiffPyramid(path, 2048, 1536, {{1}, {1}, {4}}, &err), err.c_str());
         iris::EngineConfig cfg;
         cfg.color.managed = false;
         cfg.source = iris::SourcePreference::OpenSlide;

@@ -8,7 +8,8 @@
 #include <vector>
 
 #include <openslide.h>
-#include <tiffio.h>
+
+#include "slide/openslide_guard.h"
 
 namespace iris {
 
@@ -42,99 +43,6 @@ bool OpenSlideSource::detect(const std::string&) {
     return true; // the universal reader: open() decides and explains
 }
 
-namespace {
-
-// Hostile TIFFs that crash OpenSlide 3.4.1 while it opens them, refused here with libtiff
-// (without its memory map) before OpenSlide sees the file. Not a TIFF (other vendors' formats):
-// nothing to check.
-//  - A tile's bytes are read into a buffer of the size TILEBYTECOUNTS states (g_slice_alloc),
-//    and GLib aborts the process when that cannot be had: a hostile count of a few gigabytes
-//    kills the host (the fuzzer found one, 2995479730 bytes). Every tile of every tiled
-//    directory must lie inside the file.
-//  - The Aperio reader marks a level's empty tiles (byte count 0) missing and propagates each
-//    to the next tiled directory, dividing its column by round(tiles across / next level's
-//    tiles across), and its row likewise: a next level more than twice as many tiles across or
-//    down makes that 0, an integer division by zero (SIGFPE; the fuzzer found it). A pyramid's
-//    next level is never bigger, so such a file is refused as corrupt whatever its vendor.
-//  - Every tile OpenSlide reads (and, for an Aperio JPEG 2000 file, tile 0 while it opens) is
-//    decoded into one g_slice_alloc of tile width x height x 4 bytes: 16 GiB for a stated
-//    65536 x 65536 tile, and GLib aborts when it fails. Tiles longer than kMaxFileTileSide a
-//    side are refused as unsupported (the TIFF tile reader refuses them too).
-Result checkTiffForOpenSlide(const std::string& path, const std::string& name) {
-    std::error_code ec;
-    const uint64_t fileSize = std::filesystem::file_size(path, ec);
-    if (ec) return {};
-    TIFFErrorHandler oldError = TIFFSetErrorHandler(nullptr), oldWarning = TIFFSetWarningHandler(nullptr);
-    TIFF* tif = TIFFOpen(path.c_str(), "rm");
-    TIFFSetErrorHandler(oldError);
-    TIFFSetWarningHandler(oldWarning);
-    if (!tif) return {}; // not a TIFF: OpenSlide decides
-    struct TiledDir {
-        tdir_t dir = 0;
-        uint64_t across = 0, down = 0;
-        bool emptyTiles = false;
-    };
-    std::vector<TiledDir> tiled;
-    const auto checkDirectory = [&](tdir_t dir) -> Result {
-        if (!TIFFIsTiled(tif)) return {};
-        TiledDir td;
-        td.dir = dir;
-        uint32_t w = 0, h = 0, tw = 0, th = 0;
-        TIFFGetField(tif, TIFFTAG_IMAGEWIDTH, &w);
-        TIFFGetField(tif, TIFFTAG_IMAGELENGTH, &h);
-        TIFFGetField(tif, TIFFTAG_TILEWIDTH, &tw);
-        TIFFGetField(tif, TIFFTAG_TILELENGTH, &th);
-        if (tw > kMaxFileTileSide || th > kMaxFileTileSide) {
-            return Result(Status::UnsupportedFormat,
-                          "Cannot open '" + name + "': TIFF directory " + std::to_string(dir) + " has tiles of " +
-                              std::to_string(tw) + "x" + std::to_string(th) + " pixels, more than the " +
-                              std::to_string(kMaxFileTileSide) + " a side Iris View reads");
-        }
-        if (tw && th) {
-            td.across = (uint64_t(w) + tw - 1) / tw;
-            td.down = (uint64_t(h) + th - 1) / th;
-        }
-        tiled.push_back(td); // a level to OpenSlide, even one it then refuses
-        uint64_t* counts = nullptr;
-        uint64_t* offsets = nullptr;
-        if (!TIFFGetField(tif, TIFFTAG_TILEBYTECOUNTS, &counts) || !TIFFGetField(tif, TIFFTAG_TILEOFFSETS, &offsets) ||
-            !counts || !offsets)
-            return {}; // OpenSlide refuses such a directory itself
-        const uint32_t tiles = TIFFNumberOfTiles(tif);
-        for (uint32_t t = 0; t < tiles; ++t) {
-            if (counts[t] > fileSize || offsets[t] > fileSize - counts[t]) {
-                return Result(Status::CorruptData, "Cannot open '" + name + "': tile " + std::to_string(t) +
-                                                      " of TIFF directory " + std::to_string(dir) + " claims " +
-                                                      std::to_string(counts[t]) + " bytes at byte " +
-                                                      std::to_string(offsets[t]) + ", past the end of the file (" +
-                                                      std::to_string(fileSize) + " bytes)");
-            }
-            if (counts[t] == 0) tiled.back().emptyTiles = true;
-        }
-        return {};
-    };
-    Result out;
-    tdir_t dir = 0;
-    do {
-        out = checkDirectory(dir++);
-    } while (out.ok() && TIFFReadDirectory(tif));
-    TIFFClose(tif);
-    for (size_t i = 0; out.ok() && i + 1 < tiled.size(); ++i) {
-        const TiledDir& a = tiled[i];
-        const TiledDir& b = tiled[i + 1];
-        if (a.emptyTiles && (b.across > 2 * a.across || b.down > 2 * a.down)) {
-            out = Result(Status::CorruptData,
-                         "Cannot open '" + name + "': TIFF directory " + std::to_string(a.dir) + " (" +
-                             std::to_string(a.across) + "x" + std::to_string(a.down) +
-                             " tiles) has empty tiles and the next tiled directory, " + std::to_string(b.dir) + ", has " +
-                             std::to_string(b.across) + "x" + std::to_string(b.down) +
-                             " tiles: a pyramid whose next level is bigger is corrupt");
-        }
-    }
-    return out;
-}
-
-} // namespace
 
 std::string OpenSlideSource::vendorOf(const std::string& path) {
     const char* vendor = openslide_detect_vendor(path.c_str());
@@ -150,7 +58,7 @@ Expected<std::unique_ptr<SlideSource>> OpenSlideSource::open(const std::string& 
     auto pinned = std::make_unique<PinnedFile>(path);
     if (!pinned->isTiff()) pinned.reset();
     const std::string opened = pinned ? pinned->name() : path;
-    if (Result r = checkTiffForOpenSlide(opened, name); !r.ok()) return r;
+    if (Result r = checkFileForOpenSlide(opened, name); !r.ok()) return r;
     const char* vendor = openslide_detect_vendor(opened.c_str());
     openslide_t* osr = openslide_open(opened.c_str());
     if (!osr) {

@@ -1,6 +1,8 @@
 #include "slide/openslide_guard.h"
 
+#include <algorithm>
 #include <cerrno>
+#include <cstdio>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -236,6 +238,212 @@ Result checkLeica(TIFF* tif, const std::string& name) {
     return {};
 }
 
+// An NDPI level's JPEG header, as OpenSlide's find_bitstream_start and libjpeg see it: the
+// restart interval, the MCU size, and where the entropy-coded data starts.
+struct NdpiJpeg {
+    uint64_t headerEnd = 0; // file offset just past the SOS segment
+    uint32_t restartInterval = 0;
+    uint32_t mcuW = 8, mcuH = 8;
+};
+
+// Walks the markers from `start` to SOS. Nothing when they are not markers (OpenSlide refuses
+// the file itself); headerEnd past `limit` when the header runs past it.
+std::optional<NdpiJpeg> readNdpiJpegHeader(std::FILE* f, uint64_t start, uint64_t limit) {
+    NdpiJpeg j;
+    uint32_t hMax = 1, vMax = 1;
+    uint64_t pos = start;
+    for (int markers = 0; markers < 1024; ++markers) {
+        if (pos > limit) {
+            j.headerEnd = pos;
+            return j;
+        }
+        uint8_t m[4];
+        if (fseeko(f, off_t(pos), SEEK_SET) != 0 || std::fread(m, 1, 2, f) != 2 || m[0] != 0xFF) return std::nullopt;
+        if (m[1] == 0xD8) { // SOI: no segment
+            pos += 2;
+            continue;
+        }
+        if (std::fread(m + 2, 1, 2, f) != 2) return std::nullopt;
+        const uint32_t len = uint32_t(m[2]) << 8 | m[3];
+        if (len < 2) return std::nullopt;
+        std::vector<uint8_t> seg(len - 2);
+        if (!seg.empty() && std::fread(seg.data(), 1, seg.size(), f) != seg.size()) {
+            j.headerEnd = pos + 2 + len; // a segment past the end of the file
+            return j;
+        }
+        const uint8_t marker = m[1];
+        const bool sof = (marker >= 0xC0 && marker <= 0xC3) || (marker >= 0xC5 && marker <= 0xC7) ||
+                         (marker >= 0xC9 && marker <= 0xCB) || (marker >= 0xCD && marker <= 0xCF);
+        if (sof && seg.size() >= 6) {
+            const size_t comps = seg[5];
+            for (size_t c = 0; c < comps && 6 + 3 * c + 1 < seg.size(); ++c) {
+                hMax = std::max<uint32_t>(hMax, seg[6 + 3 * c + 1] >> 4);
+                vMax = std::max<uint32_t>(vMax, seg[6 + 3 * c + 1] & 15);
+            }
+        } else if (marker == 0xDD && seg.size() >= 2) {
+            j.restartInterval = uint32_t(seg[0]) << 8 | seg[1];
+        } else if (marker == 0xDA) {
+            const bool interleaved = !seg.empty() && seg[0] > 1; // libjpeg's comps_in_scan > 1
+            j.mcuW = interleaved ? 8 * std::max<uint32_t>(hMax, 1) : 8;
+            j.mcuH = interleaved ? 8 * std::max<uint32_t>(vMax, 1) : 8;
+            j.headerEnd = pos + 2 + len;
+            return j;
+        }
+        pos += 2 + len;
+    }
+    return std::nullopt;
+}
+
+// OpenSlide's fix for NDPI files over 4 GiB, whose 32-bit offsets lose their high bits: they
+// are taken from the directory's own offset (openslide-decode-tifflike.c, fix_offset_ndpi).
+uint64_t fixNdpiOffset(uint64_t dirOffset, uint64_t offset) {
+    uint64_t result = (dirOffset & ~uint64_t(UINT32_MAX)) | (offset & UINT32_MAX);
+    if (result >= dirOffset) result = std::min(result - UINT32_MAX - 1, result);
+    return result;
+}
+
+// One NDPI directory's fields that OpenSlide's ndpi reader reads (first values; nothing when
+// absent or unreadable).
+struct NdpiDirectory {
+    int index = 0;
+    std::optional<double> width, height, sourceLens, focalPlane, stripOffset, stripBytes;
+    std::optional<double> mcuStartMost; // the largest MCU start (tag 65426)
+};
+
+// The directories of an NDPI file as OpenSlide's own TIFF parser (tifflike) reads them, not
+// libtiff, which refuses some (a level 0 pixels wide) that tifflike takes: a classic TIFF whose
+// next-directory offsets are 64-bit, and whose other offsets get fixNdpiOffset.
+std::vector<NdpiDirectory> readNdpiDirectories(std::FILE* f) {
+    std::vector<NdpiDirectory> out;
+    uint8_t head[8];
+    if (fseeko(f, 0, SEEK_SET) != 0 || std::fread(head, 1, 8, f) != 8) return out;
+    const bool be = head[0] == 'M';
+    const auto u = [&](const uint8_t* p, int n) {
+        uint64_t v = 0;
+        for (int i = 0; i < n; ++i) v |= uint64_t(p[be ? n - 1 - i : i]) << (8 * i);
+        return v;
+    };
+    if (u(head + 2, 2) != 42) return out;
+    uint64_t dirOffset = u(head + 4, 4);
+    std::vector<uint64_t> seen;
+    while (dirOffset != 0 && out.size() < 4096 && std::find(seen.begin(), seen.end(), dirOffset) == seen.end()) {
+        seen.push_back(dirOffset);
+        uint8_t cnt[2];
+        if (fseeko(f, off_t(dirOffset), SEEK_SET) != 0 || std::fread(cnt, 1, 2, f) != 2) break;
+        const size_t entries = size_t(u(cnt, 2));
+        std::vector<uint8_t> raw(entries * 12 + 8);
+        if (std::fread(raw.data(), 1, raw.size(), f) != raw.size()) break;
+        NdpiDirectory d;
+        d.index = int(out.size());
+        const auto values = [&](const uint8_t* e, std::optional<double>* first, std::optional<double>* most) {
+            const uint64_t type = u(e + 2, 2), count = u(e + 4, 4);
+            static constexpr int kSize[] = {0, 1, 1, 2, 4, 8, 1, 1, 2, 4, 8, 4, 8, 4, 0, 0, 8, 8, 8};
+            const int size = type < std::size(kSize) ? kSize[type] : 0;
+            if (size == 0 || count == 0 || count > (uint64_t(1) << 24)) return;
+            std::vector<uint8_t> bytes(size_t(count) * size_t(size));
+            if (bytes.size() <= 4) {
+                std::memcpy(bytes.data(), e + 8, bytes.size());
+            } else {
+                const uint64_t at = fixNdpiOffset(dirOffset, u(e + 8, 4));
+                const off_t resume = ftello(f);
+                const bool ok = fseeko(f, off_t(at), SEEK_SET) == 0 && std::fread(bytes.data(), 1, bytes.size(), f) == bytes.size();
+                fseeko(f, resume, SEEK_SET);
+                if (!ok) return;
+            }
+            for (uint64_t i = 0; i < count; ++i) {
+                const uint8_t* p = bytes.data() + i * size_t(size);
+                double v = 0;
+                switch (type) {
+                case 6: v = double(int8_t(p[0])); break;
+                case 8: v = double(int16_t(u(p, 2))); break;
+                case 9: v = double(int32_t(u(p, 4))); break;
+                case 11: { const uint32_t b = uint32_t(u(p, 4)); float x; std::memcpy(&x, &b, 4); v = x; break; }
+                case 12: { const uint64_t b = u(p, 8); double x; std::memcpy(&x, &b, 8); v = x; break; }
+                case 17: v = double(int64_t(u(p, 8))); break;
+                default: v = double(u(p, size)); break;
+                }
+                if (i == 0 && first) *first = v;
+                if (most) *most = std::max(most->value_or(v), v);
+                if (!most) break;
+            }
+        };
+        for (size_t i = 0; i < entries; ++i) {
+            const uint8_t* e = raw.data() + i * 12;
+            switch (u(e, 2)) {
+            case TIFFTAG_IMAGEWIDTH: values(e, &d.width, nullptr); break;
+            case TIFFTAG_IMAGELENGTH: values(e, &d.height, nullptr); break;
+            case TIFFTAG_STRIPOFFSETS: values(e, &d.stripOffset, nullptr); break;
+            case TIFFTAG_STRIPBYTECOUNTS: values(e, &d.stripBytes, nullptr); break;
+            case 65421: values(e, &d.sourceLens, nullptr); break;
+            case 65424: values(e, &d.focalPlane, nullptr); break;
+            case 65426: values(e, nullptr, &d.mcuStartMost); break;
+            default: break;
+            }
+        }
+        if (d.stripOffset) d.stripOffset = double(fixNdpiOffset(dirOffset, uint64_t(*d.stripOffset)));
+        out.push_back(d);
+        dirOffset = u(raw.data() + entries * 12, 8);
+    }
+    return out;
+}
+
+// Hamamatsu NDPI (OpenSlide 3.4.1's ndpi reader). Each level (source lens > 0, focal plane 0)
+// is one JPEG in one strip; OpenSlide walks its header and then:
+//  - divides the level's width and height by the tile size (the whole level when the JPEG has
+//    no restart markers): a level of 0 pixels is a division by zero (SIGFPE);
+//  - counts tiles in 32 bits and allocates them with g_new: a product past 2^31 aborts in GLib;
+//  - decodes a level without restart markers as one tile of w * h * 4 bytes counted in 32
+//    bits: past 2^31 the buffer is too small (SIGSEGV);
+//  - scans for restart markers from the end of the header up to the strip's end: a strip
+//    shorter than its header (or an MCU start past the strip) overflows a stack buffer, which
+//    glibc's fortify check aborts.
+Result checkNdpi(const std::string& path, const std::string& name) {
+    std::FILE* f = std::fopen(path.c_str(), "rb");
+    if (!f) return {};
+    Result out;
+    for (const NdpiDirectory& d : readNdpiDirectories(f)) {
+        if (!d.sourceLens || !(*d.sourceLens > 0) || !d.focalPlane || *d.focalPlane != 0) continue; // not a level
+        if (!d.width || !d.height || !d.stripOffset || !d.stripBytes) continue; // OpenSlide refuses it itself
+        const std::string where = "directory " + std::to_string(d.index);
+        const auto refuse = [&](const std::string& why) {
+            return Result(Status::CorruptData, "Cannot open '" + name + "' (Hamamatsu NDPI): " + where + " " + why);
+        };
+        const uint64_t w = uint64_t(std::max(0.0, *d.width)), h = uint64_t(std::max(0.0, *d.height));
+        if (w == 0 || h == 0) {
+            out = refuse("is a level of " + std::to_string(w) + "x" + std::to_string(h) + " pixels");
+            break;
+        }
+        const uint64_t start = uint64_t(*d.stripOffset), bytes = uint64_t(*d.stripBytes);
+        const std::optional<NdpiJpeg> jpeg = readNdpiJpegHeader(f, start, start + bytes);
+        if (!jpeg) continue; // not a JPEG: OpenSlide refuses it itself
+        if (jpeg->headerEnd > start + bytes) {
+            out = refuse("has a JPEG header longer than its strip (" + std::to_string(bytes) + " bytes)");
+            break;
+        }
+        if (d.mcuStartMost && *d.mcuStartMost > double(bytes)) {
+            out = refuse("has an MCU start past its strip");
+            break;
+        }
+        if (jpeg->restartInterval == 0) {
+            if (w * h * 4 > uint64_t(INT32_MAX)) {
+                out = refuse("is one JPEG of " + std::to_string(w) + "x" + std::to_string(h) +
+                             " pixels without restart markers, more than OpenSlide can decode");
+                break;
+            }
+            continue;
+        }
+        const uint64_t tileW = uint64_t(jpeg->mcuW) * jpeg->restartInterval, tileH = jpeg->mcuH;
+        const uint64_t tiles = (w / tileW) * (h / tileH);
+        if (tiles > uint64_t(1) << 27) {
+            out = refuse("is " + std::to_string(tiles) + " tiles of " + std::to_string(tileW) + "x" +
+                         std::to_string(tileH));
+            break;
+        }
+    }
+    std::fclose(f);
+    return out;
+}
+
 } // namespace
 
 Result checkFileForOpenSlide(const std::string& path, const std::string& name) {
@@ -246,14 +454,19 @@ Result checkFileForOpenSlide(const std::string& path, const std::string& name) {
     TIFF* tif = TIFFOpen(path.c_str(), "rm");
     TIFFSetErrorHandler(oldError);
     TIFFSetWarningHandler(oldWarning);
-    if (!tif) return {}; // not a TIFF: OpenSlide decides
-    Result out = checkTiffLayout(tif, fileSize, name);
-    if (out.ok()) {
-        const char* v = openslide_detect_vendor(path.c_str());
-        const std::string_view vendor = v ? v : "";
-        if ((vendor == "ventana" || vendor == "leica") && TIFFSetDirectory(tif, 0))
-            out = vendor == "ventana" ? checkVentana(tif, name) : checkLeica(tif, name);
+    const char* v = openslide_detect_vendor(path.c_str());
+    const std::string_view vendor = v ? v : "";
+    // NDPI's fields are read as OpenSlide reads them, whether libtiff can open the file or not.
+    if (vendor == "hamamatsu") {
+        if (Result r = checkNdpi(path, name); !r.ok()) {
+            if (tif) TIFFClose(tif);
+            return r;
+        }
     }
+    if (!tif) return {}; // not a TIFF to libtiff: OpenSlide decides
+    Result out = checkTiffLayout(tif, fileSize, name);
+    if (out.ok() && (vendor == "ventana" || vendor == "leica") && TIFFSetDirectory(tif, 0))
+        out = vendor == "ventana" ? checkVentana(tif, name) : checkLeica(tif, name);
     TIFFClose(tif);
     return out;
 }

@@ -1,9 +1,8 @@
 #include "slide/openslide_guard.h"
 
 #include <algorithm>
-#include <cerrno>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -21,8 +20,8 @@ namespace iris {
 
 namespace {
 
-// The most tiles one Ventana scan area may state: 2^27 (a 134-Mpx grid of tiles, far beyond any
-// slide; OpenSlide allocates a pointer and a record for each).
+// The most tiles one Ventana scan area may state: 2^27, some 134 million (a slide has thousands;
+// OpenSlide allocates a pointer and a record for each).
 constexpr int64_t kMaxVentanaAreaTiles = int64_t(1) << 27;
 
 // Every TIFF's directories, whatever its vendor (tif at its first directory):
@@ -104,7 +103,6 @@ Result checkTiffLayout(TIFF* tif, uint64_t fileSize, const std::string& name) {
     return out;
 }
 
-
 // An element's name without its namespace prefix.
 std::string_view localName(const pugi::xml_node& n) {
     const std::string_view name = n.name();
@@ -133,7 +131,6 @@ std::string textAt(pugi::xml_node n, std::initializer_list<std::string_view> pat
 std::optional<int64_t> parseInt(const char* s) {
     if (!s || !*s) return std::nullopt;
     char* end = nullptr;
-    errno = 0;
     const long long v = std::strtoll(s, &end, 10);
     if (*end != 0) return std::nullopt;
     return int64_t(v);

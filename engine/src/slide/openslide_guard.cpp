@@ -451,20 +451,20 @@ Result checkFileForOpenSlide(const std::string& path, const std::string& name) {
     TIFF* tif = TIFFOpen(path.c_str(), "rm");
     TIFFSetErrorHandler(oldError);
     TIFFSetWarningHandler(oldWarning);
-    const char* v = openslide_detect_vendor(path.c_str());
-    const std::string_view vendor = v ? v : "";
-    // NDPI's fields are read as OpenSlide reads them, whether libtiff can open the file or not.
-    if (vendor == "hamamatsu") {
-        if (Result r = checkNdpi(path, name); !r.ok()) {
-            if (tif) TIFFClose(tif);
-            return r;
-        }
+    // The layout first: OpenSlide's vendor detection parses the file's directories itself, and
+    // asks for what a hostile one states (it copes when that fails, but the asking is better
+    // not made).
+    Result out = tif ? checkTiffLayout(tif, fileSize, name) : Result();
+    if (out.ok()) {
+        const char* v = openslide_detect_vendor(path.c_str());
+        const std::string_view vendor = v ? v : "";
+        // NDPI's fields are read as OpenSlide reads them, whether libtiff can open the file or not.
+        if (vendor == "hamamatsu")
+            out = checkNdpi(path, name);
+        else if (tif && (vendor == "ventana" || vendor == "leica") && TIFFSetDirectory(tif, 0))
+            out = vendor == "ventana" ? checkVentana(tif, name) : checkLeica(tif, name);
     }
-    if (!tif) return {}; // not a TIFF to libtiff: OpenSlide decides
-    Result out = checkTiffLayout(tif, fileSize, name);
-    if (out.ok() && (vendor == "ventana" || vendor == "leica") && TIFFSetDirectory(tif, 0))
-        out = vendor == "ventana" ? checkVentana(tif, name) : checkLeica(tif, name);
-    TIFFClose(tif);
+    if (tif) TIFFClose(tif);
     return out;
 }
 

@@ -44,12 +44,12 @@ bool OpenSlideSource::detect(const std::string&) {
 }
 
 
-std::string OpenSlideSource::vendorOf(const std::string& path) {
-    const char* vendor = openslide_detect_vendor(path.c_str());
-    return vendor ? vendor : "";
+Expected<std::unique_ptr<SlideSource>> OpenSlideSource::open(const std::string& path) {
+    return openAs(path, {});
 }
 
-Expected<std::unique_ptr<SlideSource>> OpenSlideSource::open(const std::string& path) {
+Expected<std::unique_ptr<SlideSource>> OpenSlideSource::openAs(const std::string& path,
+                                                               std::initializer_list<std::string_view> vendors) {
     const std::string name = std::filesystem::path(path).filename().string();
     // TIFF-based formats (Aperio, generic TIFF, Hamamatsu NDPI, Philips, Ventana, Leica, Trestle)
     // are found by their contents: they are opened through the pinned name, so that tiles are
@@ -60,6 +60,10 @@ Expected<std::unique_ptr<SlideSource>> OpenSlideSource::open(const std::string& 
     const std::string opened = pinned ? pinned->name() : path;
     if (Result r = checkFileForOpenSlide(opened, name); !r.ok()) return r;
     const char* vendor = openslide_detect_vendor(opened.c_str());
+    if (vendors.size() != 0 && std::find(vendors.begin(), vendors.end(), std::string_view(vendor ? vendor : "")) == vendors.end()) {
+        return Result(Status::UnsupportedFormat, "Cannot open '" + name + "' here: OpenSlide names " +
+                                                     (vendor ? std::string("its vendor ") + vendor : "no vendor for it"));
+    }
     openslide_t* osr = openslide_open(opened.c_str());
     if (!osr) {
         return Result(Status::UnsupportedFormat,

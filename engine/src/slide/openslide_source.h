@@ -2,7 +2,9 @@
 // Leica, MIRAX, Philips, Sakura, Trestle, Ventana, generic tiled TIFF).
 #pragma once
 
+#include <initializer_list>
 #include <mutex>
+#include <string_view>
 #include <vector>
 
 #include "slide/slide_source.h"
@@ -15,9 +17,11 @@ class OpenSlideSource final : public SlideSource {
 public:
     static bool detect(const std::string& path);
     static Expected<std::unique_ptr<SlideSource>> open(const std::string& path);
-    // The vendor OpenSlide names for the file ("aperio", "hamamatsu", …) from its TIFF tags or
-    // its name alone (openslide_detect_vendor: no level is opened), or "" for none.
-    static std::string vendorOf(const std::string& path);
+    // open(), but only a file for which OpenSlide names one of `vendors` ("aperio", …) from its
+    // tags or name alone (openslide_detect_vendor); any other is UnsupportedFormat, without
+    // being opened. After checkFileForOpenSlide, like every open.
+    static Expected<std::unique_ptr<SlideSource>> openAs(const std::string& path,
+                                                         std::initializer_list<std::string_view> vendors);
     ~OpenSlideSource() override;
 
     const SlideInfo& info() const override { return info_; }

@@ -336,14 +336,6 @@ Expected<std::unique_ptr<SlideSource>> TiffTileSource::tryOpen(const std::string
     const std::string name = fileNameOf(path);
     if (!detect(path)) return notMine(name, "not a TIFF file");
 
-    // Aperio and generic TIFF only. OpenSlide names the vendor from the tags: a Hamamatsu,
-    // Philips, Ventana, Leica or Trestle TIFF goes straight to the OpenSlide reader, which
-    // would otherwise open it a second time after this reader had opened it whole only to
-    // learn its vendor (an NDPI open validates every level's JPEG header and may start a
-    // restart-marker scan).
-    if (const std::string vendor = OpenSlideSource::vendorOf(path); vendor != "aperio" && vendor != "generic-tiff")
-        return notMine(name, vendor.empty() ? "OpenSlide names no vendor for it" : "vendor " + vendor);
-
     // libtiff first: the file must pass checkFirstJp2kTile before OpenSlide opens it.
     std::unique_ptr<TiffTileSource> src(new TiffTileSource());
     src->fileName_ = name;
@@ -357,7 +349,11 @@ Expected<std::unique_ptr<SlideSource>> TiffTileSource::tryOpen(const std::string
     if (!probe) return notMine(name, "libtiff: " + err);
     if (Result r = checkFirstJp2kTile(*probe, name); !r.ok()) return r;
 
-    auto meta = OpenSlideSource::open(path);
+    // Aperio and generic TIFF only: OpenSlide names the vendor from the tags first, so that a
+    // Hamamatsu, Philips, Ventana, Leica or Trestle TIFF goes on to the OpenSlide reader without
+    // being opened whole here only to learn its vendor (an NDPI open validates every level's
+    // JPEG header and may start a restart-marker scan).
+    auto meta = OpenSlideSource::openAs(path, {"aperio", "generic-tiff"});
     if (!meta.ok()) {
         // OpenSlide's own verdict: "not a slide" lets the next reader try; anything else
         // (a recognised but broken file) is the answer, with OpenSlide's message.

@@ -43,7 +43,6 @@ bool OpenSlideSource::detect(const std::string&) {
     return true; // the universal reader: open() decides and explains
 }
 
-
 Expected<std::unique_ptr<SlideSource>> OpenSlideSource::open(const std::string& path) {
     return openAs(path, {});
 }
@@ -60,7 +59,8 @@ Expected<std::unique_ptr<SlideSource>> OpenSlideSource::openAs(const std::string
     const std::string opened = pinned ? pinned->name() : path;
     if (Result r = checkFileForOpenSlide(opened, name); !r.ok()) return r;
     const char* vendor = openslide_detect_vendor(opened.c_str());
-    if (vendors.size() != 0 && std::find(vendors.begin(), vendors.end(), std::string_view(vendor ? vendor : "")) == vendors.end()) {
+    const std::string_view named = vendor ? vendor : "";
+    if (vendors.size() != 0 && std::find(vendors.begin(), vendors.end(), named) == vendors.end()) {
         return Result(Status::UnsupportedFormat, "Cannot open '" + name + "' here: OpenSlide names " +
                                                      (vendor ? std::string("its vendor ") + vendor : "no vendor for it"));
     }

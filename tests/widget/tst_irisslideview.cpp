@@ -50,6 +50,11 @@ constexpr double kMaxMeanDifference = 1.0;
 // … and at most this fraction of pixels with a channel off by more than kPixelThreshold.
 constexpr double kMaxFractionOver = 0.002;
 constexpr int kPixelThreshold = 16;
+// How long to wait for what the X server shows to catch up (a presented frame, a repaint). A
+// bound on failure only: the waits return as soon as the condition holds. 5 s once ran out by
+// 50 ms in CI (widget.view.scale2, after two device recoveries at twice the pixels, with other
+// suites on the two cores).
+constexpr int kPresentTimeoutMs = 30000;
 
 bool near(double a, double b, double tolerance)
 {
@@ -201,7 +206,7 @@ void TstIrisSlideView::checkPresentedMatchesHeadless(IrisSlideView *view, const 
         return presented.size() == target && difference.meanAbs <= kMaxMeanDifference
             && difference.fractionOver <= kMaxFractionOver;
     };
-    QTRY_VERIFY_WITH_TIMEOUT(matches(), 5000);
+    QTRY_VERIFY_WITH_TIMEOUT(matches(), kPresentTimeoutMs);
     qInfo("%s: presented %dx%d vs headless: %s", qPrintable(name), target.width(), target.height(),
           qPrintable(difference.describe()));
     if (QTest::currentTestFailed() || qEnvironmentVariableIsSet("IRIS_TEST_SAVE_FRAMES")) {
@@ -564,10 +569,10 @@ void TstIrisSlideView::uncoveredPixelsArePresentedAgain()
     const int framesBefore = m_w->frames->frames();
     coverWindow.hide();
     // Without a new present the spot keeps the cover's green for good.
-    QTRY_VERIFY2_WITH_TIMEOUT(presentedPixelIs(view, at, band, 2, &seen), qPrintable(seen.name()), 5000);
+    QTRY_VERIFY2_WITH_TIMEOUT(presentedPixelIs(view, at, band, 2, &seen), qPrintable(seen.name()), kPresentTimeoutMs);
     // The frame's signal is queued after its present: the X server may show the pixels before
     // the event loop has delivered it.
-    QTRY_VERIFY_WITH_TIMEOUT(m_w->frames->frames() > framesBefore, 5000);
+    QTRY_VERIFY_WITH_TIMEOUT(m_w->frames->frames() > framesBefore, kPresentTimeoutMs);
     QCOMPARE(view->validationMessageCount(), quint64(0));
 }
 

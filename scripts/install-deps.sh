@@ -29,7 +29,8 @@ PACKAGES=(
   clang libclang-rt-dev llvm lld
   libcli11-dev nlohmann-json3-dev
   # Annotations (engine/src/annotations): Boost.Geometry's R-tree (headers only), GEOS's C API
-  # for fill triangulation (libgeos-c1v5 at run time), pugixml for ASAP XML (libpugixml1v5).
+  # for fill triangulation (libgeos-c1v5 at run time), pugixml for ASAP XML and for the
+  # OpenSlide guard's Ventana and Leica XML (libpugixml1v5).
   libboost-dev libgeos-dev libpugixml-dev
   dpkg-dev file help2man desktop-file-utils shared-mime-info
   python3 strace

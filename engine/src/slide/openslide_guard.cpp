@@ -443,10 +443,14 @@ Result checkNdpi(const std::string& path, const std::string& name) {
 
 } // namespace
 
-Result checkFileForOpenSlide(const std::string& path, const std::string& name) {
+Result checkFileForOpenSlide(const std::string& path, const std::string& name, const char** vendor) {
+    *vendor = nullptr;
     std::error_code ec;
     const uint64_t fileSize = std::filesystem::file_size(path, ec);
-    if (ec) return {};
+    if (ec) {
+        *vendor = openslide_detect_vendor(path.c_str());
+        return {};
+    }
     TIFFErrorHandler oldError = TIFFSetErrorHandler(nullptr), oldWarning = TIFFSetWarningHandler(nullptr);
     TIFF* tif = TIFFOpen(path.c_str(), "rm");
     TIFFSetErrorHandler(oldError);
@@ -456,13 +460,13 @@ Result checkFileForOpenSlide(const std::string& path, const std::string& name) {
     // not made).
     Result out = tif ? checkTiffLayout(tif, fileSize, name) : Result();
     if (out.ok()) {
-        const char* v = openslide_detect_vendor(path.c_str());
-        const std::string_view vendor = v ? v : "";
+        *vendor = openslide_detect_vendor(path.c_str());
+        const std::string_view named = *vendor ? *vendor : "";
         // NDPI's fields are read as OpenSlide reads them, whether libtiff can open the file or not.
-        if (vendor == "hamamatsu")
+        if (named == "hamamatsu")
             out = checkNdpi(path, name);
-        else if (tif && (vendor == "ventana" || vendor == "leica") && TIFFSetDirectory(tif, 0))
-            out = vendor == "ventana" ? checkVentana(tif, name) : checkLeica(tif, name);
+        else if (tif && (named == "ventana" || named == "leica") && TIFFSetDirectory(tif, 0))
+            out = named == "ventana" ? checkVentana(tif, name) : checkLeica(tif, name);
     }
     if (tif) TIFFClose(tif);
     return out;

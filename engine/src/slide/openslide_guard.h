@@ -15,7 +15,9 @@
 namespace iris {
 
 // Ok, or CorruptData / UnsupportedFormat naming `name` (the file as the host knows it; `path`
-// may be a /proc/self/fd name) and why. Not a TIFF: ok (OpenSlide decides).
-Result checkFileForOpenSlide(const std::string& path, const std::string& name);
+// may be a /proc/self/fd name) and why. Not a TIFF: ok (OpenSlide decides). When ok, *vendor
+// is what openslide_detect_vendor names for the file (a static string; null for none), which
+// the check asks once the file's layout has passed.
+Result checkFileForOpenSlide(const std::string& path, const std::string& name, const char** vendor);
 
 } // namespace iris

@@ -57,8 +57,8 @@ Expected<std::unique_ptr<SlideSource>> OpenSlideSource::openAs(const std::string
     auto pinned = std::make_unique<PinnedFile>(path);
     if (!pinned->isTiff()) pinned.reset();
     const std::string opened = pinned ? pinned->name() : path;
-    if (Result r = checkFileForOpenSlide(opened, name); !r.ok()) return r;
-    const char* vendor = openslide_detect_vendor(opened.c_str());
+    const char* vendor = nullptr;
+    if (Result r = checkFileForOpenSlide(opened, name, &vendor); !r.ok()) return r;
     const std::string_view named = vendor ? vendor : "";
     if (vendors.size() != 0 && std::find(vendors.begin(), vendors.end(), named) == vendors.end()) {
         return Result(Status::UnsupportedFormat, "Cannot open '" + name + "' here: OpenSlide names " +
